@@ -1,0 +1,181 @@
+"""Convex polyhedra: faces, volume, centroid and inertia tensor.
+
+A block is the convex hull of its vertices (computed with Qhull through
+``scipy.spatial.ConvexHull``); coplanar hull triangles are merged into polygonal
+faces whose vertices run counter-clockwise seen from outside, so every face has
+an outward unit normal.
+
+Mass properties are exact for the polyhedron: it is split into tetrahedra
+(centroid of the vertices, and a fan of each face), and each tetrahedron with
+vertices v0..v3 and volume V contributes the second moment
+
+    integral x x^T dV = V / 20 (sum_i v_i v_i^T + s s^T),   s = sum_i v_i
+
+(e.g. Tonon 2004, J. Math. Stat. 1, "Explicit exact formulas for the 3-D
+tetrahedron inertia tensor"). The inertia tensor about the centroid is
+I = rho (trace(C) 1 - C) with C the second moment about the centroid.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import ConvexHull, QhullError
+
+from drydem.errors import GeometryError
+
+#: Relative tolerance (fraction of the block's size) for "on the hull" and "coplanar".
+RELATIVE_TOLERANCE = 1e-9
+
+
+@dataclass(frozen=True, eq=False)
+class ConvexPolyhedron:
+    """A convex polyhedron in world coordinates (m).
+
+    Attributes
+    ----------
+    vertices : (nv, 3) float array, m
+        Hull vertices.
+    faces : tuple of int arrays
+        Each face's vertex indices, counter-clockwise seen from outside.
+    face_normals : (nf, 3) float array
+        Outward unit normals.
+    volume : float, m3
+    centroid : (3,) float array, m
+    second_moment : (3, 3) float array, m5
+        integral (x - c)(x - c)^T dV about the centroid.
+    """
+
+    vertices: np.ndarray
+    faces: tuple[np.ndarray, ...]
+    face_normals: np.ndarray
+    volume: float
+    centroid: np.ndarray
+    second_moment: np.ndarray = field(repr=False)
+
+    @property
+    def size(self) -> float:
+        """Diagonal of the axis-aligned bounding box, m."""
+        return float(np.linalg.norm(self.vertices.max(0) - self.vertices.min(0)))
+
+    def inertia_tensor(self, density: float) -> np.ndarray:
+        """Inertia tensor about the centroid, kg m2: rho (trace(C) 1 - C)."""
+        c = self.second_moment
+        return density * (np.trace(c) * np.eye(3) - c)
+
+    def face_polygon(self, face: int) -> np.ndarray:
+        """(k, 3) vertices of one face, counter-clockwise seen from outside."""
+        return self.vertices[self.faces[face]]
+
+    def face_area(self, face: int) -> float:
+        """Area of one face, m2 (shoelace formula in 3D)."""
+        p = self.face_polygon(face)
+        return 0.5 * float(np.linalg.norm(np.cross(p, np.roll(p, -1, axis=0)).sum(0)))
+
+    def transformed(self, rotation: np.ndarray, translation: np.ndarray) -> ConvexPolyhedron:
+        """The same polyhedron moved rigidly: x -> R x + t."""
+        return ConvexPolyhedron(
+            vertices=self.vertices @ rotation.T + translation,
+            faces=self.faces,
+            face_normals=self.face_normals @ rotation.T,
+            volume=self.volume,
+            centroid=rotation @ self.centroid + translation,
+            second_moment=rotation @ self.second_moment @ rotation.T,
+        )
+
+
+def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
+    """The convex polyhedron spanned by ``points`` ((n, 3), m).
+
+    Raises GeometryError naming ``name`` if the points are degenerate (fewer than
+    four, coplanar, collinear) or if a point lies strictly inside the hull of the
+    others, i.e. the vertex set does not describe a convex block.
+    """
+    pts = np.asarray(points, dtype=float)
+    if pts.ndim != 2 or pts.shape[1] != 3:
+        raise GeometryError(f"{name}: vertices must be a list of [x, y, z] points, got shape {pts.shape}")
+    if not np.all(np.isfinite(pts)):
+        raise GeometryError(f"{name}: vertices contain NaN or infinite coordinates")
+    if len(pts) < 4:
+        raise GeometryError(f"{name}: a block needs at least 4 vertices, got {len(pts)}")
+    scale = float(np.linalg.norm(pts.max(0) - pts.min(0)))
+    try:
+        hull = ConvexHull(pts)
+    except QhullError as exc:
+        raise GeometryError(f"{name}: degenerate block (vertices coplanar or collinear): {exc.args[0].splitlines()[0]}") from None
+    tol = RELATIVE_TOLERANCE * 1e3 * scale
+    if hull.volume <= 1e-9 * scale**3:
+        raise GeometryError(f"{name}: degenerate block (volume {hull.volume:.3g} m3 for size {scale:.3g} m)")
+    depth = -(pts @ hull.equations[:, :3].T + hull.equations[:, 3]).max(axis=1)
+    inside = np.flatnonzero(depth > tol)
+    if inside.size:
+        i = int(inside[np.argmax(depth[inside])])
+        raise GeometryError(
+            f"{name}: vertex {i} {pts[i].tolist()} lies {depth[i]:.3g} m inside the hull of the others; "
+            "the block is not convex (split it into convex blocks)"
+        )
+    faces, normals = _merge_coplanar(pts, hull, tol)
+    used = np.unique(np.concatenate(faces))
+    remap = np.full(len(pts), -1)
+    remap[used] = np.arange(len(used))
+    vertices = pts[used]
+    faces = tuple(remap[f] for f in faces)
+    volume, centroid, second = _mass_properties(vertices, faces)
+    return ConvexPolyhedron(vertices, faces, normals, volume, centroid, second)
+
+
+def box(lower, upper, *, name: str = "block") -> ConvexPolyhedron:
+    """Axis-aligned box between corners ``lower`` and ``upper`` (m)."""
+    lo, hi = np.asarray(lower, float), np.asarray(upper, float)
+    if lo.shape != (3,) or hi.shape != (3,):
+        raise GeometryError(f"{name}: box min and max must be [x, y, z]")
+    if np.any(hi <= lo):
+        raise GeometryError(f"{name}: box max {hi.tolist()} must exceed min {lo.tolist()} in every coordinate")
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    return convex_hull(corners, name=name)
+
+
+def _merge_coplanar(pts: np.ndarray, hull: ConvexHull, tol: float) -> tuple[list[np.ndarray], np.ndarray]:
+    """Group hull triangles by plane; order each face's vertices counter-clockwise."""
+    faces: list[np.ndarray] = []
+    normals: list[np.ndarray] = []
+    unassigned = list(range(len(hull.simplices)))
+    while unassigned:
+        first = unassigned[0]
+        n, d = hull.equations[first, :3], hull.equations[first, 3]
+        group = [s for s in unassigned if np.dot(hull.equations[s, :3], n) > 1 - 1e-9 and abs(hull.equations[s, 3] - d) <= tol]
+        unassigned = [s for s in unassigned if s not in group]
+        on_plane = np.flatnonzero(np.abs(pts @ n + d) <= tol)
+        idx = np.intersect1d(on_plane, hull.vertices)
+        faces.append(_counter_clockwise(pts, idx, n))
+        normals.append(n / np.linalg.norm(n))
+    return faces, np.array(normals)
+
+
+def _counter_clockwise(pts: np.ndarray, idx: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """Vertex indices of a planar convex polygon sorted counter-clockwise about ``normal``."""
+    p = pts[idx]
+    centre = p.mean(0)
+    u = p[0] - centre
+    u /= np.linalg.norm(u)
+    v = np.cross(normal, u)
+    angle = np.arctan2((p - centre) @ v, (p - centre) @ u)
+    return idx[np.argsort(angle)]
+
+
+def _mass_properties(vertices: np.ndarray, faces: tuple[np.ndarray, ...]) -> tuple[float, np.ndarray, np.ndarray]:
+    """Volume, centroid and second moment about the centroid (see module docstring)."""
+    apex = vertices.mean(0)
+    tets = []
+    for f in faces:
+        for k in range(1, len(f) - 1):
+            tets.append((vertices[f[0]], vertices[f[k]], vertices[f[k + 1]]))
+    t = np.array(tets) - apex  # (nt, 3, 3): three vertices relative to the apex (fourth vertex at 0)
+    vol = np.einsum("ij,ij->i", t[:, 0], np.cross(t[:, 1], t[:, 2])) / 6.0
+    volume = float(vol.sum())
+    s = t.sum(1)
+    centroid_rel = (vol[:, None] * s / 4.0).sum(0) / volume
+    moment = np.einsum("t,tij->ij", vol / 20.0, np.einsum("tki,tkj->tij", t, t) + np.einsum("ti,tj->tij", s, s))
+    second = moment - volume * np.outer(centroid_rel, centroid_rel)
+    return volume, apex + centroid_rel, second

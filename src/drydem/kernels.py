@@ -1,0 +1,216 @@
+"""The explicit cycle, compiled with numba.
+
+One cycle (paper Eq. 2 and 4; Itasca 3DEC's calculation cycle) reads like the physics:
+
+1. rotation matrices of the blocks at time t;
+2. body forces: gravity m g at every centroid;
+3. sub-contact kinematics (gap, shear increment over the last step from v(t - dt/2))
+   and the joint law -> forces on both blocks, applied at the incident material point;
+4. per degree of freedom: local damping, velocity v(t + dt/2) = v(t - dt/2) + F_d / m dt,
+   angular velocity in the world frame with the gyroscopic term
+   I_w d(omega)/dt = M_d - omega x I_w omega (I_w = R I_body R^T);
+5. positions x(t + dt) = x(t) + v dt and exact rotations q <- exp(omega dt / 2) q.
+
+``run_cycles`` repeats it until the equilibrium criterion holds, the blocks have moved
+far enough to need new contacts, the integration diverges, or ``max_cycles`` is reached.
+:mod:`drydem.reference` implements the same ``step`` in vectorised NumPy, as the oracle
+the tests hold this one to, and shares the loop (``make_run_cycles``).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+from drydem.contacts import SubContacts
+from drydem.joints import JointArrays, joint_law
+from drydem.motion import BlockArrays, local_damping
+from drydem.rotation import quaternion_to_matrix, rotate_by_vector
+from drydem.state import State
+
+#: run_cycles exit codes
+RUNNING, CONVERGED, REDETECT, DIVERGED = 0, 1, 2, 3
+#: criterion codes
+RATIO, VELOCITY = 0, 1
+#: a block point faster than this (m/s) means the integration has blown up
+DIVERGENCE_SPEED = 1e3
+
+
+class SubContactArrays(NamedTuple):
+    """The arrays of :class:`drydem.contacts.SubContacts` the kernels read and update."""
+
+    block_ref: np.ndarray
+    block_inc: np.ndarray
+    point_ref_body: np.ndarray
+    point_inc_body: np.ndarray
+    normal_ref_body: np.ndarray
+    area: np.ndarray
+    shear_force: np.ndarray
+    normal_force: np.ndarray
+    intact: np.ndarray
+
+    @classmethod
+    def of(cls, sub: SubContacts) -> SubContactArrays:
+        return cls(*(getattr(sub, name) for name in cls._fields))
+
+
+class StepStats(NamedTuple):
+    """What the last cycle measured: unbalanced-force ratio and maximum block point speed (m/s)."""
+
+    ratio: float
+    max_speed: float
+
+
+@numba.njit(cache=True)
+def _mat_vec(r, v0, v1, v2):
+    return (
+        r[0, 0] * v0 + r[0, 1] * v1 + r[0, 2] * v2,
+        r[1, 0] * v0 + r[1, 1] * v1 + r[1, 2] * v2,
+        r[2, 0] * v0 + r[2, 1] * v1 + r[2, 2] * v2,
+    )
+
+
+@numba.njit(cache=True)
+def contact_forces(state, rot, sub, joint, dt, force, moment):
+    """Step 3: update every sub-contact's forces and add them to ``force`` and ``moment`` (N, N m)."""
+    pos, vel, omega = state.position, state.velocity, state.angular_velocity
+    for s in range(sub.area.shape[0]):
+        a, b = sub.block_ref[s], sub.block_inc[s]
+        pr, pi, nb_ = sub.point_ref_body[s], sub.point_inc_body[s], sub.normal_ref_body[s]
+        rax, ray, raz = _mat_vec(rot[a], pr[0], pr[1], pr[2])
+        nx, ny, nz = _mat_vec(rot[a], nb_[0], nb_[1], nb_[2])
+        rbx, rby, rbz = _mat_vec(rot[b], pi[0], pi[1], pi[2])
+        # incident material point x_b and its lever arms from both centroids
+        xbx, xby, xbz = pos[b, 0] + rbx, pos[b, 1] + rby, pos[b, 2] + rbz
+        gap = (xbx - pos[a, 0] - rax) * nx + (xby - pos[a, 1] - ray) * ny + (xbz - pos[a, 2] - raz) * nz
+        lax, lay, laz = xbx - pos[a, 0], xby - pos[a, 1], xbz - pos[a, 2]
+        # relative velocity of b with respect to a at x_b, tangential part times dt
+        wa, wb = omega[a], omega[b]
+        vx = vel[b, 0] + wb[1] * rbz - wb[2] * rby - vel[a, 0] - (wa[1] * laz - wa[2] * lay)
+        vy = vel[b, 1] + wb[2] * rbx - wb[0] * rbz - vel[a, 1] - (wa[2] * lax - wa[0] * laz)
+        vz = vel[b, 2] + wb[0] * rby - wb[1] * rbx - vel[a, 2] - (wa[0] * lay - wa[1] * lax)
+        vn = vx * nx + vy * ny + vz * nz
+        dux, duy, duz = (vx - vn * nx) * dt, (vy - vn * ny) * dt, (vz - vn * nz) * dt
+        # previous shear force rotated into the current tangent plane, magnitude kept
+        fs = sub.shear_force[s]
+        old = np.sqrt(fs[0] * fs[0] + fs[1] * fs[1] + fs[2] * fs[2])
+        fsn = fs[0] * nx + fs[1] * ny + fs[2] * nz
+        sx, sy, sz = fs[0] - fsn * nx, fs[1] - fsn * ny, fs[2] - fsn * nz
+        new = np.sqrt(sx * sx + sy * sy + sz * sz)
+        if new > 0.0:
+            sx, sy, sz = sx * (old / new), sy * (old / new), sz * (old / new)
+        fn, sx, sy, sz, intact = joint_law(-gap, dux, duy, duz, sx, sy, sz, sub.area[s], sub.intact[s], joint)
+        sub.normal_force[s] = fn
+        fs[0], fs[1], fs[2] = sx, sy, sz
+        sub.intact[s] = intact
+        fx, fy, fz = fn * nx + sx, fn * ny + sy, fn * nz + sz
+        force[b, 0] += fx
+        force[b, 1] += fy
+        force[b, 2] += fz
+        moment[b, 0] += rby * fz - rbz * fy
+        moment[b, 1] += rbz * fx - rbx * fz
+        moment[b, 2] += rbx * fy - rby * fx
+        force[a, 0] -= fx
+        force[a, 1] -= fy
+        force[a, 2] -= fz
+        moment[a, 0] -= lay * fz - laz * fy
+        moment[a, 1] -= laz * fx - lax * fz
+        moment[a, 2] -= lax * fy - lay * fx
+
+
+@numba.njit(cache=True)
+def integrate(state, rot, blocks, force, moment, damping, dt, motion):
+    """Steps 4-5: damped velocities, positions and rotations; returns (max unbalanced force
+    or moment / radius over the free degrees of freedom, N; max block point speed, m/s).
+    Adds each block's point-path bound (|v| + |omega| r) dt to ``motion`` (m)."""
+    max_unbalanced = 0.0
+    max_speed = 0.0
+    for i in range(state.position.shape[0]):
+        free = blocks.free[i]
+        if free.max() == 0.0:
+            continue
+        r = rot[i]
+        f2 = 0.0
+        m2 = 0.0
+        for k in range(3):
+            f = force[i, k] * free[k]
+            f2 += f * f
+            state.velocity[i, k] += local_damping(f, state.velocity[i, k], damping) * blocks.inv_mass[i] * dt
+            m = moment[i, k] * free[3 + k]
+            m2 += m * m
+            moment[i, k] = local_damping(m, state.angular_velocity[i, k], damping)
+        # world inertia I_w = R I_body R^T applied to omega, and the gyroscopic moment omega x I_w omega
+        w = state.angular_velocity[i]
+        bx, by, bz = w[0] * r[0, 0] + w[1] * r[1, 0] + w[2] * r[2, 0], w[0] * r[0, 1] + w[1] * r[1, 1] + w[2] * r[2, 1], w[0] * r[0, 2] + w[1] * r[1, 2] + w[2] * r[2, 2]
+        ib = blocks.inertia_body[i]
+        lx, ly, lz = _mat_vec(r, *_mat_vec(ib, bx, by, bz))
+        tx = moment[i, 0] - (w[1] * lz - w[2] * ly)
+        ty = moment[i, 1] - (w[2] * lx - w[0] * lz)
+        tz = moment[i, 2] - (w[0] * ly - w[1] * lx)
+        cx, cy, cz = tx * r[0, 0] + ty * r[1, 0] + tz * r[2, 0], tx * r[0, 1] + ty * r[1, 1] + tz * r[2, 1], tx * r[0, 2] + ty * r[1, 2] + tz * r[2, 2]
+        ax, ay, az = _mat_vec(r, *_mat_vec(blocks.inv_inertia_body[i], cx, cy, cz))
+        w[0] += ax * dt * free[3]
+        w[1] += ay * dt * free[4]
+        w[2] += az * dt * free[5]
+        for k in range(3):
+            state.velocity[i, k] *= free[k]
+            state.position[i, k] += state.velocity[i, k] * dt
+        rotate_by_vector(state.quaternion[i], w[0] * dt, w[1] * dt, w[2] * dt)
+        v = state.velocity[i]
+        speed = np.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * blocks.radius[i]
+        if not speed < DIVERGENCE_SPEED:  # also catches NaN
+            speed = np.inf
+        motion[i] += speed * dt
+        max_speed = max(max_speed, speed)
+        max_unbalanced = max(max_unbalanced, np.sqrt(f2), np.sqrt(m2) / blocks.radius[i])
+    return max_unbalanced, max_speed
+
+
+@numba.njit(cache=True)
+def step(state, blocks, sub, joint, gravity, dt, damping, motion, rot, force, moment):
+    """One cycle, steps 1-5 (``rot``, ``force``, ``moment`` are scratch arrays).
+
+    Returns (max unbalanced force over the free blocks, N; max block point speed, m/s)."""
+    for i in range(state.position.shape[0]):
+        quaternion_to_matrix(state.quaternion[i], rot[i])
+        for k in range(3):
+            force[i, k] = blocks.mass[i] * gravity[k]
+            moment[i, k] = 0.0
+    contact_forces(state, rot, sub, joint, dt, force, moment)
+    return integrate(state, rot, blocks, force, moment, damping, dt, motion)
+
+
+def make_run_cycles(step_function, *, jit: bool):
+    """The cycling loop around ``step_function`` (numba-compiled when ``jit``).
+
+    ``run_cycles(state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit,
+    force_scale, motion, motion_limit)`` cycles until converged, re-detection needed, diverged
+    or ``max_cycles``, and returns (cycles run, exit code, StepStats of the last cycle).
+    ``force_scale`` (N) is the ratio's denominator (mean weight of the free blocks); ``motion``
+    (m) accumulates each block's movement since the last contact detection, bounded by
+    ``motion_limit`` (m).
+    """
+
+    def run_cycles(state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit, force_scale, motion, motion_limit):
+        nb = state.position.shape[0]
+        rot = np.empty((nb, 3, 3))
+        force = np.empty((nb, 3))
+        moment = np.empty((nb, 3))
+        stats = StepStats(np.inf, np.inf)
+        for cycle in range(max_cycles):
+            unbalanced, speed = step_function(state, blocks, sub, joint, gravity, dt, damping, motion, rot, force, moment)
+            stats = StepStats(unbalanced / force_scale, speed)
+            if not speed < np.inf:
+                return cycle + 1, DIVERGED, stats
+            if (criterion == RATIO and stats.ratio < limit) or (criterion == VELOCITY and speed < limit):
+                return cycle + 1, CONVERGED, stats
+            if motion.max() > motion_limit:
+                return cycle + 1, REDETECT, stats
+        return max_cycles, RUNNING, stats
+
+    return numba.njit(cache=True)(run_cycles) if jit else run_cycles
+
+
+run_cycles = make_run_cycles(step, jit=True)

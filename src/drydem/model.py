@@ -1,0 +1,177 @@
+"""The Model: blocks, supports and materials, frozen once built.
+
+Build one with :func:`build_model` from :class:`Block` descriptions (the model file
+loader, :mod:`drydem.io.model_file`, does exactly that). Everything that changes during
+a run lives in :class:`drydem.state.State` and :class:`drydem.contacts.SubContacts`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from drydem import contacts
+from drydem.errors import ModelError
+from drydem.geometry import ConvexPolyhedron
+from drydem.parameters import ContactSettings, JointMaterial, SolverSettings, Supports
+
+#: default contact tolerance as a fraction of the thinnest movable block (m/m)
+TOLERANCE_FRACTION = 0.05
+#: initial overlaps deeper than this fraction of the contact tolerance are errors
+OVERLAP_FRACTION = 0.01
+
+
+@dataclass(frozen=True, kw_only=True)
+class Block:
+    """One block as described by the user.
+
+    name : unique label used in messages and outputs. shape : its geometry in the model's
+    frame (m). density : kg/m3, None for the model's. fixed : all six degrees of freedom fixed.
+    """
+
+    name: str
+    shape: ConvexPolyhedron
+    density: float | None = None
+    fixed: bool = False
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Model:
+    """Frozen description of a block assembly (nb blocks).
+
+    block_name : names. block_shape : geometry as given (this is the body frame: a block's
+    body coordinates are its model-file coordinates minus its centroid). block_mass : (nb,) kg.
+    block_inertia : (nb, 3, 3) kg m2 about the centroid. block_fixed : (nb, 6) bool, fixed
+    degrees of freedom (x, y, z, rx, ry, rz). block_radius : (nb,) m, centroid-to-vertex
+    maximum. contact_tolerance : m, resolved from ``contacts.tolerance``. source : where the
+    model came from (file name), for messages.
+    """
+
+    block_name: tuple[str, ...]
+    block_shape: tuple[ConvexPolyhedron, ...] = field(repr=False)
+    block_mass: np.ndarray = field(repr=False)
+    block_inertia: np.ndarray = field(repr=False)
+    block_fixed: np.ndarray = field(repr=False)
+    block_radius: np.ndarray = field(repr=False)
+    joint: JointMaterial
+    contacts: ContactSettings
+    supports: Supports
+    solver: SolverSettings
+    contact_tolerance: float
+    source: str = "<python>"
+
+    @property
+    def n_blocks(self) -> int:
+        return len(self.block_name)
+
+    @property
+    def block_centroid(self) -> np.ndarray:
+        """(nb, 3) centroids in the model file, m."""
+        return np.array([s.centroid for s in self.block_shape])
+
+    @property
+    def block_movable(self) -> np.ndarray:
+        """(nb,) bool: the block has at least one free degree of freedom."""
+        return ~self.block_fixed.all(axis=1)
+
+    @property
+    def total_mass(self) -> float:
+        """Mass of the movable blocks, kg."""
+        return float(self.block_mass[self.block_movable].sum())
+
+    def block_index(self, name: str) -> int:
+        try:
+            return self.block_name.index(name)
+        except ValueError:
+            raise ModelError(f"{self.source}: no block named {name!r}") from None
+
+    def shapes_at(self, position: np.ndarray, rotation: np.ndarray) -> list[ConvexPolyhedron]:
+        """Every block's geometry with centroids ``position`` (nb, 3) and rotations (nb, 3, 3)."""
+        return [s.transformed(r, x - r @ s.centroid) for s, x, r in zip(self.block_shape, position, rotation)]
+
+    def replace(self, **changes) -> Model:
+        """A copy with some parameters changed (joint, contacts, supports, solver)."""
+        allowed = {"joint", "contacts", "supports", "solver"}
+        unknown = set(changes) - allowed
+        if unknown:
+            raise TypeError(f"Model.replace accepts {sorted(allowed)}, not {sorted(unknown)}")
+        blocks = [Block(name=n, shape=s, fixed=bool(f.all())) for n, s, f in zip(self.block_name, self.block_shape, self.block_fixed)]
+        density = self.block_mass / np.array([s.volume for s in self.block_shape])
+        params = dict(joint=self.joint, contacts=self.contacts, supports=self.supports, solver=self.solver) | changes
+        return _assemble(blocks, density, source=self.source, **params)
+
+
+def build_model(
+    blocks: list[Block],
+    *,
+    density: float,
+    joint: JointMaterial = JointMaterial(),
+    contacts: ContactSettings = ContactSettings(),
+    supports: Supports = Supports(),
+    solver: SolverSettings = SolverSettings(),
+    source: str = "<python>",
+) -> Model:
+    """Validate the blocks and freeze them into a :class:`Model`.
+
+    Raises ModelError for duplicate names, non-positive densities, no movable block, or two
+    blocks overlapping deeper than 1 % of the contact tolerance (naming both and the depth).
+    """
+    if not blocks:
+        raise ModelError(f"{source}: the model has no blocks")
+    if not (isinstance(density, (int, float)) and np.isfinite(density) and density > 0):
+        raise ModelError(f"{source}: [material] density = {density!r}: must be a positive number (kg/m3)")
+    names = [b.name for b in blocks]
+    duplicates = sorted({n for n in names if names.count(n) > 1})
+    if duplicates:
+        raise ModelError(f"{source}: duplicate block names {duplicates}")
+    for b in blocks:
+        if b.density is not None and not (np.isfinite(b.density) and b.density > 0):
+            raise ModelError(f"{source}: block {b.name!r}: density = {b.density!r}: must be a positive number (kg/m3)")
+    if all(b.fixed for b in blocks):
+        raise ModelError(f"{source}: every block is fixed; nothing can move")
+    per_block = np.array([density if b.density is None else b.density for b in blocks], dtype=float)
+    return _assemble(blocks, per_block, joint=joint, contacts=contacts, supports=supports, solver=solver, source=source)
+
+
+def _assemble(blocks, density, *, joint, contacts, supports, solver, source) -> Model:
+    shapes = tuple(b.shape for b in blocks)
+    fixed = np.array([[True] * 6 if b.fixed else list(supports.mask) for b in blocks], dtype=bool)
+    tolerance = contacts.tolerance
+    if tolerance is None:
+        movable = [s for s, f in zip(shapes, fixed) if not f.all()]
+        tolerance = TOLERANCE_FRACTION * min(_thickness(s) for s in movable)
+    model = Model(
+        block_name=tuple(b.name for b in blocks),
+        block_shape=shapes,
+        block_mass=density * np.array([s.volume for s in shapes]),
+        block_inertia=np.array([s.inertia_tensor(rho) for s, rho in zip(shapes, density)]),
+        block_fixed=fixed,
+        block_radius=np.array([np.linalg.norm(s.vertices - s.centroid, axis=1).max() for s in shapes]),
+        joint=joint,
+        contacts=contacts,
+        supports=supports,
+        solver=solver,
+        contact_tolerance=float(tolerance),
+        source=source,
+    )
+    _check_overlaps(model)
+    return model
+
+
+def _thickness(shape: ConvexPolyhedron) -> float:
+    """Smallest width of a convex polyhedron across its face normals, m."""
+    heights = shape.vertices @ shape.face_normals.T
+    return float((heights.max(0) - heights.min(0)).min())
+
+
+def _check_overlaps(model: Model) -> None:
+    limit = OVERLAP_FRACTION * model.contact_tolerance
+    shapes = list(model.block_shape)
+    for i, j in contacts.broad_phase(shapes, model.block_movable, 0.0):
+        depth = contacts.penetration_depth(shapes[i], shapes[j])
+        if depth > limit:
+            raise ModelError(
+                f"{model.source}: blocks {model.block_name[i]!r} and {model.block_name[j]!r} overlap by "
+                f"{depth:.3g} m at the start (allowed: {limit:.3g} m, 1 % of the contact tolerance)"
+            )

@@ -1,0 +1,72 @@
+"""Planar convex polygons as (k, 2) arrays of counter-clockwise vertices (m)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def signed_area(poly: np.ndarray) -> float:
+    """Shoelace formula, positive for counter-clockwise vertices, m2."""
+    if len(poly) < 3:
+        return 0.0
+    x, y = poly[:, 0], poly[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def centroid(poly: np.ndarray) -> np.ndarray:
+    """Area centroid of a polygon with non-zero area, m."""
+    x, y = poly[:, 0], poly[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    cross = x * yn - xn * y
+    a = 3.0 * cross.sum()
+    return np.array([((x + xn) * cross).sum() / a, ((y + yn) * cross).sum() / a])
+
+
+def counter_clockwise(poly: np.ndarray) -> np.ndarray:
+    """The same polygon with its vertices counter-clockwise."""
+    return poly if signed_area(poly) >= 0 else poly[::-1]
+
+
+def clip(subject: np.ndarray, clipper: np.ndarray) -> np.ndarray:
+    """Intersection of two convex counter-clockwise polygons (Sutherland-Hodgman).
+
+    Sutherland & Hodgman (1974), "Reentrant polygon clipping", CACM 17(1).
+    Returns a (k, 2) array, k = 0 when they do not intersect.
+    """
+    out = [tuple(p) for p in subject]
+    k = len(clipper)
+    for i in range(k):
+        if not out:
+            break
+        ax, ay = clipper[i]
+        bx, by = clipper[(i + 1) % k]
+        ex, ey = bx - ax, by - ay
+        pts, out = out, []
+        prev = pts[-1]
+        prev_in = ex * (prev[1] - ay) - ey * (prev[0] - ax)
+        for cur in pts:
+            cur_in = ex * (cur[1] - ay) - ey * (cur[0] - ax)
+            if cur_in >= 0:
+                if prev_in < 0:
+                    out.append(_crossing(prev, cur, prev_in, cur_in))
+                out.append(cur)
+            elif prev_in >= 0:
+                out.append(_crossing(prev, cur, prev_in, cur_in))
+            prev, prev_in = cur, cur_in
+    return np.array(out, dtype=float).reshape(-1, 2)
+
+
+def _crossing(p, q, dp: float, dq: float) -> tuple[float, float]:
+    t = dp / (dp - dq)
+    return (p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1]))
+
+
+def rectangle(u0: float, u1: float, v0: float, v1: float) -> np.ndarray:
+    """Axis-aligned rectangle [u0, u1] x [v0, v1], counter-clockwise."""
+    return np.array([[u0, v0], [u1, v0], [u1, v1], [u0, v1]])
+
+
+def is_rectangle(poly: np.ndarray, tol: float) -> bool:
+    """Whether ``poly`` equals its axis-aligned bounding box (within ``tol``)."""
+    lo, hi = poly.min(0), poly.max(0)
+    return abs(signed_area(poly) - np.prod(hi - lo)) <= tol * max(hi - lo).item()

@@ -1,0 +1,97 @@
+"""The cycle of :mod:`drydem.kernels` written again in vectorised NumPy: the tests' oracle.
+
+Same arguments, same physics, same results to round-off; written independently (array
+expressions, ``np.add.at`` scatter, scipy's ``Rotation`` for quaternion algebra) so that
+an indexing or sign slip in the compiled kernels shows up as a difference. About 20-50x
+slower than the kernels (see ``benchmarks/bench_step.py``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from drydem.kernels import DIVERGENCE_SPEED, make_run_cycles
+
+
+def _apply(rot: np.ndarray, vec: np.ndarray) -> np.ndarray:
+    return np.einsum("nij,nj->ni", rot, vec)
+
+
+def _norm(vec: np.ndarray) -> np.ndarray:
+    return np.sqrt(np.einsum("ni,ni->n", vec, vec))
+
+
+def _damped(force: np.ndarray, velocity: np.ndarray, alpha: float) -> np.ndarray:
+    return force - alpha * np.abs(force) * np.sign(velocity)
+
+
+def step(state, blocks, sub, joint, gravity, dt, damping, motion, rot, force, moment):
+    """One cycle; see :func:`drydem.kernels.step`."""
+    pos, vel, omega = state.position, state.velocity, state.angular_velocity
+    rot[:] = Rotation.from_quat(state.quaternion[:, [1, 2, 3, 0]]).as_matrix()
+    force[:] = blocks.mass[:, None] * np.asarray(gravity)
+    moment[:] = 0.0
+
+    # sub-contact kinematics
+    a, b = sub.block_ref, sub.block_inc
+    n = _apply(rot[a], sub.normal_ref_body)
+    arm_b = _apply(rot[b], sub.point_inc_body)
+    x_b = pos[b] + arm_b
+    arm_a = x_b - pos[a]
+    gap = np.einsum("ni,ni->n", x_b - pos[a] - _apply(rot[a], sub.point_ref_body), n)
+    v_rel = vel[b] + np.cross(omega[b], arm_b) - vel[a] - np.cross(omega[a], arm_a)
+    dus = (v_rel - np.einsum("ni,ni->n", v_rel, n)[:, None] * n) * dt
+    fs = sub.shear_force
+    old = _norm(fs)
+    fs_t = fs - np.einsum("ni,ni->n", fs, n)[:, None] * n
+    new = _norm(fs_t)
+    fs_t *= np.divide(old, new, out=np.ones_like(old), where=new > 0)[:, None]
+
+    # joint law
+    area = sub.area
+    fn = joint.kn * area * -gap
+    opened = fn < -np.where(sub.intact, joint.tension * area, 0.0)
+    fs_new = fs_t - joint.ks * area[:, None] * dus
+    limit = np.maximum(np.where(sub.intact, joint.cohesion * area, 0.0) + joint.friction * fn, 0.0)
+    magnitude = _norm(fs_new)
+    slip = magnitude > limit
+    fs_new[slip] *= (limit[slip] / magnitude[slip])[:, None]
+    fn[opened] = 0.0
+    fs_new[opened] = 0.0
+    sub.normal_force[:] = fn
+    sub.shear_force[:] = fs_new
+    sub.intact[:] = sub.intact & ~slip & ~opened
+
+    # forces on the incident (+) and reference (-) blocks at the incident point
+    f = fn[:, None] * n + fs_new
+    np.add.at(force, b, f)
+    np.add.at(moment, b, np.cross(arm_b, f))
+    np.add.at(force, a, -f)
+    np.add.at(moment, a, -np.cross(arm_a, f))
+
+    # damped motion of the blocks with a free degree of freedom
+    moving = blocks.free.max(axis=1) > 0
+    free_t, free_r = blocks.free[:, :3], blocks.free[:, 3:]
+    f_free, m_free = force * free_t, moment * free_r
+    unbalanced = np.maximum(_norm(f_free), _norm(m_free) / blocks.radius)
+    vel += _damped(f_free, vel, damping) * (blocks.inv_mass[:, None] * dt) * moving[:, None]
+    torque = _damped(m_free, omega, damping)
+    rot_t = rot.transpose(0, 2, 1)
+    spin = _apply(rot, _apply(blocks.inertia_body, _apply(rot_t, omega)))
+    accel = _apply(rot, _apply(blocks.inv_inertia_body, _apply(rot_t, torque - np.cross(omega, spin))))
+    omega += accel * dt * free_r * moving[:, None]
+    vel *= free_t
+    pos += vel * dt * moving[:, None]
+    turned = Rotation.from_rotvec(omega * dt) * Rotation.from_quat(state.quaternion[:, [1, 2, 3, 0]])
+    state.quaternion[moving] = turned.as_quat()[moving][:, [3, 0, 1, 2]]
+
+    speed = _norm(vel) + _norm(omega) * blocks.radius
+    speed = np.where(speed < DIVERGENCE_SPEED, speed, np.inf)
+    motion[moving] += speed[moving] * dt
+    if not moving.any():
+        return 0.0, 0.0
+    return float(unbalanced[moving].max()), float(speed[moving].max())
+
+
+run_cycles = make_run_cycles(step, jit=False)

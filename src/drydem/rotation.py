@@ -1,0 +1,57 @@
+"""Unit quaternions q = (w, x, y, z) for exact finite rotations, as numba functions.
+
+A block's orientation is the quaternion taking its body frame (its orientation in
+the model file) to the world frame. A constant angular velocity omega (world frame)
+held for dt rotates it by the rotation vector phi = omega dt:
+
+    q(t + dt) = exp(phi / 2) (x) q(t),   exp(phi / 2) = (cos |phi|/2, sin(|phi|/2) phi/|phi|)
+
+which is exact for any |phi| (no small-angle update, so collapse with large
+rotations keeps rigid blocks rigid).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+
+@numba.njit(cache=True, inline="always")
+def quaternion_to_matrix(q: np.ndarray, out: np.ndarray) -> None:
+    """Rotation matrix of the unit quaternion ``q`` written into ``out`` (3, 3)."""
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    out[0, 0] = 1 - 2 * (y * y + z * z)
+    out[0, 1] = 2 * (x * y - w * z)
+    out[0, 2] = 2 * (x * z + w * y)
+    out[1, 0] = 2 * (x * y + w * z)
+    out[1, 1] = 1 - 2 * (x * x + z * z)
+    out[1, 2] = 2 * (y * z - w * x)
+    out[2, 0] = 2 * (x * z - w * y)
+    out[2, 1] = 2 * (y * z + w * x)
+    out[2, 2] = 1 - 2 * (x * x + y * y)
+
+
+@numba.njit(cache=True, inline="always")
+def rotate_by_vector(q: np.ndarray, phi_x: float, phi_y: float, phi_z: float) -> None:
+    """q <- exp(phi / 2) (x) q in place, then renormalised (phi a rotation vector, rad)."""
+    angle = np.sqrt(phi_x * phi_x + phi_y * phi_y + phi_z * phi_z)
+    if angle == 0.0:
+        return
+    s = np.sin(0.5 * angle) / angle
+    dw, dx, dy, dz = np.cos(0.5 * angle), s * phi_x, s * phi_y, s * phi_z
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    nw = dw * w - dx * x - dy * y - dz * z
+    nx = dw * x + dx * w + dy * z - dz * y
+    ny = dw * y - dx * z + dy * w + dz * x
+    nz = dw * z + dx * y - dy * x + dz * w
+    norm = np.sqrt(nw * nw + nx * nx + ny * ny + nz * nz)
+    q[0], q[1], q[2], q[3] = nw / norm, nx / norm, ny / norm, nz / norm
+
+
+@numba.njit(cache=True)
+def matrices(quaternion: np.ndarray) -> np.ndarray:
+    """(n, 3, 3) rotation matrices of (n, 4) unit quaternions."""
+    out = np.empty((quaternion.shape[0], 3, 3))
+    for i in range(quaternion.shape[0]):
+        quaternion_to_matrix(quaternion[i], out[i])
+    return out

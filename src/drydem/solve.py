@@ -1,0 +1,199 @@
+"""Cycling a model: contact (re-)detection, timestep, equilibrium by dynamic relaxation.
+
+A :class:`Simulation` holds a frozen :class:`~drydem.model.Model`, the mutable
+:class:`~drydem.state.State` and the current :class:`~drydem.contacts.SubContacts`.
+Contacts are re-detected whenever some block may have moved half the contact
+tolerance since the last detection (a bound on every point's path, so no new touch
+is missed); each detection recomputes the timestep (or, with mass scaling, the
+fictitious masses at the first timestep).
+
+Equilibrium (3DEC's ``solve``): cycle until
+
+* ``ratio``: max over free blocks of the unbalanced force (or moment / block radius)
+  divided by the mean weight of the free blocks is below ``SolverSettings.ratio``, or
+* ``velocity``: the fastest block point (|v| + |omega| r) is slower than
+  ``SolverSettings.max_velocity`` (the paper's 1e-13 m/s).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from drydem import contacts, kernels, reference
+from drydem.errors import DivergenceError, ModelError
+from drydem.joints import JointArrays
+from drydem.model import Model
+from drydem.motion import BlockArrays, contact_stiffness, critical_timestep, scaled_inertia
+from drydem.parameters import SolverSettings
+from drydem.rotation import matrices
+from drydem.state import State
+
+ENGINES = {"numba": kernels.run_cycles, "reference": reference.run_cycles}
+#: standard gravity, m/s2
+G = 9.81
+#: cycles run in one call of the kernel loop between progress checks
+CHUNK = 20_000
+
+
+@dataclass(frozen=True)
+class EquilibriumResult:
+    """Outcome of :meth:`Simulation.cycle_to_equilibrium`.
+
+    converged : the criterion was met. cycles : cycles run. criterion : "ratio" or "velocity".
+    ratio : unbalanced-force ratio at the last cycle. max_speed : m/s, fastest block point at
+    the last cycle. detections : contact detections during the call.
+    """
+
+    converged: bool
+    cycles: int
+    criterion: str
+    ratio: float
+    max_speed: float
+    detections: int
+
+
+class Simulation:
+    """A model being cycled. ``engine`` is "numba" (fast) or "reference" (NumPy oracle).
+
+    ``timestep`` (s) overrides the automatic one; it must not exceed the critical timestep.
+    """
+
+    def __init__(self, model: Model, *, state: State | None = None, engine: str = "numba", timestep: float | None = None):
+        if engine not in ENGINES:
+            raise ValueError(f"engine must be one of {sorted(ENGINES)}, not {engine!r}")
+        self.model = model
+        self.state = state.copy() if state is not None else State.at_rest(model.block_centroid)
+        self.engine = engine
+        self.contacts = contacts.SubContacts.empty()
+        self.cycles = 0
+        self.detections = 0
+        self._fixed_timestep = timestep
+        self._scaled_timestep: float | None = None
+        self._motion = np.zeros(model.n_blocks)
+        self.detect_contacts()
+
+    # -- contacts and inertia -------------------------------------------------------------
+    def detect_contacts(self) -> None:
+        """Re-detect sub-contacts at the current state, keeping the shear history."""
+        m = self.model
+        rot = matrices(self.state.quaternion)
+        self.contacts = contacts.detect(
+            m.shapes_at(self.state.position, rot),
+            self.state.position,
+            rot,
+            m.block_movable,
+            tolerance=m.contact_tolerance,
+            points_per_length=m.contacts.points_per_length,
+            previous=self.contacts if self.contacts.count else None,
+        )
+        self._motion[:] = 0.0
+        self.detections += 1
+        self._update_inertia()
+
+    def _update_inertia(self) -> None:
+        m, solver = self.model, self.model.solver
+        k_t, k_r = contact_stiffness(self.contacts, m.joint.kn, m.joint.ks, m.n_blocks)
+        critical = critical_timestep(m.block_mass, m.block_inertia, m.block_movable, k_t, k_r)
+        if self._fixed_timestep is not None:
+            if self._fixed_timestep > critical:
+                raise ModelError(
+                    f"{m.source}: timestep {self._fixed_timestep:.3g} s exceeds the critical timestep "
+                    f"{critical:.3g} s (kn = {m.joint.kn:.3g} Pa/m); the run would blow up"
+                )
+            dt = self._fixed_timestep
+        else:
+            dt = solver.timestep_safety * critical if np.isfinite(critical) else self._free_flight_timestep()
+        mass, inertia = m.block_mass, m.block_inertia
+        if solver.mass_scaling:
+            if self._scaled_timestep is None:
+                self._scaled_timestep = dt
+            dt = self._scaled_timestep
+            mass, inertia = scaled_inertia(mass, inertia, k_t, k_r, dt, solver.timestep_safety)
+        self.timestep = float(dt)
+        movable = m.block_movable
+        self._blocks = BlockArrays(
+            mass=m.block_mass,
+            inv_mass=np.where(movable, 1.0 / mass, 0.0),
+            inertia_body=inertia,
+            inv_inertia_body=np.linalg.inv(inertia),
+            free=(~m.block_fixed).astype(float),
+            radius=m.block_radius,
+        )
+
+    def _free_flight_timestep(self) -> float:
+        """Timestep with no springs: a tenth of the time to fall through the contact tolerance."""
+        return 0.1 * float(np.sqrt(2.0 * self.model.contact_tolerance / G))
+
+    # -- cycling --------------------------------------------------------------------------
+    def cycle(self, n: int, *, gravity=(0.0, 0.0, -G)) -> EquilibriumResult:
+        """Run exactly ``n`` cycles (re-detecting contacts as needed), no equilibrium test."""
+        return self._run(gravity, n, criterion=kernels.RATIO, limit=-1.0, criterion_name="none")
+
+    def cycle_to_equilibrium(self, *, gravity=(0.0, 0.0, -G), solver: SolverSettings | None = None) -> EquilibriumResult:
+        """Cycle until at rest (see module docstring); non-convergence is returned, not hidden.
+
+        Raises DivergenceError if the integration blows up.
+        """
+        solver = solver or self.model.solver
+        if solver.criterion == "ratio":
+            return self._run(gravity, solver.max_cycles, criterion=kernels.RATIO, limit=solver.ratio, criterion_name="ratio")
+        return self._run(gravity, solver.max_cycles, criterion=kernels.VELOCITY, limit=solver.max_velocity, criterion_name="velocity")
+
+    def _run(self, gravity, max_cycles: int, *, criterion: int, limit: float, criterion_name: str) -> EquilibriumResult:
+        m = self.model
+        g = np.asarray(gravity, dtype=float)
+        if g.shape != (3,) or not np.all(np.isfinite(g)):
+            raise ModelError(f"gravity must be a finite [gx, gy, gz] in m/s2, got {gravity!r}")
+        weight = float(np.linalg.norm(g)) * m.total_mass / max(int(m.block_movable.sum()), 1)
+        if criterion_name == "ratio" and weight == 0.0:
+            raise ModelError("the 'ratio' criterion needs gravity (it divides by the mean weight); use 'velocity'")
+        run_cycles = ENGINES[self.engine]
+        joint = JointArrays.of(m.joint)
+        done, detections = 0, 0
+        code, stats = kernels.RUNNING, kernels.StepStats(np.inf, np.inf)
+        while done < max_cycles:
+            n, code, stats = run_cycles(
+                self.state, self._blocks, kernels.SubContactArrays.of(self.contacts), joint, g, self.timestep,
+                m.solver.damping, min(CHUNK, max_cycles - done), criterion, limit, max(weight, 1e-300),
+                self._motion, 0.5 * m.contact_tolerance,
+            )
+            done += n
+            self.cycles += n
+            if code == kernels.DIVERGED:
+                raise DivergenceError(
+                    f"{m.source}: the integration diverged after {self.cycles} cycles (timestep {self.timestep:.3g} s): "
+                    "reduce the timestep (solver.timestep_safety) or check the stiffness and masses"
+                )
+            if code == kernels.CONVERGED:
+                break
+            if code == kernels.REDETECT:
+                self.detect_contacts()
+                detections += 1
+        return EquilibriumResult(code == kernels.CONVERGED, done, criterion_name, float(stats.ratio), float(stats.max_speed), detections)
+
+    # -- diagnostics ----------------------------------------------------------------------
+    def energy(self, *, gravity=(0.0, 0.0, -G)) -> dict[str, float]:
+        """Kinetic, gravitational and elastic (joint springs) energy, J.
+
+        Kinetic: sum 1/2 m v^2 + 1/2 omega . I_w omega (true masses, half-step velocities);
+        gravitational: -sum m g . x (zero at the model-file positions); elastic:
+        sum 1/2 F_n^2 / (kn A) + 1/2 |F_s|^2 / (ks A) from the last computed forces.
+        """
+        m, s, c = self.model, self.state, self.contacts
+        rot = matrices(s.quaternion)
+        inertia_world = np.einsum("nij,njk,nlk->nil", rot, m.block_inertia, rot)
+        kinetic = 0.5 * (m.block_mass * np.einsum("ni,ni->n", s.velocity, s.velocity)).sum()
+        kinetic += 0.5 * np.einsum("ni,nij,nj->", s.angular_velocity, inertia_world, s.angular_velocity)
+        lift = s.position - m.block_centroid
+        gravitational = -float((m.block_mass * (lift @ np.asarray(gravity, float))).sum())
+        elastic = 0.5 * (c.normal_force**2 / (m.joint.kn * c.area)).sum()
+        elastic += 0.5 * (np.einsum("ni,ni->n", c.shear_force, c.shear_force) / (m.joint.ks * c.area)).sum()
+        return {"kinetic": float(kinetic), "gravitational": gravitational, "elastic": float(elastic)}
+
+    def reactions(self, block: int) -> np.ndarray:
+        """Total contact force (N, world frame) that the other blocks exert on ``block``."""
+        c = self.contacts
+        f = c.normal_force[:, None] * np.einsum("nij,nj->ni", matrices(self.state.quaternion)[c.block_ref], c.normal_ref_body) + c.shear_force
+        return f[c.block_inc == block].sum(0) - f[c.block_ref == block].sum(0)
