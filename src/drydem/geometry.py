@@ -92,7 +92,10 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
     four, coplanar, collinear) or if a point lies strictly inside the hull of the
     others, i.e. the vertex set does not describe a convex block.
     """
-    pts = np.asarray(points, dtype=float)
+    try:
+        pts = np.asarray(points, dtype=float)
+    except (TypeError, ValueError):
+        raise GeometryError(f"{name}: vertices must be a list of [x, y, z] numbers") from None
     if pts.ndim != 2 or pts.shape[1] != 3:
         raise GeometryError(f"{name}: vertices must be a list of [x, y, z] points, got shape {pts.shape}")
     if not np.all(np.isfinite(pts)):

@@ -121,10 +121,9 @@ def contact_forces(state, rot, sub, joint, dt, force, moment):
 
 
 @numba.njit(cache=True)
-def integrate(state, rot, blocks, force, moment, damping, dt, motion):
+def integrate(state, rot, blocks, force, moment, damping, dt):
     """Steps 4-5: damped velocities, positions and rotations; returns (max unbalanced force
-    or moment / radius over the free degrees of freedom, N; max block point speed, m/s).
-    Adds each block's point-path bound (|v| + |omega| r) dt to ``motion`` (m)."""
+    or moment / radius over the free degrees of freedom, N; max block point speed, m/s)."""
     max_unbalanced = 0.0
     max_speed = 0.0
     for i in range(state.position.shape[0]):
@@ -162,14 +161,32 @@ def integrate(state, rot, blocks, force, moment, damping, dt, motion):
         speed = np.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * blocks.radius[i]
         if not speed < DIVERGENCE_SPEED:  # also catches NaN
             speed = np.inf
-        motion[i] += speed * dt
         max_speed = max(max_speed, speed)
         max_unbalanced = max(max_unbalanced, np.sqrt(f2), np.sqrt(m2) / blocks.radius[i])
     return max_unbalanced, max_speed
 
 
 @numba.njit(cache=True)
-def step(state, blocks, sub, joint, gravity, dt, damping, motion, rot, force, moment):
+def displacement_since(state, detected, radius):
+    """Largest displacement of any block point since the contacts were detected at ``detected``, m.
+
+    Per block |x - x0| + theta r, theta = 2 acos|w| the angle of q q0^-1 and r the block radius
+    (a chord 2 r sin(theta / 2) is shorter than theta r).
+    """
+    largest = 0.0
+    for i in range(state.position.shape[0]):
+        q, q0 = state.quaternion[i], detected.quaternion[i]
+        w = abs(q[0] * q0[0] + q[1] * q0[1] + q[2] * q0[2] + q[3] * q0[3])
+        theta = 2.0 * np.arccos(min(w, 1.0))
+        dx = state.position[i, 0] - detected.position[i, 0]
+        dy = state.position[i, 1] - detected.position[i, 1]
+        dz = state.position[i, 2] - detected.position[i, 2]
+        largest = max(largest, np.sqrt(dx * dx + dy * dy + dz * dz) + theta * radius[i])
+    return largest
+
+
+@numba.njit(cache=True)
+def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment):
     """One cycle, steps 1-5 (``rot``, ``force``, ``moment`` are scratch arrays).
 
     Returns (max unbalanced force over the free blocks, N; max block point speed, m/s)."""
@@ -179,34 +196,33 @@ def step(state, blocks, sub, joint, gravity, dt, damping, motion, rot, force, mo
             force[i, k] = blocks.mass[i] * gravity[k]
             moment[i, k] = 0.0
     contact_forces(state, rot, sub, joint, dt, force, moment)
-    return integrate(state, rot, blocks, force, moment, damping, dt, motion)
+    return integrate(state, rot, blocks, force, moment, damping, dt)
 
 
 def make_run_cycles(step_function, *, jit: bool):
     """The cycling loop around ``step_function`` (numba-compiled when ``jit``).
 
     ``run_cycles(state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit,
-    force_scale, motion, motion_limit)`` cycles until converged, re-detection needed, diverged
+    force_scale, detected, motion_limit)`` cycles until converged, re-detection needed, diverged
     or ``max_cycles``, and returns (cycles run, exit code, StepStats of the last cycle).
-    ``force_scale`` (N) is the ratio's denominator (mean weight of the free blocks); ``motion``
-    (m) accumulates each block's movement since the last contact detection, bounded by
-    ``motion_limit`` (m).
+    ``force_scale`` (N) is the ratio's denominator (mean weight of the free blocks); re-detection
+    is needed once a block point has moved ``motion_limit`` (m) from the State ``detected``.
     """
 
-    def run_cycles(state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit, force_scale, motion, motion_limit):
+    def run_cycles(state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit, force_scale, detected, motion_limit):
         nb = state.position.shape[0]
         rot = np.empty((nb, 3, 3))
         force = np.empty((nb, 3))
         moment = np.empty((nb, 3))
         stats = StepStats(np.inf, np.inf)
         for cycle in range(max_cycles):
-            unbalanced, speed = step_function(state, blocks, sub, joint, gravity, dt, damping, motion, rot, force, moment)
+            unbalanced, speed = step_function(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment)
             stats = StepStats(unbalanced / force_scale, speed)
             if not speed < np.inf:
                 return cycle + 1, DIVERGED, stats
             if (criterion == RATIO and stats.ratio < limit) or (criterion == VELOCITY and speed < limit):
                 return cycle + 1, CONVERGED, stats
-            if motion.max() > motion_limit:
+            if displacement_since(state, detected, blocks.radius) > motion_limit:
                 return cycle + 1, REDETECT, stats
         return max_cycles, RUNNING, stats
 

@@ -1,21 +1,23 @@
 """Inertia for the explicit integration: critical timestep, mass scaling, local damping.
 
 Critical timestep. The central-difference scheme is stable for dt < 2 / omega_max
-(omega_max the highest natural frequency). For a block i touched by springs of
-stiffness k_s = max(kn, ks) A_s at lever arms r_s from its centroid, a spring moves
-the point with inverse mass 1/m + r_s^2 / I_min, and the partner block adds at most as
-much again (Gershgorin bound), so
+(omega_max the highest natural frequency). Block i is touched by springs of stiffness
+k_s = max(kn, ks) A_s at lever arms r_s from its centroid; they give it the translational
+stiffness K_t = sum_s k_s (N/m) and the rotational stiffness matrix
+K_r = sum_s k_s (|r_s|^2 1 - r_s r_s^T) (N m). The block alone on fixed partners has
+omega^2 <= K_t / m + lambda_max(I^-1 K_r) (a positive block matrix is bounded by the sum
+of its diagonal blocks), and moving partners at most double it (Gershgorin), so
 
-    omega_i^2 <= 2 sum_s k_s (1/m_i + r_s^2 / I_min,i) = 2 (K_t / m_i + K_r / I_min,i)
+    omega_i^2 <= 2 (K_t / m_i + lambda_max(I_i^-1 K_r,i))
 
 and dt = safety * 2 / max_i omega_i (Cundall & Strack 1979; Itasca 3DEC manual,
 "Timestep determination").
 
-Mass scaling (statics only: inertia does not change the equilibrium). Each free
-block gets the fictitious mass m' = C K_t and isotropic inertia I' = C K_r with
-C = (dt / safety)^2, so every block is critical at the same dt: the slow, heavy
-modes no longer wait for the stiff, light ones (Underwood 1983, "Dynamic relaxation";
-3DEC's density scaling). Gravity still acts on the true mass.
+Mass scaling (statics only: inertia does not change the equilibrium). Each sprung
+block gets the fictitious mass m' = C K_t and inertia I' = C K_r with C = (dt / safety)^2,
+so every block is critical at the same dt: the slow, heavy modes no longer wait for
+the stiff, light ones (Underwood 1983, "Dynamic relaxation"; 3DEC's density scaling).
+Gravity still acts on the true mass.
 """
 
 from __future__ import annotations
@@ -47,20 +49,21 @@ class BlockArrays(NamedTuple):
 
 
 def contact_stiffness(sub: SubContacts, kn: float, ks: float, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:
-    """Per-block translational K_t (N/m) and rotational K_r (N m) sums of its sub-contact springs."""
+    """Per-block K_t (nb,) N/m and K_r (nb, 3, 3) N m of its sub-contact springs (body frame)."""
     k = max(kn, ks) * sub.area
     k_t = np.bincount(sub.block_ref, k, n_blocks) + np.bincount(sub.block_inc, k, n_blocks)
-    r_ref = np.einsum("ni,ni->n", sub.point_ref_body, sub.point_ref_body)
-    r_inc = np.einsum("ni,ni->n", sub.point_inc_body, sub.point_inc_body)
-    k_r = np.bincount(sub.block_ref, k * r_ref, n_blocks) + np.bincount(sub.block_inc, k * r_inc, n_blocks)
+    k_r = np.zeros((n_blocks, 3, 3))
+    for block, arm in ((sub.block_ref, sub.point_ref_body), (sub.block_inc, sub.point_inc_body)):
+        per_spring = np.einsum("n,ni,nj->nij", k, arm, arm)
+        np.add.at(k_r, block, np.einsum("nkk->n", per_spring)[:, None, None] * np.eye(3) - per_spring)
     return k_t, k_r
 
 
 def critical_timestep(mass: np.ndarray, inertia_body: np.ndarray, movable: np.ndarray, k_t: np.ndarray, k_r: np.ndarray) -> float:
-    """2 / omega_max with omega_i^2 = 2 (K_t / m + K_r / I_min), s (inf if nothing is sprung)."""
-    i_min = np.linalg.eigvalsh(inertia_body)[:, 0]
-    omega_sq = 2.0 * (k_t / mass + k_r / i_min)
-    omega_sq = omega_sq[movable]
+    """2 / omega_max with omega_i^2 = 2 (K_t / m + lambda_max(I^-1 K_r)), s (inf if nothing is sprung)."""
+    inv_chol = np.linalg.inv(np.linalg.cholesky(inertia_body))
+    rotational = np.linalg.eigvalsh(inv_chol @ k_r @ inv_chol.transpose(0, 2, 1))[:, -1]
+    omega_sq = (2.0 * (k_t / mass + rotational))[movable]
     if omega_sq.size == 0 or omega_sq.max() <= 0:
         return np.inf
     return float(2.0 / np.sqrt(omega_sq.max()))
@@ -69,14 +72,16 @@ def critical_timestep(mass: np.ndarray, inertia_body: np.ndarray, movable: np.nd
 def scaled_inertia(
     mass: np.ndarray, inertia_body: np.ndarray, k_t: np.ndarray, k_r: np.ndarray, timestep: float, safety: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Fictitious masses m' = C K_t and inertias I' = C K_r 1, C = (dt / safety)^2 (see module docstring).
+    """Fictitious masses m' = C K_t and inertias I' = C K_r, C = (dt / safety)^2 (see module docstring).
 
-    Blocks without springs keep their true mass and inertia (free flight is dynamics).
+    Blocks whose springs do not hold every rotation (K_r singular: free flight, a single point)
+    keep their true mass and inertia.
     """
     c = (timestep / safety) ** 2
-    sprung = (k_t > 0) & (k_r > 0)
+    smallest = np.linalg.eigvalsh(k_r)[:, 0]
+    sprung = (k_t > 0) & (smallest > 1e-9 * np.abs(k_r).max(axis=(1, 2)))
     m = np.where(sprung, c * k_t, mass)
-    inertia = np.where(sprung[:, None, None], c * k_r[:, None, None] * np.eye(3), inertia_body)
+    inertia = np.where(sprung[:, None, None], c * k_r, inertia_body)
     return m, inertia
 
 

@@ -26,7 +26,7 @@ def _damped(force: np.ndarray, velocity: np.ndarray, alpha: float) -> np.ndarray
     return force - alpha * np.abs(force) * np.sign(velocity)
 
 
-def step(state, blocks, sub, joint, gravity, dt, damping, motion, rot, force, moment):
+def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment):
     """One cycle; see :func:`drydem.kernels.step`."""
     pos, vel, omega = state.position, state.velocity, state.angular_velocity
     rot[:] = Rotation.from_quat(state.quaternion[:, [1, 2, 3, 0]]).as_matrix()
@@ -88,7 +88,6 @@ def step(state, blocks, sub, joint, gravity, dt, damping, motion, rot, force, mo
 
     speed = _norm(vel) + _norm(omega) * blocks.radius
     speed = np.where(speed < DIVERGENCE_SPEED, speed, np.inf)
-    motion[moving] += speed[moving] * dt
     if not moving.any():
         return 0.0, 0.0
     return float(unbalanced[moving].max()), float(speed[moving].max())

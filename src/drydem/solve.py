@@ -3,7 +3,7 @@
 A :class:`Simulation` holds a frozen :class:`~drydem.model.Model`, the mutable
 :class:`~drydem.state.State` and the current :class:`~drydem.contacts.SubContacts`.
 Contacts are re-detected whenever some block may have moved half the contact
-tolerance since the last detection (a bound on every point's path, so no new touch
+tolerance since the last detection (a bound on every point's displacement, so no new touch
 is missed); each detection recomputes the timestep (or, with mass scaling, the
 fictitious masses at the first timestep).
 
@@ -71,7 +71,6 @@ class Simulation:
         self.detections = 0
         self._fixed_timestep = timestep
         self._scaled_timestep: float | None = None
-        self._motion = np.zeros(model.n_blocks)
         self.detect_contacts()
 
     # -- contacts and inertia -------------------------------------------------------------
@@ -88,7 +87,7 @@ class Simulation:
             points_per_length=m.contacts.points_per_length,
             previous=self.contacts if self.contacts.count else None,
         )
-        self._motion[:] = 0.0
+        self._detected_state = self.state.copy()
         self.detections += 1
         self._update_inertia()
 
@@ -157,7 +156,7 @@ class Simulation:
             n, code, stats = run_cycles(
                 self.state, self._blocks, kernels.SubContactArrays.of(self.contacts), joint, g, self.timestep,
                 m.solver.damping, min(CHUNK, max_cycles - done), criterion, limit, max(weight, 1e-300),
-                self._motion, 0.5 * m.contact_tolerance,
+                self._detected_state, 0.5 * m.contact_tolerance,
             )
             done += n
             self.cycles += n

@@ -1,0 +1,115 @@
+"""The model file: a TOML description of blocks, joints, contacts, supports and solver.
+
+Example (units SI; every table but ``[[block]]`` optional)::
+
+    [material]
+    density = 1800.0            # kg/m3 (a block may override it)
+    [joint]
+    kn = 3e7                    # Pa/m
+    ks = 3e7                    # Pa/m
+    friction = 0.5              # Coulomb coefficient
+    cohesion = 0.0              # Pa
+    tension = 0.0               # Pa
+    [contacts]
+    points_per_length = 4
+    tolerance = 2.5e-4          # m (default: 5 % of the thinnest block)
+    [supports]
+    fix_y = true                # every block's y translation fixed (also fix_x, fix_z, fix_rx, ...)
+    [solver]
+    damping = 0.8               # local damping alpha
+    criterion = "ratio"         # or "velocity"
+    [[block]]
+    name = "base"
+    fixed = true
+    box = { min = [-0.05, -0.006, -0.01], max = [0.25, 0.006, 0.0] }
+    [[block]]
+    name = "brick"
+    vertices = [[0, -0.006, 0], [0.025, -0.006, 0], ...]   # convex hull of these points
+
+Unknown tables or keys are errors (a misspelt ``frction`` must not silently fall back
+to the default); so are wrong types. Messages name the file, table, block and key.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import fields
+from pathlib import Path
+
+from drydem.errors import DrydemError, ModelError
+from drydem.geometry import box, convex_hull
+from drydem.model import Block, Model, build_model
+from drydem.parameters import ContactSettings, JointMaterial, SolverSettings, Supports
+
+SECTIONS = {"joint": JointMaterial, "contacts": ContactSettings, "supports": Supports, "solver": SolverSettings}
+BLOCK_KEYS = {"name", "fixed", "density", "box", "vertices"}
+
+
+def load_model(path: str | Path) -> Model:
+    """Read and validate a model file; raises ModelError naming the file and the culprit."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read the model file ({exc.strerror})") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ModelError(f"{path}: not valid TOML: {exc}") from None
+    return model_from_dict(data, source=str(path))
+
+
+def model_from_dict(data: dict, *, source: str = "<dict>") -> Model:
+    """Build a model from the parsed TOML structure (see module docstring)."""
+    _no_unknown(data, {"material", "block", *SECTIONS}, source, "top level")
+    try:
+        params = {name: _section(data.get(name, {}), cls, name, source) for name, cls in SECTIONS.items()}
+        material = data.get("material", {})
+        _no_unknown(material, {"density"}, source, "[material]")
+        density = material.get("density", 1800.0)
+        blocks = data.get("block")
+        if not isinstance(blocks, list) or not blocks:
+            raise ModelError(f"{source}: no [[block]] entries")
+        return build_model([_block(b, i, source) for i, b in enumerate(blocks)], density=density, source=source, **params)
+    except DrydemError as exc:
+        message = str(exc)
+        raise type(exc)(message if message.startswith(source) else f"{source}: {message}") from None
+
+
+def _no_unknown(table: dict, allowed: set[str], source: str, where: str) -> None:
+    if not isinstance(table, dict):
+        raise ModelError(f"{source}: {where} must be a table")
+    unknown = sorted(set(table) - allowed)
+    if unknown:
+        raise ModelError(f"{source}: unknown key(s) {unknown} in {where}; allowed: {sorted(allowed)}")
+
+
+def _section(table: dict, cls, name: str, source: str):
+    _no_unknown(table, {f.name for f in fields(cls)}, source, f"[{name}]")
+    try:
+        return cls(**table)
+    except TypeError as exc:
+        raise ModelError(f"{source}: [{name}]: {exc}") from None
+
+
+def _block(entry: dict, index: int, source: str) -> Block:
+    name = entry.get("name", f"block{index}") if isinstance(entry, dict) else f"block{index}"
+    where = f"[[block]] #{index} ({name!r})"
+    _no_unknown(entry, BLOCK_KEYS, source, where)
+    if ("box" in entry) == ("vertices" in entry):
+        raise ModelError(f"{source}: {where} needs exactly one of 'box' or 'vertices'")
+    if "box" in entry:
+        spec = entry["box"]
+        _no_unknown(spec, {"min", "max"}, source, f"{where} box")
+        if "min" not in spec or "max" not in spec:
+            raise ModelError(f"{source}: {where} box needs 'min' and 'max'")
+        shape = box(spec["min"], spec["max"], name=f"block {name!r}")
+    else:
+        shape = convex_hull(entry["vertices"], name=f"block {name!r}")
+    fixed = entry.get("fixed", False)
+    if not isinstance(fixed, bool):
+        raise ModelError(f"{source}: {where} fixed = {fixed!r}: must be true or false")
+    density = entry.get("density")
+    if density is not None and not isinstance(density, (int, float)):
+        raise ModelError(f"{source}: {where} density = {density!r}: must be a number (kg/m3)")
+    return Block(name=str(name), shape=shape, density=density, fixed=fixed)
