@@ -8,10 +8,9 @@ it. The incident face, projected on the reference plane and clipped by the
 reference face, is the contact polygon.
 
 The polygon is discretised into sub-contacts as 3DEC's contact points: a
-tensor grid along the reference face's in-plane axes whose spacing puts
-``points_per_length`` points along the full length of the smaller face, ends
-included, each point carrying the area of its trapezoid cell clipped to the
-polygon (so the areas sum to the polygon's area). Each sub-contact is a pair of
+tensor grid whose spacing puts ``points_per_length`` points along the full
+length of the smaller face, ends included, each point carrying its trapezoid
+share of the area (the areas sum to the polygon's area); see :func:`_grid`. Each sub-contact is a pair of
 material points (one on each block, the incident one on the incident face
 straight above the reference one) and the reference normal, all stored in the
 blocks' body frames, so rocking opens or closes them as the blocks turn.
@@ -157,25 +156,63 @@ def face_contact(
 def _grid(overlap: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, n: int, tol: float) -> tuple[np.ndarray, np.ndarray]:
     """Grid nodes (k, 2) and their tributary areas (k,) on the contact polygon ``overlap``.
 
-    The spacing along each axis is the smaller face's extent / (n - 1); the overlap's
-    extent is then split into the fewest equal intervals not longer than that, nodes at
-    both ends (trapezoid rule). ``n = 1`` gives one node at the polygon's centroid.
+    Along each grid direction the spacing is the smaller face's extent / (n - 1); the overlap
+    is split into the fewest equal intervals not longer than that, with nodes at both ends
+    (trapezoid rule). A quadrilateral overlap (the usual face-on-face case, also when the
+    blocks are turned or rocking) gets a bilinear grid between its corners, so the corners
+    are always points and an affine image of a face maps back to the same material points.
+    Other polygons get an axis-aligned grid whose cells are clipped to the polygon (nodes
+    outside move to their cell's centroid). ``n = 1``: one node at the polygon's centroid.
     """
     if n == 1:
         return polygon.centroid(overlap)[None, :], np.array([polygon.signed_area(overlap)])
+    corners = polygon.without_collinear(overlap, tol)
+    if len(corners) == 4:
+        return _bilinear_grid(corners, face_a, face_b, n)
+    return _clipped_grid(overlap, face_a, face_b, n, tol)
+
+
+def _intervals(length: float, direction: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, n: int) -> int:
+    """Fewest equal intervals over ``length`` with spacing <= smaller face extent along ``direction`` / (n - 1)."""
+    extent = min(np.ptp(face_a @ direction), np.ptp(face_b @ direction))
+    return max(1, math.ceil(length / (extent / (n - 1)) - 1e-6))
+
+
+def _trapezoid(intervals: int) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes in [0, 1] and trapezoid weights (summing to 1)."""
+    weights = np.full(intervals + 1, 1.0 / intervals)
+    weights[[0, -1]] *= 0.5
+    return np.linspace(0.0, 1.0, intervals + 1), weights
+
+
+def _bilinear_grid(quad: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """X(s, t) = (1-s)(1-t) P0 + s(1-t) P1 + s t P2 + (1-s) t P3; areas w_s w_t |X_s x X_t|, scaled to the exact area."""
+    p0, p1, p2, p3 = quad
+    axes = []
+    for a0, a1, b0, b1 in ((p0, p1, p3, p2), (p0, p3, p1, p2)):
+        length = max(np.linalg.norm(a1 - a0), np.linalg.norm(b1 - b0))
+        direction = (a1 - a0 + b1 - b0) / np.linalg.norm(a1 - a0 + b1 - b0)
+        axes.append(_trapezoid(_intervals(length, direction, face_a, face_b, n)))
+    (s, ws), (t, wt) = axes
+    s, t = np.meshgrid(s, t, indexing="ij")
+    s, t = s.ravel()[:, None], t.ravel()[:, None]
+    nodes = (1 - s) * (1 - t) * p0 + s * (1 - t) * p1 + s * t * p2 + (1 - s) * t * p3
+    dx_ds = (1 - t) * (p1 - p0) + t * (p2 - p3)
+    dx_dt = (1 - s) * (p3 - p0) + s * (p2 - p1)
+    jacobian = np.abs(dx_ds[:, 0] * dx_dt[:, 1] - dx_ds[:, 1] * dx_dt[:, 0])
+    areas = np.outer(ws, wt).ravel() * jacobian
+    return nodes, areas * (polygon.signed_area(quad) / areas.sum())
+
+
+def _clipped_grid(overlap: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, n: int, tol: float) -> tuple[np.ndarray, np.ndarray]:
     lo, hi = overlap.min(0), overlap.max(0)
-    extent = np.minimum(np.ptp(face_a, axis=0), np.ptp(face_b, axis=0))
     axes = []
     for k in range(2):
-        intervals = max(1, math.ceil((hi[k] - lo[k]) / (extent[k] / (n - 1)) - 1e-6))
+        intervals = _intervals(hi[k] - lo[k], np.eye(2)[k], face_a, face_b, n)
         nodes = np.linspace(lo[k], hi[k], intervals + 1)
         half = 0.5 * (hi[k] - lo[k]) / intervals
         axes.append((nodes, np.clip(nodes - half, lo[k], hi[k]), np.clip(nodes + half, lo[k], hi[k])))
     (un, u0, u1), (vn, v0, v1) = axes
-    if polygon.is_rectangle(overlap, tol):
-        uu, vv = np.meshgrid(un, vn, indexing="ij")
-        areas = np.outer(u1 - u0, v1 - v0)
-        return np.column_stack([uu.ravel(), vv.ravel()]), areas.ravel()
     nodes, areas = [], []
     for i in range(len(un)):
         for j in range(len(vn)):

@@ -66,7 +66,20 @@ def rectangle(u0: float, u1: float, v0: float, v1: float) -> np.ndarray:
     return np.array([[u0, v0], [u1, v0], [u1, v1], [u0, v1]])
 
 
-def is_rectangle(poly: np.ndarray, tol: float) -> bool:
-    """Whether ``poly`` equals its axis-aligned bounding box (within ``tol``)."""
-    lo, hi = poly.min(0), poly.max(0)
-    return abs(signed_area(poly) - np.prod(hi - lo)) <= tol * max(hi - lo).item()
+def without_collinear(poly: np.ndarray, tol: float) -> np.ndarray:
+    """The polygon's corners: vertices closer than ``tol`` to the line through their
+    neighbours, or to the previous vertex, are dropped (clipping leaves such vertices)."""
+    corners = list(poly)
+    changed = True
+    while changed and len(corners) > 3:
+        changed = False
+        for i in range(len(corners)):
+            prev, cur, nxt = corners[i - 1], corners[i], corners[(i + 1) % len(corners)]
+            edge = nxt - prev
+            length = np.hypot(*edge)
+            off_line = abs(edge[0] * (cur[1] - prev[1]) - edge[1] * (cur[0] - prev[0])) / length if length > 0 else 0.0
+            if off_line <= tol or np.hypot(*(cur - prev)) <= tol:
+                del corners[i]
+                changed = True
+                break
+    return np.array(corners)

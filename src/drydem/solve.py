@@ -27,7 +27,7 @@ from drydem.joints import JointArrays
 from drydem.model import Model
 from drydem.motion import BlockArrays, contact_stiffness, critical_timestep, scaled_inertia
 from drydem.parameters import SolverSettings
-from drydem.rotation import matrices
+from drydem.rotation import matrices, rotate_by_vector
 from drydem.state import State
 
 ENGINES = {"numba": kernels.run_cycles, "reference": reference.run_cycles}
@@ -174,20 +174,28 @@ class Simulation:
 
     # -- diagnostics ----------------------------------------------------------------------
     def energy(self, *, gravity=(0.0, 0.0, -G)) -> dict[str, float]:
-        """Kinetic, gravitational and elastic (joint springs) energy, J.
+        """Kinetic, gravitational and elastic (joint spring) energy, J, all at the half step.
 
-        Kinetic: sum 1/2 m v^2 + 1/2 omega . I_w omega (true masses, half-step velocities);
-        gravitational: -sum m g . x (zero at the model-file positions); elastic:
-        sum 1/2 F_n^2 / (kn A) + 1/2 |F_s|^2 / (ks A) from the last computed forces.
+        The velocities are those of t - dt/2 in leapfrog terms, so the positions are rewound
+        by half a step (x - v dt/2, rotations by -omega dt/2) before the potentials are
+        evaluated. Kinetic: sum 1/2 m v^2 + 1/2 omega . I_w omega (true masses);
+        gravitational: -sum m g . (x - x_model_file); elastic: sum 1/2 kn A u_n^2 over closed
+        sub-contacts plus 1/2 |F_s|^2 / (ks A) (no-tension joints).
         """
         m, s, c = self.model, self.state, self.contacts
-        rot = matrices(s.quaternion)
+        half = -0.5 * self.timestep
+        position = s.position + half * s.velocity
+        quaternion = s.quaternion.copy()
+        for q, w in zip(quaternion, s.angular_velocity):
+            rotate_by_vector(q, *(half * w))
+        rot = matrices(quaternion)
         inertia_world = np.einsum("nij,njk,nlk->nil", rot, m.block_inertia, rot)
         kinetic = 0.5 * (m.block_mass * np.einsum("ni,ni->n", s.velocity, s.velocity)).sum()
         kinetic += 0.5 * np.einsum("ni,nij,nj->", s.angular_velocity, inertia_world, s.angular_velocity)
-        lift = s.position - m.block_centroid
-        gravitational = -float((m.block_mass * (lift @ np.asarray(gravity, float))).sum())
-        elastic = 0.5 * (c.normal_force**2 / (m.joint.kn * c.area)).sum()
+        gravitational = -float((m.block_mass * ((position - m.block_centroid) @ np.asarray(gravity, float))).sum())
+        x_inc, x_ref, normal = contacts.world_points(c, position, rot)
+        closure = np.maximum(-np.einsum("ni,ni->n", x_inc - x_ref, normal), 0.0)
+        elastic = 0.5 * (m.joint.kn * c.area * closure**2).sum()
         elastic += 0.5 * (np.einsum("ni,ni->n", c.shear_force, c.shear_force) / (m.joint.ks * c.area)).sum()
         return {"kinetic": float(kinetic), "gravitational": gravitational, "elastic": float(elastic)}
 

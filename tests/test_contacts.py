@@ -1,0 +1,153 @@
+"""Contact detection: sub-contact grids, and broad + narrow phase against an all-pairs oracle."""
+
+import itertools
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import drydem as dd
+from drydem import contacts
+from drydem.rotation import matrices
+from conftest import BRICK, box_vertices
+
+
+def detect_boxes(boxes, *, points, tolerance, rotation=np.eye(3)):
+    shapes = [dd.convex_hull(box_vertices(lo, hi) @ rotation.T) for lo, hi in boxes]
+    n = len(shapes)
+    return contacts.detect(
+        shapes, np.array([s.centroid for s in shapes]), np.repeat(np.eye(3)[None], n, 0), np.ones(n, bool),
+        tolerance=tolerance, points_per_length=points,
+    )
+
+
+def bed_joint(offset_x, points):
+    """A brick on another, shifted ``offset_x`` along its length."""
+    lx, ly, lz = BRICK
+    return detect_boxes([([0, 0, 0], [lx, ly, lz]), ([offset_x, 0, lz], [offset_x + lx, ly, 2 * lz])], points=points, tolerance=1e-4)
+
+
+@pytest.mark.parametrize("points", [2, 3, 4, 8])
+def test_full_bed_joint_gets_n_by_n_points_with_trapezoid_areas(points):
+    sub = bed_joint(0.0, points)
+    lx, ly, _ = BRICK
+    assert sub.count == points * points
+    assert sub.area.sum() == pytest.approx(lx * ly, rel=1e-12)
+    # trapezoid weights: a corner point carries a quarter cell, an interior point a full cell
+    cell = (lx / (points - 1)) * (ly / (points - 1))
+    assert sub.area.min() == pytest.approx(cell / 4)
+    if points > 2:
+        assert sub.area.max() == pytest.approx(cell)
+    x = sub.point_ref_body[:, 0] + 0.5 * lx  # reference points in the bottom brick's frame
+    np.testing.assert_allclose(np.unique(x.round(12)), np.linspace(0, lx, points), atol=1e-12)
+
+
+def test_corner_points_only_with_two_points_per_length():
+    sub = bed_joint(0.0, 2)
+    lx, ly, _ = BRICK
+    corners = np.abs(sub.point_ref_body[:, :2])
+    np.testing.assert_allclose(corners, np.tile([lx / 2, ly / 2], (4, 1)), atol=1e-12)
+
+
+def test_single_point_sits_at_the_contact_centroid():
+    sub = bed_joint(0.5 * BRICK[0], 1)
+    assert sub.count == 1
+    assert sub.area[0] == pytest.approx(0.5 * BRICK[0] * BRICK[1])
+    assert sub.point_ref_body[0, 0] == pytest.approx(0.25 * BRICK[0])
+
+
+def test_half_overlap_of_running_bond_keeps_the_spacing_and_both_ends():
+    # 4 points along 25 mm: spacing 8.33 mm; a 12.5 mm overlap needs 2 intervals -> 3 points
+    sub = bed_joint(0.5 * BRICK[0], 4)
+    x = np.unique(sub.point_ref_body[:, 0].round(12))
+    np.testing.assert_allclose(x, [0.0, 0.25 * BRICK[0], 0.5 * BRICK[0]], atol=1e-12)
+    assert sub.area.sum() == pytest.approx(0.5 * BRICK[0] * BRICK[1])
+
+
+def test_non_rectangular_overlap_areas_sum_to_the_polygon():
+    # a brick turned 30 deg about z on a larger slab: the contact polygon is the turned rectangle
+    rot = Rotation.from_euler("z", 30, degrees=True).as_matrix()
+    slab = dd.box([-0.1, -0.1, -0.01], [0.1, 0.1, 0.0])
+    brick = dd.convex_hull(box_vertices([-0.0125, -0.006, 0.0], [0.0125, 0.006, 0.0055]) @ rot.T)
+    fc = contacts.face_contact(slab, brick, 0, 1, tolerance=1e-4, points_per_length=4)
+    assert fc.areas.sum() == pytest.approx(BRICK[0] * BRICK[1], rel=1e-9)
+    assert fc.ref == 0 and np.allclose(fc.normal, [0, 0, 1])
+
+
+def random_box_cloud(rng, n=5):
+    """Boxes on a jittered n^3 lattice, each side pulled in by 0, a gap within or beyond the
+    tolerance, or a lot; about a third of the cells empty. Returns boxes and the tolerance."""
+    tolerance = 1e-3
+    lines = [np.cumsum(rng.uniform(0.5, 1.5, n + 1)) for _ in range(3)]
+    pulls = np.array([0.0, 0.0, 0.3 * tolerance, 0.45 * tolerance, 3 * tolerance, 0.2])
+    boxes = {}
+    for cell in itertools.product(range(n), repeat=3):
+        if rng.random() < 0.35:
+            continue
+        lo = np.array([lines[k][cell[k]] for k in range(3)]) + rng.choice(pulls, 3)
+        hi = np.array([lines[k][cell[k] + 1] for k in range(3)]) - rng.choice(pulls, 3)
+        boxes[cell] = (lo, hi)
+    return boxes, tolerance
+
+
+def oracle_contact_areas(boxes, tolerance):
+    """All pairs: boxes touch through a face if their gap along one axis is <= tolerance and
+    they overlap (with positive area) in the other two; the contact area is that overlap."""
+    areas = {}
+    cells = list(boxes)
+    for i, j in itertools.combinations(range(len(cells)), 2):
+        (lo_a, hi_a), (lo_b, hi_b) = boxes[cells[i]], boxes[cells[j]]
+        overlap = np.minimum(hi_a, hi_b) - np.maximum(lo_a, lo_b)  # negative = gap
+        for axis in range(3):
+            others = [k for k in range(3) if k != axis]
+            if -tolerance <= overlap[axis] <= 1e-12 and np.all(overlap[others] > 0):
+                areas[(i, j)] = float(np.prod(overlap[others]))
+    return areas
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_detection_matches_all_pairs_oracle_on_random_clouds(seed):
+    rng = np.random.default_rng(seed)
+    boxes, tolerance = random_box_cloud(rng)
+    expected = oracle_contact_areas(boxes, tolerance)
+    assert len(expected) > 20  # the cloud really has contacts
+    rotation = Rotation.random(random_state=rng).as_matrix()  # detection is frame invariant
+    sub = detect_boxes(list(boxes.values()), points=2, tolerance=tolerance, rotation=rotation)
+    found = {}
+    for k, (a, b) in enumerate(sub.pairs):
+        found[(min(a, b), max(a, b))] = sub.area[sub.contact == k].sum()
+    assert set(found) == set(expected)
+    for pair, area in expected.items():
+        assert found[pair] == pytest.approx(area, rel=1e-9)
+    assert np.all(np.bincount(sub.contact) == 4)  # rectangles: corner points only
+
+
+def test_broad_phase_matches_all_pairs_bounding_box_test():
+    rng = np.random.default_rng(7)
+    lo = rng.uniform(0, 10, (300, 3))
+    shapes = [dd.box(l, l + rng.uniform(0.1, 1.5, 3)) for l in lo]
+    movable = rng.random(300) < 0.8
+    found = {tuple(p) for p in contacts.broad_phase(shapes, movable, 0.05)}
+    lo_b = np.array([s.vertices.min(0) for s in shapes]) - 0.05
+    hi_b = np.array([s.vertices.max(0) for s in shapes]) + 0.05
+    expected = {
+        (i, j)
+        for i, j in itertools.combinations(range(300), 2)
+        if (movable[i] or movable[j]) and np.all(lo_b[i] <= hi_b[j]) and np.all(lo_b[j] <= hi_b[i])
+    }
+    assert found == expected and len(expected) > 50
+
+
+def test_redetection_keeps_shear_stress_of_the_same_pair():
+    model = dd.build_model(
+        [dd.Block(name="base", shape=dd.box([-0.1, -0.1, -0.01], [0.1, 0.1, 0]), fixed=True),
+         dd.Block(name="b", shape=dd.box([0, 0, 0], [0.025, 0.012, 0.0055]))],
+        density=1800.0,
+    )
+    sim = dd.Simulation(model)
+    sim.contacts.shear_force[:, 0] = 2.0 * sim.contacts.area  # 2 Pa of shear stress on the block
+    sim.contacts.intact[0] = False
+    sim.state.position[1, 0] += 1e-4  # slid a little: the grid moves with the overlap
+    sim.detect_contacts()
+    np.testing.assert_allclose(sim.contacts.shear_force[:, 0] / sim.contacts.area, 2.0)
+    assert (~sim.contacts.intact).sum() == 1
