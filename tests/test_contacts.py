@@ -17,7 +17,7 @@ def detect_boxes(boxes, *, points, tolerance, rotation=np.eye(3)):
     n = len(shapes)
     return contacts.detect(
         shapes, np.array([s.centroid for s in shapes]), np.repeat(np.eye(3)[None], n, 0), np.ones(n, bool),
-        tolerance=tolerance, points_per_length=points,
+        tolerance=tolerance, margin=tolerance, points_per_length=points,
     )
 
 

@@ -19,7 +19,7 @@ blocks' body frames, so rocking opens or closes them as the blocks turn.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -37,6 +37,8 @@ class SubContacts:
     centroid in its body frame; normal_ref_body (ns, 3), unit normal of the reference face
     in the reference block's body frame, pointing towards the incident block; area (ns,) m2;
     contact (ns,) int64, index of the face pair in ``pairs`` ((nc, 2) int64, ref and inc block).
+    neighbours : (nn, 2) int64, the block pairs whose bounding boxes were within the detection
+    margin (the Verlet list watched for re-detection).
     State: shear_force (ns, 3) N, world frame, force on the incident block; normal_force (ns,) N,
     compression positive; intact (ns,) bool, cohesion and tension still available.
     """
@@ -49,6 +51,7 @@ class SubContacts:
     area: np.ndarray
     contact: np.ndarray
     pairs: np.ndarray
+    neighbours: np.ndarray
     shear_force: np.ndarray
     normal_force: np.ndarray
     intact: np.ndarray
@@ -60,7 +63,8 @@ class SubContacts:
     @classmethod
     def empty(cls) -> SubContacts:
         i, v, s = np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros(0)
-        return cls(i, i, v, v, v, s, i, np.zeros((0, 2), np.int64), v.copy(), s.copy(), np.zeros(0, bool))
+        none = np.zeros((0, 2), np.int64)
+        return cls(i, i, v, v, v, s, i, none, none, v.copy(), s.copy(), np.zeros(0, bool))
 
 
 @dataclass(frozen=True)
@@ -240,22 +244,25 @@ def detect(
     movable: np.ndarray,
     *,
     tolerance: float,
+    margin: float,
     points_per_length: int,
     previous: SubContacts | None = None,
 ) -> SubContacts:
     """All sub-contacts of blocks ``polyhedra`` (world geometry now) at centroids ``position``
-    (nb, 3) and rotation matrices ``rotation`` (nb, 3, 3).
+    (nb, 3) and rotation matrices ``rotation`` (nb, 3, 3); block pairs whose bounding boxes are
+    within ``margin`` (m, >= tolerance) are the neighbours.
 
     With ``previous``, each new sub-contact inherits the shear stress and the intact flag of
     the nearest previous sub-contact of the same block pair (see :func:`carry_over`).
     """
     found = []
-    for ia, ib in broad_phase(polyhedra, movable, 0.5 * tolerance):
+    neighbours = broad_phase(polyhedra, movable, 0.5 * margin)
+    for ia, ib in neighbours:
         fc = face_contact(polyhedra[ia], polyhedra[ib], int(ia), int(ib), tolerance=tolerance, points_per_length=points_per_length)
         if fc is not None:
             found.append(fc)
     if not found:
-        return SubContacts.empty()
+        return replace(SubContacts.empty(), neighbours=neighbours)
     counts = np.array([len(fc.areas) for fc in found], dtype=np.int64)
     contact = np.repeat(np.arange(len(found), dtype=np.int64), counts)
     pairs = np.array([(fc.ref, fc.inc) for fc in found], dtype=np.int64)
@@ -276,6 +283,7 @@ def detect(
         area=areas,
         contact=contact,
         pairs=pairs,
+        neighbours=neighbours,
         shear_force=np.zeros((ns, 3)),
         normal_force=np.zeros(ns),
         intact=np.ones(ns, dtype=bool),

@@ -166,23 +166,56 @@ def integrate(state, rot, blocks, force, moment, damping, dt):
     return max_unbalanced, max_speed
 
 
-@numba.njit(cache=True)
-def displacement_since(state, detected, radius):
-    """Largest displacement of any block point since the contacts were detected at ``detected``, m.
+@numba.njit(cache=True, inline="always")
+def _relative_quaternion(q, q0):
+    """q (x) q0^-1 for unit quaternions: the rotation since detection."""
+    return (
+        q[0] * q0[0] + q[1] * q0[1] + q[2] * q0[2] + q[3] * q0[3],
+        -q[0] * q0[1] + q[1] * q0[0] - q[2] * q0[3] + q[3] * q0[2],
+        -q[0] * q0[2] + q[1] * q0[3] + q[2] * q0[0] - q[3] * q0[1],
+        -q[0] * q0[3] - q[1] * q0[2] + q[2] * q0[1] + q[3] * q0[0],
+    )
 
-    Per block |x - x0| + theta r, theta = 2 acos|w| the angle of q q0^-1 and r the block radius
-    (a chord 2 r sin(theta / 2) is shorter than theta r).
+
+@numba.njit(cache=True)
+def needs_detection(state, detected, neighbours, radius, relative_limit, absolute_limit):
+    """Whether contacts must be re-detected since the State ``detected`` (a Verlet-list test).
+
+    Absolute: a block point moved more than ``absolute_limit`` (|dx| + theta r), so a block
+    outside the neighbour list may have come close. Relative: for a neighbour pair (i, j), every
+    point of i moved relative to j by at most |dx_i - dx_j - (Q_j - 1)(c_i0 - c_j0)| + theta_ij r_i
+    (Q the rotations since detection, theta_ij the angle of Q_i Q_j^T); more than
+    ``relative_limit`` means their contact may have changed. Blocks moving together as one
+    rigid body never trigger it.
     """
-    largest = 0.0
-    for i in range(state.position.shape[0]):
-        q, q0 = state.quaternion[i], detected.quaternion[i]
-        w = abs(q[0] * q0[0] + q[1] * q0[1] + q[2] * q0[2] + q[3] * q0[3])
-        theta = 2.0 * np.arccos(min(w, 1.0))
-        dx = state.position[i, 0] - detected.position[i, 0]
-        dy = state.position[i, 1] - detected.position[i, 1]
-        dz = state.position[i, 2] - detected.position[i, 2]
-        largest = max(largest, np.sqrt(dx * dx + dy * dy + dz * dz) + theta * radius[i])
-    return largest
+    nb = state.position.shape[0]
+    rel = np.empty((nb, 4))
+    for i in range(nb):
+        w, x, y, z = _relative_quaternion(state.quaternion[i], detected.quaternion[i])
+        rel[i, 0], rel[i, 1], rel[i, 2], rel[i, 3] = w, x, y, z
+        d = state.position[i] - detected.position[i]
+        theta = 2.0 * np.arccos(min(abs(w), 1.0))
+        if np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) + theta * radius[i] > absolute_limit:
+            return True
+    for k in range(neighbours.shape[0]):
+        i, j = neighbours[k, 0], neighbours[k, 1]
+        # (Q_j - 1) v with v = c_i0 - c_j0, by v' = v + 2 w (u x v) + 2 u x (u x v)
+        vx = detected.position[i, 0] - detected.position[j, 0]
+        vy = detected.position[i, 1] - detected.position[j, 1]
+        vz = detected.position[i, 2] - detected.position[j, 2]
+        w, ux, uy, uz = rel[j, 0], rel[j, 1], rel[j, 2], rel[j, 3]
+        cx, cy, cz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+        qx = 2.0 * w * cx + 2.0 * (uy * cz - uz * cy)
+        qy = 2.0 * w * cy + 2.0 * (uz * cx - ux * cz)
+        qz = 2.0 * w * cz + 2.0 * (ux * cy - uy * cx)
+        dx = state.position[i, 0] - detected.position[i, 0] - state.position[j, 0] + detected.position[j, 0] - qx
+        dy = state.position[i, 1] - detected.position[i, 1] - state.position[j, 1] + detected.position[j, 1] - qy
+        dz = state.position[i, 2] - detected.position[i, 2] - state.position[j, 2] + detected.position[j, 2] - qz
+        cos_half = abs(rel[i, 0] * rel[j, 0] + rel[i, 1] * rel[j, 1] + rel[i, 2] * rel[j, 2] + rel[i, 3] * rel[j, 3])
+        theta = 2.0 * np.arccos(min(cos_half, 1.0))
+        if np.sqrt(dx * dx + dy * dy + dz * dz) + theta * max(radius[i], radius[j]) > relative_limit:
+            return True
+    return False
 
 
 @numba.njit(cache=True)
@@ -203,13 +236,15 @@ def make_run_cycles(step_function, *, jit: bool):
     """The cycling loop around ``step_function`` (numba-compiled when ``jit``).
 
     ``run_cycles(state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit,
-    force_scale, detected, motion_limit)`` cycles until converged, re-detection needed, diverged
-    or ``max_cycles``, and returns (cycles run, exit code, StepStats of the last cycle).
-    ``force_scale`` (N) is the ratio's denominator (mean weight of the free blocks); re-detection
-    is needed once a block point has moved ``motion_limit`` (m) from the State ``detected``.
+    force_scale, detected, neighbours, relative_limit, absolute_limit)`` cycles until converged,
+    re-detection needed, diverged or ``max_cycles``, and returns (cycles run, exit code,
+    StepStats of the last cycle). ``force_scale`` (N) is the ratio's denominator (mean weight of
+    the free blocks); the last four arguments go to :func:`needs_detection`.
     """
 
-    def run_cycles(state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit, force_scale, detected, motion_limit):
+    def run_cycles(
+        state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit, force_scale, detected, neighbours, relative_limit, absolute_limit
+    ):
         nb = state.position.shape[0]
         rot = np.empty((nb, 3, 3))
         force = np.empty((nb, 3))
@@ -222,7 +257,7 @@ def make_run_cycles(step_function, *, jit: bool):
                 return cycle + 1, DIVERGED, stats
             if (criterion == RATIO and stats.ratio < limit) or (criterion == VELOCITY and speed < limit):
                 return cycle + 1, CONVERGED, stats
-            if displacement_since(state, detected, blocks.radius) > motion_limit:
+            if needs_detection(state, detected, neighbours, blocks.radius, relative_limit, absolute_limit):
                 return cycle + 1, REDETECT, stats
         return max_cycles, RUNNING, stats
 

@@ -2,10 +2,12 @@
 
 A :class:`Simulation` holds a frozen :class:`~drydem.model.Model`, the mutable
 :class:`~drydem.state.State` and the current :class:`~drydem.contacts.SubContacts`.
-Contacts are re-detected whenever some block may have moved half the contact
-tolerance since the last detection (a bound on every point's displacement, so no new touch
-is missed); each detection recomputes the timestep (or, with mass scaling, the
-fictitious masses at the first timestep).
+Contacts are re-detected whenever two neighbouring blocks may have moved half the
+contact tolerance relative to each other since the last detection, or any block may have
+moved far enough for a block outside its neighbour list to reach it (bounds on every
+point's displacement, so no new touch is missed: :func:`drydem.kernels.needs_detection`);
+each detection recomputes the timestep (or, with mass scaling, the fictitious masses at
+the first timestep).
 
 Equilibrium (3DEC's ``solve``): cycle until
 
@@ -17,6 +19,7 @@ Equilibrium (3DEC's ``solve``): cycle until
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,8 +36,11 @@ from drydem.state import State
 ENGINES = {"numba": kernels.run_cycles, "reference": reference.run_cycles}
 #: standard gravity, m/s2
 G = 9.81
-#: cycles run in one call of the kernel loop between progress checks
-CHUNK = 20_000
+#: neighbour-list margin in contact tolerances: blocks whose bounding boxes are this close are
+#: watched for relative motion; any block moving (margin - tolerance) / 2 re-detects everything
+NEIGHBOUR_MARGIN = 10.0
+#: cycles run in one call of the kernel loop between progress reports
+CHUNK = 5_000
 
 
 @dataclass(frozen=True)
@@ -84,6 +90,7 @@ class Simulation:
             rot,
             m.block_movable,
             tolerance=m.contact_tolerance,
+            margin=NEIGHBOUR_MARGIN * m.contact_tolerance,
             points_per_length=m.contacts.points_per_length,
             previous=self.contacts if self.contacts.count else None,
         )
@@ -130,17 +137,22 @@ class Simulation:
         """Run exactly ``n`` cycles (re-detecting contacts as needed), no equilibrium test."""
         return self._run(gravity, n, criterion=kernels.RATIO, limit=-1.0, criterion_name="none")
 
-    def cycle_to_equilibrium(self, *, gravity=(0.0, 0.0, -G), solver: SolverSettings | None = None) -> EquilibriumResult:
+    def cycle_to_equilibrium(
+        self, *, gravity=(0.0, 0.0, -G), solver: SolverSettings | None = None, progress: Callable[[int, kernels.StepStats], None] | None = None
+    ) -> EquilibriumResult:
         """Cycle until at rest (see module docstring); non-convergence is returned, not hidden.
 
-        Raises DivergenceError if the integration blows up.
+        ``progress(cycles, stats)`` is called every few thousand cycles. Raises DivergenceError
+        if the integration blows up.
         """
         solver = solver or self.model.solver
         if solver.criterion == "ratio":
-            return self._run(gravity, solver.max_cycles, criterion=kernels.RATIO, limit=solver.ratio, criterion_name="ratio")
-        return self._run(gravity, solver.max_cycles, criterion=kernels.VELOCITY, limit=solver.max_velocity, criterion_name="velocity")
+            return self._run(gravity, solver.max_cycles, criterion=kernels.RATIO, limit=solver.ratio, criterion_name="ratio", progress=progress)
+        return self._run(
+            gravity, solver.max_cycles, criterion=kernels.VELOCITY, limit=solver.max_velocity, criterion_name="velocity", progress=progress
+        )
 
-    def _run(self, gravity, max_cycles: int, *, criterion: int, limit: float, criterion_name: str) -> EquilibriumResult:
+    def _run(self, gravity, max_cycles: int, *, criterion: int, limit: float, criterion_name: str, progress=None) -> EquilibriumResult:
         m = self.model
         g = np.asarray(gravity, dtype=float)
         if g.shape != (3,) or not np.all(np.isfinite(g)):
@@ -156,10 +168,13 @@ class Simulation:
             n, code, stats = run_cycles(
                 self.state, self._blocks, kernels.SubContactArrays.of(self.contacts), joint, g, self.timestep,
                 m.solver.damping, min(CHUNK, max_cycles - done), criterion, limit, max(weight, 1e-300),
-                self._detected_state, 0.5 * m.contact_tolerance,
+                self._detected_state, self.contacts.neighbours, 0.5 * m.contact_tolerance,
+                0.5 * (NEIGHBOUR_MARGIN - 1.0) * m.contact_tolerance,
             )
             done += n
             self.cycles += n
+            if progress is not None:
+                progress(done, stats)
             if code == kernels.DIVERGED:
                 raise DivergenceError(
                     f"{m.source}: the integration diverged after {self.cycles} cycles (timestep {self.timestep:.3g} s): "

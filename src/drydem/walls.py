@@ -14,7 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from drydem.geometry import box
-from drydem.model import Block
+from drydem.model import Block, Model, build_model
+from drydem.parameters import ContactSettings, JointMaterial, Supports
 
 #: the seed paper's brick: length, height, width (m) and density (kg/m3), Savalle et al. 2022, Section 2
 PAPER_BRICK_M = (0.025, 0.0055, 0.012)
@@ -108,3 +109,19 @@ def _runs(owner: list[int]) -> list[list[int]]:
         else:
             runs.append([h])
     return runs
+
+
+def benchmark_wall(*, kn: float = 3e7, points_per_length: int = 4) -> Model:
+    """The benchmark wall (8 bricks x 27 courses, running bond, 33 % voids, four lintels) as an
+    in-plane model (every block fixed in y, paper Section 3), kn = ks, mu = 0.5, on a fixed base.
+
+    This is the shipped example ``perforated_wall`` and the wall of ``benchmarks/``; it is not
+    one of the paper's competition walls.
+    """
+    return build_model(
+        running_bond_wall(courses=27, bricks_per_course=8, openings=BENCHMARK_OPENINGS),
+        density=PAPER_DENSITY,
+        joint=JointMaterial(kn=kn, ks=kn, friction=0.5),
+        contacts=ContactSettings(points_per_length=points_per_length),
+        supports=Supports(fix_y=True),
+    )

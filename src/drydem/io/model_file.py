@@ -33,8 +33,12 @@ to the default); so are wrong types. Messages name the file, table, block and ke
 from __future__ import annotations
 
 import tomllib
-from dataclasses import fields
+from dataclasses import asdict, fields
 from pathlib import Path
+
+import json
+
+import numpy as np
 
 from drydem.errors import DrydemError, ModelError
 from drydem.geometry import box, convex_hull
@@ -113,3 +117,64 @@ def _block(entry: dict, index: int, source: str) -> Block:
     if density is not None and not isinstance(density, (int, float)):
         raise ModelError(f"{source}: {where} density = {density!r}: must be a number (kg/m3)")
     return Block(name=str(name), shape=shape, density=density, fixed=fixed)
+
+
+def model_to_dict(model: Model) -> dict:
+    """The model as the TOML structure :func:`model_from_dict` reads.
+
+    Axis-aligned boxes are written as ``box = {min, max}``, other blocks as their hull vertices.
+    """
+    density = model.block_mass / np.array([s.volume for s in model.block_shape])
+    common = float(np.median(density))
+    data: dict = {"material": {"density": common}}
+    for name in SECTIONS:
+        data[name] = {k: v for k, v in asdict(getattr(model, name)).items() if v is not None}
+    blocks = []
+    for name, shape, fixed, rho in zip(model.block_name, model.block_shape, model.block_fixed, density):
+        entry: dict = {"name": name}
+        if fixed.all():
+            entry["fixed"] = True
+        if not np.isclose(rho, common, rtol=1e-12):
+            entry["density"] = float(rho)
+        lo, hi = shape.vertices.min(0), shape.vertices.max(0)
+        if np.isclose(shape.volume, np.prod(hi - lo), rtol=1e-12):
+            entry["box"] = {"min": _rounded(lo), "max": _rounded(hi)}
+        else:
+            entry["vertices"] = [_rounded(v) for v in shape.vertices]
+        blocks.append(entry)
+    data["block"] = blocks
+    return data
+
+
+def save_model(model: Model, path: str | Path, *, header: str = "") -> None:
+    """Write ``model`` as a model file that :func:`load_model` reads back to the same model;
+    ``header`` lines go first, as TOML comments.
+
+    Written by hand rather than with a TOML library: the schema has only scalars and numeric
+    arrays, and this keeps one line per block (tomli-w splits every array over many lines).
+    """
+    data = model_to_dict(model)
+    lines = [f"# {line}" for line in header.splitlines()]
+    for table in ("material", *SECTIONS):
+        lines += ["", f"[{table}]"] + [f"{k} = {_toml(v)}" for k, v in data[table].items()]
+    for entry in data["block"]:
+        lines += ["", "[[block]]"] + [f"{k} = {_toml(v)}" for k, v in entry.items()]
+    Path(path).write_text("\n".join(lines).lstrip("\n") + "\n")
+
+
+def _rounded(values) -> list[float]:
+    """Coordinates to 12 significant digits (drops the 1e-17 noise of float arithmetic)."""
+    return [float(f"{c:.12g}") for c in values]
+
+
+def _toml(value) -> str:
+    """An inline TOML value: bool, int, float, str, list or dict of those."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, dict):
+        return "{ " + ", ".join(f"{k} = {_toml(v)}" for k, v in value.items()) + " }"
+    return "[" + ", ".join(_toml(v) for v in value) + "]"
