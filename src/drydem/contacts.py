@@ -19,7 +19,8 @@ blocks' body frames, so rocking opens or closes them as the blocks turn.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -30,41 +31,57 @@ from drydem.geometry import ConvexPolyhedron
 
 @dataclass(eq=False)
 class SubContacts:
-    """Struct-of-arrays of sub-contacts (ns of them) and the contacts (face pairs) they belong to.
+    """Struct-of-arrays of the contacts (face pairs, nc) and their sub-contacts (ns), CSR-style:
+    the sub-contacts of contact k are ``start[k]:start[k + 1]``.
 
-    Geometry (fixed between detections): block_ref, block_inc (ns,) int64;
-    point_ref_body, point_inc_body (ns, 3) m, material points relative to each block's
-    centroid in its body frame; normal_ref_body (ns, 3), unit normal of the reference face
-    in the reference block's body frame, pointing towards the incident block; area (ns,) m2;
-    contact (ns,) int64, index of the face pair in ``pairs`` ((nc, 2) int64, ref and inc block).
+    Per contact (fixed between detections): pairs (nc, 2) int64, reference and incident block;
+    normal_body (nc, 3), unit normal of the reference face in the reference block's body frame,
+    pointing towards the incident block; offset (nc,) m, that face's plane n . x = offset in the
+    same frame; start (nc + 1,) int64.
+    Per sub-contact: point_ref_body, point_inc_body (ns, 3) m, the two material points relative
+    to each block's centroid in its body frame; area (ns,) m2. State: shear_force (ns, 3) N,
+    world frame, force on the incident block; normal_force (ns,) N, compression positive;
+    intact (ns,) bool, cohesion and tension still available.
     neighbours : (nn, 2) int64, the block pairs whose bounding boxes were within the detection
     margin (the Verlet list watched for re-detection).
-    State: shear_force (ns, 3) N, world frame, force on the incident block; normal_force (ns,) N,
-    compression positive; intact (ns,) bool, cohesion and tension still available.
     """
 
-    block_ref: np.ndarray
-    block_inc: np.ndarray
+    pairs: np.ndarray
+    normal_body: np.ndarray
+    offset: np.ndarray
+    start: np.ndarray
     point_ref_body: np.ndarray
     point_inc_body: np.ndarray
-    normal_ref_body: np.ndarray
     area: np.ndarray
-    contact: np.ndarray
-    pairs: np.ndarray
-    neighbours: np.ndarray
     shear_force: np.ndarray
     normal_force: np.ndarray
     intact: np.ndarray
+    neighbours: np.ndarray
 
     @property
     def count(self) -> int:
         return len(self.area)
 
+    @cached_property
+    def contact(self) -> np.ndarray:
+        """(ns,) index of each sub-contact's contact."""
+        return np.repeat(np.arange(len(self.pairs)), np.diff(self.start))
+
+    @property
+    def block_ref(self) -> np.ndarray:
+        return self.pairs[self.contact, 0]
+
+    @property
+    def block_inc(self) -> np.ndarray:
+        return self.pairs[self.contact, 1]
+
     @classmethod
-    def empty(cls) -> SubContacts:
-        i, v, s = np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros(0)
-        none = np.zeros((0, 2), np.int64)
-        return cls(i, i, v, v, v, s, i, none, none, v.copy(), s.copy(), np.zeros(0, bool))
+    def empty(cls, neighbours: np.ndarray | None = None) -> SubContacts:
+        v, s, pairs = np.zeros((0, 3)), np.zeros(0), np.zeros((0, 2), np.int64)
+        return cls(
+            pairs, v, s, np.zeros(1, np.int64), v, v.copy(), s.copy(), v.copy(), s.copy(), np.zeros(0, bool),
+            pairs.copy() if neighbours is None else neighbours,
+        )
 
 
 @dataclass(frozen=True)
@@ -262,31 +279,31 @@ def detect(
         if fc is not None:
             found.append(fc)
     if not found:
-        return replace(SubContacts.empty(), neighbours=neighbours)
+        return SubContacts.empty(neighbours)
     counts = np.array([len(fc.areas) for fc in found], dtype=np.int64)
-    contact = np.repeat(np.arange(len(found), dtype=np.int64), counts)
     pairs = np.array([(fc.ref, fc.inc) for fc in found], dtype=np.int64)
-    block_ref, block_inc = pairs[contact, 0], pairs[contact, 1]
+    contact = np.repeat(np.arange(len(found)), counts)
     points = np.concatenate([fc.points for fc in found])
     gaps = np.concatenate([fc.gaps for fc in found])
     areas = np.concatenate([fc.areas for fc in found])
-    normals = np.repeat(np.array([fc.normal for fc in found]), counts, axis=0)
+    normals = np.array([fc.normal for fc in found])
+    r_ref, r_inc = rotation[pairs[:, 0]], rotation[pairs[:, 1]]
+    normal_body = np.einsum("nji,nj->ni", r_ref, normals)  # R^T n
+    point_ref_body = np.einsum("nji,nj->ni", r_ref[contact], points - position[pairs[contact, 0]])
+    incident = points + gaps[:, None] * normals[contact]
     ns = len(areas)
-    r_ref, r_inc = rotation[block_ref], rotation[block_inc]
-    to_body = lambda rot, vec: np.einsum("nji,nj->ni", rot, vec)  # R^T v
     sub = SubContacts(
-        block_ref=block_ref,
-        block_inc=block_inc,
-        point_ref_body=to_body(r_ref, points - position[block_ref]),
-        point_inc_body=to_body(r_inc, points + gaps[:, None] * normals - position[block_inc]),
-        normal_ref_body=to_body(r_ref, normals),
-        area=areas,
-        contact=contact,
         pairs=pairs,
-        neighbours=neighbours,
+        normal_body=normal_body,
+        offset=np.einsum("ni,ni->n", normal_body, point_ref_body[np.cumsum(counts) - counts]),
+        start=np.concatenate([[0], np.cumsum(counts)]),
+        point_ref_body=point_ref_body,
+        point_inc_body=np.einsum("nji,nj->ni", r_inc[contact], incident - position[pairs[contact, 1]]),
+        area=areas,
         shear_force=np.zeros((ns, 3)),
         normal_force=np.zeros(ns),
         intact=np.ones(ns, dtype=bool),
+        neighbours=neighbours,
     )
     if previous is not None and previous.count:
         carry_over(previous, sub, position, rotation)
@@ -294,11 +311,13 @@ def detect(
 
 
 def world_points(sub: SubContacts, position: np.ndarray, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """World incident points, reference points and normals of every sub-contact."""
-    x_inc = position[sub.block_inc] + np.einsum("nij,nj->ni", rotation[sub.block_inc], sub.point_inc_body)
-    x_ref = position[sub.block_ref] + np.einsum("nij,nj->ni", rotation[sub.block_ref], sub.point_ref_body)
-    normal = np.einsum("nij,nj->ni", rotation[sub.block_ref], sub.normal_ref_body)
-    return x_inc, x_ref, normal
+    """World incident points, gaps (m, distance from the reference plane along the normal,
+    negative when penetrating) and normals of every sub-contact."""
+    ref, inc = sub.block_ref, sub.block_inc
+    x_inc = position[inc] + np.einsum("nij,nj->ni", rotation[inc], sub.point_inc_body)
+    normal = np.einsum("nij,nj->ni", rotation[ref], sub.normal_body[sub.contact])
+    gap = np.einsum("ni,ni->n", x_inc - position[ref], normal) - sub.offset[sub.contact]
+    return x_inc, gap, normal
 
 
 def carry_over(old: SubContacts, new: SubContacts, position: np.ndarray, rotation: np.ndarray) -> None:

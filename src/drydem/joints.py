@@ -39,15 +39,20 @@ class JointArrays(NamedTuple):
 
 
 @numba.njit(cache=True, inline="always")
-def joint_law(closure, dus_x, dus_y, dus_z, fs_x, fs_y, fs_z, area, intact, joint):
-    """One sub-contact's new (F_n, F_s x, F_s y, F_s z, intact); see module docstring.
+def normal_law(closure, area, intact, joint):
+    """(F_n, carries): the normal force and whether the sub-contact carries load at all.
 
-    ``fs_*`` is the previous shear force already rotated into the current tangent plane.
-    """
+    It does not once opened beyond its tensile strength (any opening when T = 0 or failed);
+    then F_n = F_s = 0 and the sub-contact has failed."""
     fn = joint.kn * area * closure
-    tension_limit = joint.tension * area if intact else 0.0
-    if fn < -tension_limit:  # open beyond the tensile strength (any opening when T = 0 or failed)
-        return 0.0, 0.0, 0.0, 0.0, False
+    return fn, fn >= -(joint.tension * area if intact else 0.0)
+
+
+@numba.njit(cache=True, inline="always")
+def shear_law(fn, dus_x, dus_y, dus_z, fs_x, fs_y, fs_z, area, intact, joint):
+    """New (F_s x, F_s y, F_s z, intact) of a loaded sub-contact; see module docstring.
+
+    ``fs_*`` is the previous shear force already rotated into the current tangent plane."""
     shear_scale = joint.ks * area
     fs_x -= shear_scale * dus_x
     fs_y -= shear_scale * dus_y
@@ -56,5 +61,5 @@ def joint_law(closure, dus_x, dus_y, dus_z, fs_x, fs_y, fs_z, area, intact, join
     magnitude = np.sqrt(fs_x * fs_x + fs_y * fs_y + fs_z * fs_z)
     if magnitude > limit:
         scale = limit / magnitude
-        return fn, fs_x * scale, fs_y * scale, fs_z * scale, False
-    return fn, fs_x, fs_y, fs_z, intact
+        return fs_x * scale, fs_y * scale, fs_z * scale, False
+    return fs_x, fs_y, fs_z, intact

@@ -25,7 +25,7 @@ import numba
 import numpy as np
 
 from drydem.contacts import SubContacts
-from drydem.joints import JointArrays, joint_law
+from drydem.joints import JointArrays, normal_law, shear_law
 from drydem.motion import BlockArrays, local_damping
 from drydem.rotation import quaternion_to_matrix, rotate_by_vector
 from drydem.state import State
@@ -36,16 +36,20 @@ RUNNING, CONVERGED, REDETECT, DIVERGED = 0, 1, 2, 3
 RATIO, VELOCITY = 0, 1
 #: a block point faster than this (m/s) means the integration has blown up
 DIVERGENCE_SPEED = 1e3
+#: LLVM fast-math flags for the contact loop: reassociation and fused multiply-add, but
+#: NaN and infinity keep their meaning (the divergence guard relies on them)
+FASTMATH = {"contract", "reassoc", "arcp", "nsz"}
 
 
 class SubContactArrays(NamedTuple):
-    """The arrays of :class:`drydem.contacts.SubContacts` the kernels read and update."""
+    """The arrays of :class:`drydem.contacts.SubContacts` the cycle reads and updates."""
 
-    block_ref: np.ndarray
-    block_inc: np.ndarray
+    pairs: np.ndarray
+    normal_body: np.ndarray
+    offset: np.ndarray
+    start: np.ndarray
     point_ref_body: np.ndarray
     point_inc_body: np.ndarray
-    normal_ref_body: np.ndarray
     area: np.ndarray
     shear_force: np.ndarray
     normal_force: np.ndarray
@@ -72,52 +76,78 @@ def _mat_vec(r, v0, v1, v2):
     )
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=FASTMATH)
 def contact_forces(state, rot, sub, joint, dt, force, moment):
-    """Step 3: update every sub-contact's forces and add them to ``force`` and ``moment`` (N, N m)."""
+    """Step 3: update every sub-contact's forces and add them to ``force`` and ``moment`` (N, N m).
+
+    Per contact (blocks a = reference, b = incident, normal n = R_a n_body, d = vector from
+    a's centroid to b's): each sub-contact's incident arm r = R_b p_inc gives
+    gap = (d + r) . n - offset (every reference point lies on the plane n . x = offset), and
+    relative velocity v_b - v_a - w_a x d + (w_b - w_a) x r. The forces F act at x_b on b
+    and -F on a; the contact's sums are scattered once: moment on b sum r x F, on a
+    -(d x sum F + sum r x F).
+    """
     pos, vel, omega = state.position, state.velocity, state.angular_velocity
-    for s in range(sub.area.shape[0]):
-        a, b = sub.block_ref[s], sub.block_inc[s]
-        pr, pi, nb_ = sub.point_ref_body[s], sub.point_inc_body[s], sub.normal_ref_body[s]
-        rax, ray, raz = _mat_vec(rot[a], pr[0], pr[1], pr[2])
-        nx, ny, nz = _mat_vec(rot[a], nb_[0], nb_[1], nb_[2])
-        rbx, rby, rbz = _mat_vec(rot[b], pi[0], pi[1], pi[2])
-        # incident material point x_b and its lever arms from both centroids
-        xbx, xby, xbz = pos[b, 0] + rbx, pos[b, 1] + rby, pos[b, 2] + rbz
-        gap = (xbx - pos[a, 0] - rax) * nx + (xby - pos[a, 1] - ray) * ny + (xbz - pos[a, 2] - raz) * nz
-        lax, lay, laz = xbx - pos[a, 0], xby - pos[a, 1], xbz - pos[a, 2]
-        # relative velocity of b with respect to a at x_b, tangential part times dt
+    for c in range(sub.pairs.shape[0]):
+        a, b = sub.pairs[c, 0], sub.pairs[c, 1]
+        nx, ny, nz = _mat_vec(rot[a], sub.normal_body[c, 0], sub.normal_body[c, 1], sub.normal_body[c, 2])
+        dx, dy, dz = pos[b, 0] - pos[a, 0], pos[b, 1] - pos[a, 1], pos[b, 2] - pos[a, 2]
+        base_gap = dx * nx + dy * ny + dz * nz - sub.offset[c]
         wa, wb = omega[a], omega[b]
-        vx = vel[b, 0] + wb[1] * rbz - wb[2] * rby - vel[a, 0] - (wa[1] * laz - wa[2] * lay)
-        vy = vel[b, 1] + wb[2] * rbx - wb[0] * rbz - vel[a, 1] - (wa[2] * lax - wa[0] * laz)
-        vz = vel[b, 2] + wb[0] * rby - wb[1] * rbx - vel[a, 2] - (wa[0] * lay - wa[1] * lax)
-        vn = vx * nx + vy * ny + vz * nz
-        dux, duy, duz = (vx - vn * nx) * dt, (vy - vn * ny) * dt, (vz - vn * nz) * dt
-        # previous shear force rotated into the current tangent plane, magnitude kept
-        fs = sub.shear_force[s]
-        old = np.sqrt(fs[0] * fs[0] + fs[1] * fs[1] + fs[2] * fs[2])
-        fsn = fs[0] * nx + fs[1] * ny + fs[2] * nz
-        sx, sy, sz = fs[0] - fsn * nx, fs[1] - fsn * ny, fs[2] - fsn * nz
-        new = np.sqrt(sx * sx + sy * sy + sz * sz)
-        if new > 0.0:
-            sx, sy, sz = sx * (old / new), sy * (old / new), sz * (old / new)
-        fn, sx, sy, sz, intact = joint_law(-gap, dux, duy, duz, sx, sy, sz, sub.area[s], sub.intact[s], joint)
-        sub.normal_force[s] = fn
-        fs[0], fs[1], fs[2] = sx, sy, sz
-        sub.intact[s] = intact
-        fx, fy, fz = fn * nx + sx, fn * ny + sy, fn * nz + sz
-        force[b, 0] += fx
-        force[b, 1] += fy
-        force[b, 2] += fz
-        moment[b, 0] += rby * fz - rbz * fy
-        moment[b, 1] += rbz * fx - rbx * fz
-        moment[b, 2] += rbx * fy - rby * fx
-        force[a, 0] -= fx
-        force[a, 1] -= fy
-        force[a, 2] -= fz
-        moment[a, 0] -= lay * fz - laz * fy
-        moment[a, 1] -= laz * fx - lax * fz
-        moment[a, 2] -= lax * fy - lay * fx
+        v0x = vel[b, 0] - vel[a, 0] - (wa[1] * dz - wa[2] * dy)
+        v0y = vel[b, 1] - vel[a, 1] - (wa[2] * dx - wa[0] * dz)
+        v0z = vel[b, 2] - vel[a, 2] - (wa[0] * dy - wa[1] * dx)
+        dwx, dwy, dwz = wb[0] - wa[0], wb[1] - wa[1], wb[2] - wa[2]
+        rb = rot[b]
+        fx_sum = fy_sum = fz_sum = 0.0
+        mx_sum = my_sum = mz_sum = 0.0
+        for s in range(sub.start[c], sub.start[c + 1]):
+            p = sub.point_inc_body[s]
+            rx, ry, rz = _mat_vec(rb, p[0], p[1], p[2])
+            fn, carries = normal_law(-(base_gap + rx * nx + ry * ny + rz * nz), sub.area[s], sub.intact[s], joint)
+            fs = sub.shear_force[s]
+            if not carries:
+                sub.normal_force[s] = 0.0
+                fs[0] = fs[1] = fs[2] = 0.0
+                sub.intact[s] = False
+                continue
+            # relative velocity of b with respect to a at x_b, tangential part times dt
+            vx = v0x + dwy * rz - dwz * ry
+            vy = v0y + dwz * rx - dwx * rz
+            vz = v0z + dwx * ry - dwy * rx
+            vn = vx * nx + vy * ny + vz * nz
+            dux, duy, duz = (vx - vn * nx) * dt, (vy - vn * ny) * dt, (vz - vn * nz) * dt
+            # previous shear force rotated into the current tangent plane, magnitude kept
+            sx, sy, sz = fs[0], fs[1], fs[2]
+            fsn = sx * nx + sy * ny + sz * nz
+            if fsn != 0.0:
+                old_sq = sx * sx + sy * sy + sz * sz
+                new_sq = old_sq - fsn * fsn  # |F_s - (F_s . n) n|^2
+                scale = np.sqrt(old_sq / new_sq) if new_sq > 0.0 else 0.0
+                sx, sy, sz = (sx - fsn * nx) * scale, (sy - fsn * ny) * scale, (sz - fsn * nz) * scale
+            sx, sy, sz, intact = shear_law(fn, dux, duy, duz, sx, sy, sz, sub.area[s], sub.intact[s], joint)
+            sub.normal_force[s] = fn
+            fs[0], fs[1], fs[2] = sx, sy, sz
+            sub.intact[s] = intact
+            fx, fy, fz = fn * nx + sx, fn * ny + sy, fn * nz + sz
+            fx_sum += fx
+            fy_sum += fy
+            fz_sum += fz
+            mx_sum += ry * fz - rz * fy
+            my_sum += rz * fx - rx * fz
+            mz_sum += rx * fy - ry * fx
+        force[b, 0] += fx_sum
+        force[b, 1] += fy_sum
+        force[b, 2] += fz_sum
+        moment[b, 0] += mx_sum
+        moment[b, 1] += my_sum
+        moment[b, 2] += mz_sum
+        force[a, 0] -= fx_sum
+        force[a, 1] -= fy_sum
+        force[a, 2] -= fz_sum
+        moment[a, 0] -= dy * fz_sum - dz * fy_sum + mx_sum
+        moment[a, 1] -= dz * fx_sum - dx * fz_sum + my_sum
+        moment[a, 2] -= dx * fy_sum - dy * fx_sum + mz_sum
 
 
 @numba.njit(cache=True)
@@ -177,16 +207,26 @@ def _relative_quaternion(q, q0):
     )
 
 
+@numba.njit(cache=True, inline="always")
+def _angle_bound(cos_half):
+    """Upper bound 2 tan(theta / 2) >= theta of a rotation angle from |cos(theta / 2)|
+    (tight to O(theta^3); no arccos in the per-cycle test)."""
+    c = min(cos_half, 1.0)
+    if c <= 0.5:
+        return np.pi
+    return 2.0 * np.sqrt(1.0 - c * c) / c
+
+
 @numba.njit(cache=True)
 def needs_detection(state, detected, neighbours, radius, relative_limit, absolute_limit):
     """Whether contacts must be re-detected since the State ``detected`` (a Verlet-list test).
 
     Absolute: a block point moved more than ``absolute_limit`` (|dx| + theta r), so a block
     outside the neighbour list may have come close. Relative: for a neighbour pair (i, j), every
-    point of i moved relative to j by at most |dx_i - dx_j - (Q_j - 1)(c_i0 - c_j0)| + theta_ij r_i
-    (Q the rotations since detection, theta_ij the angle of Q_i Q_j^T); more than
-    ``relative_limit`` means their contact may have changed. Blocks moving together as one
-    rigid body never trigger it.
+    point of i moved relative to j by at most |dx_i - dx_j - (Q_j - 1)(c_i0 - c_j0)| + theta_ij r
+    (Q the rotations since detection, theta_ij the angle of Q_i Q_j^T, r the larger radius);
+    more than ``relative_limit`` means their contact may have changed. Blocks moving together as
+    one rigid body never trigger it. Angles are bounded by 2 tan(theta / 2).
     """
     nb = state.position.shape[0]
     rel = np.empty((nb, 4))
@@ -194,8 +234,7 @@ def needs_detection(state, detected, neighbours, radius, relative_limit, absolut
         w, x, y, z = _relative_quaternion(state.quaternion[i], detected.quaternion[i])
         rel[i, 0], rel[i, 1], rel[i, 2], rel[i, 3] = w, x, y, z
         d = state.position[i] - detected.position[i]
-        theta = 2.0 * np.arccos(min(abs(w), 1.0))
-        if np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) + theta * radius[i] > absolute_limit:
+        if np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) + _angle_bound(abs(w)) * radius[i] > absolute_limit:
             return True
     for k in range(neighbours.shape[0]):
         i, j = neighbours[k, 0], neighbours[k, 1]
@@ -212,8 +251,7 @@ def needs_detection(state, detected, neighbours, radius, relative_limit, absolut
         dy = state.position[i, 1] - detected.position[i, 1] - state.position[j, 1] + detected.position[j, 1] - qy
         dz = state.position[i, 2] - detected.position[i, 2] - state.position[j, 2] + detected.position[j, 2] - qz
         cos_half = abs(rel[i, 0] * rel[j, 0] + rel[i, 1] * rel[j, 1] + rel[i, 2] * rel[j, 2] + rel[i, 3] * rel[j, 3])
-        theta = 2.0 * np.arccos(min(cos_half, 1.0))
-        if np.sqrt(dx * dx + dy * dy + dz * dz) + theta * max(radius[i], radius[j]) > relative_limit:
+        if np.sqrt(dx * dx + dy * dy + dz * dz) + _angle_bound(cos_half) * max(radius[i], radius[j]) > relative_limit:
             return True
     return False
 

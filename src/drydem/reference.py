@@ -1,6 +1,7 @@
 """The cycle of :mod:`drydem.kernels` written again in vectorised NumPy: the tests' oracle.
 
-Same arguments, same physics, same results to round-off; written independently (array
+Same arguments, same physics, same results to round-off; written independently (one row
+per sub-contact, the gap from both material points rather than the plane offset, array
 expressions, ``np.add.at`` scatter, scipy's ``Rotation`` for quaternion algebra) so that
 an indexing or sign slip in the compiled kernels shows up as a difference. About 20-50x
 slower than the kernels (see ``benchmarks/bench_step.py``).
@@ -33,9 +34,10 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment):
     force[:] = blocks.mass[:, None] * np.asarray(gravity)
     moment[:] = 0.0
 
-    # sub-contact kinematics
-    a, b = sub.block_ref, sub.block_inc
-    n = _apply(rot[a], sub.normal_ref_body)
+    # sub-contact kinematics, one row per sub-contact
+    contact = np.repeat(np.arange(len(sub.pairs)), np.diff(sub.start))
+    a, b = sub.pairs[contact, 0], sub.pairs[contact, 1]
+    n = _apply(rot[a], sub.normal_body[contact])
     arm_b = _apply(rot[b], sub.point_inc_body)
     x_b = pos[b] + arm_b
     arm_a = x_b - pos[a]

@@ -208,8 +208,8 @@ class Simulation:
         kinetic = 0.5 * (m.block_mass * np.einsum("ni,ni->n", s.velocity, s.velocity)).sum()
         kinetic += 0.5 * np.einsum("ni,nij,nj->", s.angular_velocity, inertia_world, s.angular_velocity)
         gravitational = -float((m.block_mass * ((position - m.block_centroid) @ np.asarray(gravity, float))).sum())
-        x_inc, x_ref, normal = contacts.world_points(c, position, rot)
-        closure = np.maximum(-np.einsum("ni,ni->n", x_inc - x_ref, normal), 0.0)
+        _, gap, _ = contacts.world_points(c, position, rot)
+        closure = np.maximum(-gap, 0.0)
         elastic = 0.5 * (m.joint.kn * c.area * closure**2).sum()
         elastic += 0.5 * (np.einsum("ni,ni->n", c.shear_force, c.shear_force) / (m.joint.ks * c.area)).sum()
         return {"kinetic": float(kinetic), "gravitational": gravitational, "elastic": float(elastic)}
@@ -217,5 +217,6 @@ class Simulation:
     def reactions(self, block: int) -> np.ndarray:
         """Total contact force (N, world frame) that the other blocks exert on ``block``."""
         c = self.contacts
-        f = c.normal_force[:, None] * np.einsum("nij,nj->ni", matrices(self.state.quaternion)[c.block_ref], c.normal_ref_body) + c.shear_force
+        _, _, normal = contacts.world_points(c, self.state.position, matrices(self.state.quaternion))
+        f = c.normal_force[:, None] * normal + c.shear_force
         return f[c.block_inc == block].sum(0) - f[c.block_ref == block].sum(0)

@@ -1,0 +1,102 @@
+"""The model file: loading, round trip, and clear errors for bad input."""
+
+import textwrap
+
+import numpy as np
+import pytest
+
+import drydem as dd
+from drydem import examples
+from drydem.io.model_file import load_model, save_model
+from drydem.walls import benchmark_wall
+
+GOOD = """
+[material]
+density = 1800.0
+[joint]
+kn = 3e7
+ks = 3e7
+friction = 0.5
+[contacts]
+points_per_length = 4
+[supports]
+fix_y = true
+[[block]]
+name = "base"
+fixed = true
+box = { min = [-0.05, -0.006, -0.01], max = [0.25, 0.006, 0.0] }
+[[block]]
+name = "brick"
+vertices = [[0, -0.006, 0], [0.025, -0.006, 0], [0.025, 0.006, 0], [0, 0.006, 0],
+            [0, -0.006, 0.0055], [0.025, -0.006, 0.0055], [0.025, 0.006, 0.0055], [0, 0.006, 0.0055]]
+"""
+
+
+def write(tmp_path, text, name="model.toml"):
+    path = tmp_path / name
+    path.write_text(textwrap.dedent(text))
+    return path
+
+
+def test_the_issue_example_loads(tmp_path):
+    model = load_model(write(tmp_path, GOOD))
+    assert model.block_name == ("base", "brick")
+    assert model.block_mass[1] == pytest.approx(1800 * 0.025 * 0.012 * 0.0055)
+    assert model.block_fixed[0].all() and model.block_fixed[1].tolist() == [False, True, False, False, False, False]
+    assert model.joint == dd.JointMaterial(kn=3e7, ks=3e7, friction=0.5)
+
+
+def test_shipped_example_is_the_benchmark_wall():
+    shipped = load_model(examples.resolve("perforated_wall"))
+    built = benchmark_wall()
+    assert shipped.block_name == built.block_name
+    np.testing.assert_allclose(shipped.block_centroid, built.block_centroid, atol=1e-15)
+    np.testing.assert_allclose(shipped.block_mass, built.block_mass, rtol=1e-12)
+    assert shipped.joint == built.joint and shipped.supports == built.supports and shipped.contacts == built.contacts
+
+
+def test_save_and_load_round_trip(tmp_path):
+    model = load_model(write(tmp_path, GOOD.replace('name = "brick"', 'name = "brick"\ndensity = 2000.0')))
+    path = tmp_path / "again.toml"
+    save_model(model, path, header="round trip")
+    again = load_model(path)
+    assert again.block_name == model.block_name
+    np.testing.assert_allclose(again.block_mass, model.block_mass, rtol=1e-12)
+    np.testing.assert_allclose(again.block_inertia, model.block_inertia, rtol=1e-10)
+    assert again.joint == model.joint and again.solver == model.solver and again.supports == model.supports
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (("friction = 0.5", "frction = 0.5"), r"unknown key\(s\) \['frction'\] in \[joint\]"),
+        (("[material]", "[materials]"), r"unknown key\(s\) \['materials'\] in top level"),
+        (("kn = 3e7", "kn = -3e7"), r"\[joint\] kn = -30000000.0: must be a positive number"),
+        (("ks = 3e7", "ks = 0.0"), r"\[joint\] ks = 0.0: must be a positive number"),
+        (("friction = 0.5", "friction = 0.0"), r"\[joint\] friction = 0.0: must be a positive number"),
+        (("density = 1800.0", "density = -1.0"), r"\[material\] density = -1.0"),
+        (("points_per_length = 4", "points_per_length = 0"), r"\[contacts\] points_per_length = 0"),
+        (("fix_y = true", 'fix_y = "yes"'), r"\[supports\] fix_y = 'yes'"),
+        (('name = "brick"', 'name = "base"'), r"duplicate block names \['base'\]"),
+        (('name = "brick"', 'name = "brick"\ncolour = "red"'), r"\['colour'\] in \[\[block\]\] #1 \('brick'\)"),
+        (("[0, 0.006, 0.0055]]", "[0, 0.006, 0.0055], [0.01, 0.0, 0.003]]"), r"block 'brick': vertex 8 .* not convex"),
+        (("[0, -0.006, 0.0055], [0.025, -0.006, 0.0055], [0.025, 0.006, 0.0055], [0, 0.006, 0.0055]]",
+          "[0, -0.006, 0.0], [0.025, -0.006, 0.0], [0.025, 0.006, 0.0], [0, 0.006, 0.0]]"), r"block 'brick': degenerate"),
+        (('name = "brick"\nvertices', 'name = "brick"\nbox = { min = [0, 0, 0], max = [1, 1, 1] }\nvertices'), r"#1 \('brick'\) needs exactly one of"),
+        (("max = [0.25, 0.006, 0.0]", "max = [0.25, 0.006, 0.002]"), r"blocks 'base' and 'brick' overlap by 0.002 m"),
+    ],
+)
+def test_bad_input_is_named_in_the_error(tmp_path, change, message):
+    text = GOOD.replace(*change)
+    assert text != GOOD
+    path = write(tmp_path, text, name="wall.toml")
+    with pytest.raises(dd.DrydemError, match=message) as info:
+        load_model(path)
+    assert str(info.value).startswith(str(path))  # every message names the file
+
+
+def test_invalid_toml_and_missing_file_name_the_file(tmp_path):
+    with pytest.raises(dd.ModelError, match=r"bad\.toml: not valid TOML"):
+        load_model(write(tmp_path, "[joint\nkn = 1", name="bad.toml"))
+    with pytest.raises(dd.ModelError, match=r"absent\.toml: cannot read"):
+        load_model(tmp_path / "absent.toml")

@@ -1,0 +1,57 @@
+"""Equilibrium criteria, non-convergence and divergence are reported, never hidden."""
+
+import numpy as np
+import pytest
+
+import drydem as dd
+from conftest import stack_model, tilted_gravity
+
+
+def test_non_convergence_is_reported_with_the_cycles_used():
+    sim = dd.Simulation(stack_model([0.0055] * 3))
+    result = sim.cycle_to_equilibrium(solver=dd.SolverSettings(max_cycles=5))
+    assert not result.converged and result.cycles == 5 and result.ratio > 1e-5
+
+
+def test_velocity_criterion_reaches_the_paper_threshold():
+    # the paper's stage 1: cycle until the maximum velocity is below 1e-13 m/s
+    sim = dd.Simulation(stack_model([0.0055] * 3, solver=dd.SolverSettings(criterion="velocity")))
+    result = sim.cycle_to_equilibrium()
+    assert result.converged and result.criterion == "velocity" and result.max_speed < 1e-13
+
+
+def test_both_criteria_reach_the_same_equilibrium():
+    loose = dd.Simulation(stack_model([0.0055] * 3, solver=dd.SolverSettings(ratio=1e-7)))
+    strict = dd.Simulation(stack_model([0.0055] * 3, solver=dd.SolverSettings(criterion="velocity")))
+    loose.cycle_to_equilibrium()
+    strict.cycle_to_equilibrium()
+    np.testing.assert_allclose(loose.state.position, strict.state.position, atol=1e-10)
+
+
+def test_a_timestep_above_the_critical_one_is_refused():
+    model = stack_model([0.0055])
+    critical = dd.Simulation(model).timestep / model.solver.timestep_safety
+    with pytest.raises(dd.ModelError, match=r"timestep .* exceeds the critical timestep"):
+        dd.Simulation(model, timestep=1.5 * critical)
+    assert dd.Simulation(model, timestep=0.5 * critical).timestep == 0.5 * critical
+
+
+def test_diverging_integration_stops_with_an_error_not_nan():
+    # force a step 20 x the critical one past the check: the kernel's guard must catch it
+    sim = dd.Simulation(stack_model([0.0055] * 3, solver=dd.SolverSettings(damping=0.0)))
+    sim.timestep *= 20
+    with pytest.raises(dd.DivergenceError, match="diverged"):
+        sim.cycle(10_000)
+
+
+def test_ratio_criterion_without_gravity_is_refused():
+    sim = dd.Simulation(stack_model([0.0055]))
+    with pytest.raises(dd.ModelError, match="needs gravity"):
+        sim.cycle_to_equilibrium(gravity=(0.0, 0.0, 0.0))
+
+
+def test_progress_is_reported_while_cycling():
+    seen = []
+    sim = dd.Simulation(stack_model([0.0055] * 3))
+    sim.cycle_to_equilibrium(gravity=tilted_gravity(5.0), progress=lambda cycles, stats: seen.append((cycles, stats.ratio)))
+    assert seen and seen[-1][1] < 1e-5
