@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -29,10 +29,10 @@ from drydem import polygon
 from drydem.geometry import ConvexPolyhedron
 
 
-@dataclass(eq=False)
-class SubContacts:
+class SubContacts(NamedTuple):
     """Struct-of-arrays of the contacts (face pairs, nc) and their sub-contacts (ns), CSR-style:
-    the sub-contacts of contact k are ``start[k]:start[k + 1]``.
+    the sub-contacts of contact k are ``start[k]:start[k + 1]``. A NamedTuple, so the numba
+    kernels take it as it is; the state arrays are updated in place.
 
     Per contact (fixed between detections): pairs (nc, 2) int64, reference and incident block;
     normal_body (nc, 3), unit normal of the reference face in the reference block's body frame,
@@ -62,7 +62,7 @@ class SubContacts:
     def count(self) -> int:
         return len(self.area)
 
-    @cached_property
+    @property
     def contact(self) -> np.ndarray:
         """(ns,) index of each sub-contact's contact."""
         return np.repeat(np.arange(len(self.pairs)), np.diff(self.start))
@@ -74,6 +74,9 @@ class SubContacts:
     @property
     def block_inc(self) -> np.ndarray:
         return self.pairs[self.contact, 1]
+
+    def copy(self) -> SubContacts:
+        return SubContacts(*(a.copy() for a in self))
 
     @classmethod
     def empty(cls, neighbours: np.ndarray | None = None) -> SubContacts:

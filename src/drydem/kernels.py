@@ -24,7 +24,6 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from drydem.contacts import SubContacts
 from drydem.joints import JointArrays, normal_law, shear_law
 from drydem.motion import BlockArrays, local_damping
 from drydem.rotation import quaternion_to_matrix, rotate_by_vector
@@ -39,25 +38,6 @@ DIVERGENCE_SPEED = 1e3
 #: LLVM fast-math flags for the contact loop: reassociation and fused multiply-add, but
 #: NaN and infinity keep their meaning (the divergence guard relies on them)
 FASTMATH = {"contract", "reassoc", "arcp", "nsz"}
-
-
-class SubContactArrays(NamedTuple):
-    """The arrays of :class:`drydem.contacts.SubContacts` the cycle reads and updates."""
-
-    pairs: np.ndarray
-    normal_body: np.ndarray
-    offset: np.ndarray
-    start: np.ndarray
-    point_ref_body: np.ndarray
-    point_inc_body: np.ndarray
-    area: np.ndarray
-    shear_force: np.ndarray
-    normal_force: np.ndarray
-    intact: np.ndarray
-
-    @classmethod
-    def of(cls, sub: SubContacts) -> SubContactArrays:
-        return cls(*(getattr(sub, name) for name in cls._fields))
 
 
 class StepStats(NamedTuple):

@@ -166,7 +166,7 @@ class Simulation:
         code, stats = kernels.RUNNING, kernels.StepStats(np.inf, np.inf)
         while done < max_cycles:
             n, code, stats = run_cycles(
-                self.state, self._blocks, kernels.SubContactArrays.of(self.contacts), joint, g, self.timestep,
+                self.state, self._blocks, self.contacts, joint, g, self.timestep,
                 m.solver.damping, min(CHUNK, max_cycles - done), criterion, limit, max(weight, 1e-300),
                 self._detected_state, self.contacts.neighbours, 0.5 * m.contact_tolerance,
                 0.5 * (NEIGHBOUR_MARGIN - 1.0) * m.contact_tolerance,
