@@ -19,6 +19,7 @@ I = rho (trace(C) 1 - C) with C the second moment about the centroid.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
@@ -54,7 +55,7 @@ class ConvexPolyhedron:
     centroid: np.ndarray
     second_moment: np.ndarray = field(repr=False)
 
-    @property
+    @cached_property
     def size(self) -> float:
         """Diagonal of the axis-aligned bounding box, m."""
         return float(np.linalg.norm(self.vertices.max(0) - self.vertices.min(0)))

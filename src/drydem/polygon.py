@@ -6,11 +6,18 @@ import numpy as np
 
 
 def signed_area(poly: np.ndarray) -> float:
-    """Shoelace formula, positive for counter-clockwise vertices, m2."""
+    """Shoelace formula, positive for counter-clockwise vertices, m2.
+
+    Plain Python: contact polygons have 3 to 8 vertices, where NumPy's call overhead dominates."""
     if len(poly) < 3:
         return 0.0
-    x, y = poly[:, 0], poly[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    pts = poly.tolist()
+    total = 0.0
+    x0, y0 = pts[-1]
+    for x1, y1 in pts:
+        total += x0 * y1 - x1 * y0
+        x0, y0 = x1, y1
+    return 0.5 * total
 
 
 def centroid(poly: np.ndarray) -> np.ndarray:
