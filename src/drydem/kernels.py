@@ -33,8 +33,6 @@ from drydem.state import State
 RUNNING, CONVERGED, REDETECT, DIVERGED = 0, 1, 2, 3
 #: criterion codes
 RATIO, VELOCITY = 0, 1
-#: a block point faster than this (m/s) means the integration has blown up
-DIVERGENCE_SPEED = 1e3
 #: LLVM fast-math flags for the contact loop: reassociation and fused multiply-add, but
 #: NaN and infinity keep their meaning (the divergence guard relies on them)
 FASTMATH = {"contract", "reassoc", "arcp", "nsz"}
@@ -169,7 +167,7 @@ def integrate(state, rot, blocks, force, moment, damping, dt):
         rotate_by_vector(state.quaternion[i], w[0] * dt, w[1] * dt, w[2] * dt)
         v = state.velocity[i]
         speed = np.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * blocks.radius[i]
-        if not speed < DIVERGENCE_SPEED:  # also catches NaN
+        if not speed < np.inf:  # NaN counts as infinitely fast
             speed = np.inf
         max_speed = max(max_speed, speed)
         max_unbalanced = max(max_unbalanced, np.sqrt(f2), np.sqrt(m2) / blocks.radius[i])
@@ -254,14 +252,16 @@ def make_run_cycles(step_function, *, jit: bool):
     """The cycling loop around ``step_function`` (numba-compiled when ``jit``).
 
     ``run_cycles(state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit,
-    force_scale, detected, neighbours, relative_limit, absolute_limit)`` cycles until converged,
-    re-detection needed, diverged or ``max_cycles``, and returns (cycles run, exit code,
+    force_scale, divergence_speed, detected, neighbours, relative_limit, absolute_limit)`` cycles
+    until converged, re-detection needed, diverged (a block point faster than
+    ``divergence_speed``, m/s, or NaN) or ``max_cycles``, and returns (cycles run, exit code,
     StepStats of the last cycle). ``force_scale`` (N) is the ratio's denominator (mean weight of
     the free blocks); the last four arguments go to :func:`needs_detection`.
     """
 
     def run_cycles(
-        state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit, force_scale, detected, neighbours, relative_limit, absolute_limit
+        state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit, force_scale, divergence_speed,
+        detected, neighbours, relative_limit, absolute_limit,
     ):
         nb = state.position.shape[0]
         rot = np.empty((nb, 3, 3))
@@ -271,7 +271,7 @@ def make_run_cycles(step_function, *, jit: bool):
         for cycle in range(max_cycles):
             unbalanced, speed = step_function(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment)
             stats = StepStats(unbalanced / force_scale, speed)
-            if not speed < np.inf:
+            if not speed < divergence_speed:
                 return cycle + 1, DIVERGED, stats
             if (criterion == RATIO and stats.ratio < limit) or (criterion == VELOCITY and speed < limit):
                 return cycle + 1, CONVERGED, stats

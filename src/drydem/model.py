@@ -76,6 +76,12 @@ class Model:
         return ~self.block_fixed.all(axis=1)
 
     @property
+    def size(self) -> float:
+        """Diagonal of the bounding box of all blocks in the model file, m."""
+        vertices = np.concatenate([s.vertices for s in self.block_shape])
+        return float(np.linalg.norm(vertices.max(0) - vertices.min(0)))
+
+    @property
     def total_mass(self) -> float:
         """Mass of the movable blocks, kg."""
         return float(self.block_mass[self.block_movable].sum())

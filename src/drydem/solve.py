@@ -39,6 +39,9 @@ G = 9.81
 #: neighbour-list margin in contact tolerances: blocks whose bounding boxes are this close are
 #: watched for relative motion; any block moving (margin - tolerance) / 2 re-detects everything
 NEIGHBOUR_MARGIN = 10.0
+#: a block point faster than this many times the speed of a free fall through the model's
+#: whole size, sqrt(2 |g| L), means the integration has blown up
+DIVERGENCE_FACTOR = 10.0
 #: cycles run in one call of the kernel loop between progress reports
 CHUNK = 5_000
 
@@ -162,12 +165,13 @@ class Simulation:
             raise ModelError("the 'ratio' criterion needs gravity (it divides by the mean weight); use 'velocity'")
         run_cycles = ENGINES[self.engine]
         joint = JointArrays.of(m.joint)
+        divergence_speed = DIVERGENCE_FACTOR * np.sqrt(2.0 * max(float(np.linalg.norm(g)), G) * m.size)
         done, detections = 0, 0
         code, stats = kernels.RUNNING, kernels.StepStats(np.inf, np.inf)
         while done < max_cycles:
             n, code, stats = run_cycles(
                 self.state, self._blocks, self.contacts, joint, g, self.timestep,
-                m.solver.damping, min(CHUNK, max_cycles - done), criterion, limit, max(weight, 1e-300),
+                m.solver.damping, min(CHUNK, max_cycles - done), criterion, limit, max(weight, 1e-300), divergence_speed,
                 self._detected_state, self.contacts.neighbours, 0.5 * m.contact_tolerance,
                 0.5 * (NEIGHBOUR_MARGIN - 1.0) * m.contact_tolerance,
             )
@@ -177,7 +181,8 @@ class Simulation:
                 progress(done, stats)
             if code == kernels.DIVERGED:
                 raise DivergenceError(
-                    f"{m.source}: the integration diverged after {self.cycles} cycles (timestep {self.timestep:.3g} s): "
+                    f"{m.source}: the integration diverged after {self.cycles} cycles (a block point moved faster than "
+                    f"{divergence_speed:.3g} m/s; timestep {self.timestep:.3g} s): "
                     "reduce the timestep (solver.timestep_safety) or check the stiffness and masses"
                 )
             if code == kernels.CONVERGED:
