@@ -15,9 +15,10 @@ from conftest import BRICK, box_vertices
 def detect_boxes(boxes, *, points, tolerance, rotation=np.eye(3)):
     shapes = [dd.convex_hull(box_vertices(lo, hi) @ rotation.T) for lo, hi in boxes]
     n = len(shapes)
-    return contacts.detect(
-        shapes, np.array([s.centroid for s in shapes]), np.repeat(np.eye(3)[None], n, 0), np.ones(n, bool),
-        tolerance=tolerance, margin=tolerance, points_per_length=points,
+    candidates = contacts.broad_phase(shapes, np.ones(n, bool), 0.5 * tolerance)
+    return contacts.narrow_phase(
+        dict(enumerate(shapes)), candidates, np.array([s.centroid for s in shapes]), np.repeat(np.eye(3)[None], n, 0),
+        tolerance=tolerance, points_per_length=points,
     )
 
 

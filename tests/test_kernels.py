@@ -73,4 +73,13 @@ def test_many_cycles_with_redetection_stay_together():
     assert r_fast.detections == r_slow.detections > 0
     moved = np.abs(fast.state.position - model.block_centroid).max()
     np.testing.assert_allclose(fast.state.position, slow.state.position, rtol=0, atol=1e-7 * moved)
-    np.testing.assert_allclose(fast.contacts.normal_force, slow.contacts.normal_force, rtol=0, atol=1e-7 * fast.contacts.normal_force.max())
+    # the same contacts carry the same load (sub-contact order may differ: a polygon's first
+    # corner depends on round-off)
+    totals = []
+    for sim in (fast, slow):
+        c = sim.contacts
+        per_contact = np.bincount(c.contact, c.normal_force, len(c.pairs))
+        totals.append(dict(zip(c.pair_keys(model.n_blocks).tolist(), per_contact)))
+    assert totals[0].keys() == totals[1].keys()
+    for key, load in totals[0].items():
+        assert load == pytest.approx(totals[1][key], rel=0, abs=1e-7 * max(totals[0].values()))

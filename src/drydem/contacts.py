@@ -42,8 +42,6 @@ class SubContacts(NamedTuple):
     to each block's centroid in its body frame; area (ns,) m2. State: shear_force (ns, 3) N,
     world frame, force on the incident block; normal_force (ns,) N, compression positive;
     intact (ns,) bool, cohesion and tension still available.
-    neighbours : (nn, 2) int64, the block pairs whose bounding boxes were within the detection
-    margin (the Verlet list watched for re-detection).
     """
 
     pairs: np.ndarray
@@ -56,7 +54,6 @@ class SubContacts(NamedTuple):
     shear_force: np.ndarray
     normal_force: np.ndarray
     intact: np.ndarray
-    neighbours: np.ndarray
 
     @property
     def count(self) -> int:
@@ -78,13 +75,52 @@ class SubContacts(NamedTuple):
     def copy(self) -> SubContacts:
         return SubContacts(*(a.copy() for a in self))
 
+    def pair_keys(self, n_blocks: int) -> np.ndarray:
+        """(nc,) unordered block-pair key of each contact (see :func:`pair_keys`)."""
+        return pair_keys(self.pairs, n_blocks)
+
     @classmethod
-    def empty(cls, neighbours: np.ndarray | None = None) -> SubContacts:
-        v, s, pairs = np.zeros((0, 3)), np.zeros(0), np.zeros((0, 2), np.int64)
-        return cls(
-            pairs, v, s, np.zeros(1, np.int64), v, v.copy(), s.copy(), v.copy(), s.copy(), np.zeros(0, bool),
-            pairs.copy() if neighbours is None else neighbours,
-        )
+    def empty(cls) -> SubContacts:
+        v, s = np.zeros((0, 3)), np.zeros(0)
+        return cls(np.zeros((0, 2), np.int64), v, s, np.zeros(1, np.int64), v, v.copy(), s.copy(), v.copy(), s.copy(), np.zeros(0, bool))
+
+
+class NeighbourList(NamedTuple):
+    """The block pairs watched for re-detection (a Verlet list), each with the state of its two
+    blocks when its sub-contacts were last made: pairs (nn, 2) int64 (i < j); position
+    (nn, 2, 3) m, the two centroids; quaternion (nn, 2, 4), the two orientations."""
+
+    pairs: np.ndarray
+    position: np.ndarray
+    quaternion: np.ndarray
+
+    @classmethod
+    def empty(cls) -> NeighbourList:
+        return cls(np.zeros((0, 2), np.int64), np.zeros((0, 2, 3)), np.zeros((0, 2, 4)))
+
+
+def pair_keys(pairs: np.ndarray, n_blocks: int) -> np.ndarray:
+    """Unordered key min(i, j) * n_blocks + max(i, j) of block pairs (n, 2)."""
+    return np.minimum(pairs[:, 0], pairs[:, 1]) * n_blocks + np.maximum(pairs[:, 0], pairs[:, 1])
+
+
+def subset(sub: SubContacts, keep: np.ndarray) -> SubContacts:
+    """The contacts where ``keep`` (nc,) is true, with their sub-contacts and state."""
+    rows = np.repeat(keep, np.diff(sub.start))
+    counts = np.diff(sub.start)[keep]
+    return SubContacts(
+        pairs=sub.pairs[keep], normal_body=sub.normal_body[keep], offset=sub.offset[keep],
+        start=np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
+        point_ref_body=sub.point_ref_body[rows], point_inc_body=sub.point_inc_body[rows], area=sub.area[rows],
+        shear_force=sub.shear_force[rows], normal_force=sub.normal_force[rows], intact=sub.intact[rows],
+    )
+
+
+def concatenate(first: SubContacts, second: SubContacts) -> SubContacts:
+    """Both sets of contacts in one SubContacts (``first``'s contacts first)."""
+    start = np.concatenate([first.start, second.start[1:] + first.start[-1]])
+    joined = {name: np.concatenate([getattr(first, name), getattr(second, name)]) for name in SubContacts._fields if name != "start"}
+    return SubContacts(start=start, **joined)
 
 
 @dataclass(frozen=True)
@@ -257,32 +293,25 @@ def _inside(poly: np.ndarray, point: np.ndarray, tol: float) -> bool:
     return bool(np.all(edge[:, 0] * rel[:, 1] - edge[:, 1] * rel[:, 0] >= -tol * np.linalg.norm(edge, axis=1)))
 
 
-def detect(
-    polyhedra: list[ConvexPolyhedron],
+def narrow_phase(
+    shapes: dict[int, ConvexPolyhedron],
+    candidates: np.ndarray,
     position: np.ndarray,
     rotation: np.ndarray,
-    movable: np.ndarray,
     *,
     tolerance: float,
-    margin: float,
     points_per_length: int,
-    previous: SubContacts | None = None,
 ) -> SubContacts:
-    """All sub-contacts of blocks ``polyhedra`` (world geometry now) at centroids ``position``
-    (nb, 3) and rotation matrices ``rotation`` (nb, 3, 3); block pairs whose bounding boxes are
-    within ``margin`` (m, >= tolerance) are the neighbours.
-
-    With ``previous``, each new sub-contact inherits the shear stress and the intact flag of
-    the nearest previous sub-contact of the same block pair (see :func:`carry_over`).
-    """
+    """Sub-contacts of the candidate block pairs (k, 2), from the blocks' world geometry
+    ``shapes`` (by block index, at centroids ``position`` (nb, 3) and rotations (nb, 3, 3)).
+    Shear forces start at zero (see :func:`carry_over`)."""
     found = []
-    neighbours = broad_phase(polyhedra, movable, 0.5 * margin)
-    for ia, ib in neighbours:
-        fc = face_contact(polyhedra[ia], polyhedra[ib], int(ia), int(ib), tolerance=tolerance, points_per_length=points_per_length)
+    for ia, ib in candidates:
+        fc = face_contact(shapes[ia], shapes[ib], int(ia), int(ib), tolerance=tolerance, points_per_length=points_per_length)
         if fc is not None:
             found.append(fc)
     if not found:
-        return SubContacts.empty(neighbours)
+        return SubContacts.empty()
     counts = np.array([len(fc.areas) for fc in found], dtype=np.int64)
     pairs = np.array([(fc.ref, fc.inc) for fc in found], dtype=np.int64)
     contact = np.repeat(np.arange(len(found)), counts)
@@ -295,7 +324,7 @@ def detect(
     point_ref_body = np.einsum("nji,nj->ni", r_ref[contact], points - position[pairs[contact, 0]])
     incident = points + gaps[:, None] * normals[contact]
     ns = len(areas)
-    sub = SubContacts(
+    return SubContacts(
         pairs=pairs,
         normal_body=normal_body,
         offset=np.einsum("ni,ni->n", normal_body, point_ref_body[np.cumsum(counts) - counts]),
@@ -306,11 +335,7 @@ def detect(
         shear_force=np.zeros((ns, 3)),
         normal_force=np.zeros(ns),
         intact=np.ones(ns, dtype=bool),
-        neighbours=neighbours,
     )
-    if previous is not None and previous.count:
-        carry_over(previous, sub, position, rotation)
-    return sub
 
 
 def world_points(sub: SubContacts, position: np.ndarray, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -330,11 +355,12 @@ def carry_over(old: SubContacts, new: SubContacts, position: np.ndarray, rotatio
     Shear force is stored as the force on the incident block, so it changes sign where the two
     blocks swapped roles. Sub-contacts with no old neighbour of their pair start with zero shear.
     """
+    if not (old.count and new.count):
+        return
     x_old, _, _ = world_points(old, position, rotation)
     x_new, _, n_new = world_points(new, position, rotation)
-    nb = int(max(old.block_ref.max(), old.block_inc.max(), new.block_ref.max(), new.block_inc.max())) + 1
-    key = lambda s: np.minimum(s.block_ref, s.block_inc) * nb + np.maximum(s.block_ref, s.block_inc)
-    key_old, key_new = key(old), key(new)
+    nb = len(position)
+    key_old, key_new = old.pair_keys(nb)[old.contact], new.pair_keys(nb)[new.contact]
     k = min(8, old.count)
     _, idx = cKDTree(x_old).query(x_new, k=k)
     idx = idx.reshape(len(x_new), k)

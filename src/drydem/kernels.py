@@ -29,6 +29,8 @@ from drydem.motion import BlockArrays, local_damping
 from drydem.rotation import quaternion_to_matrix, rotate_by_vector
 from drydem.state import State
 
+#: kinetic energy above this many times the work gravity can have done means a blow-up
+DIVERGENCE_FACTOR = 10.0
 #: run_cycles exit codes
 RUNNING, CONVERGED, REDETECT, DIVERGED = 0, 1, 2, 3
 #: criterion codes
@@ -130,10 +132,13 @@ def contact_forces(state, rot, sub, joint, dt, force, moment):
 
 @numba.njit(cache=True)
 def integrate(state, rot, blocks, force, moment, damping, dt):
-    """Steps 4-5: damped velocities, positions and rotations; returns (max unbalanced force
-    or moment / radius over the free degrees of freedom, N; max block point speed, m/s)."""
+    """Steps 4-5: damped velocities, positions and rotations. Returns (max unbalanced force
+    or moment / radius over the free degrees of freedom, N; max block point speed, m/s;
+    kinetic energy with the masses used for the motion, J; sum of m |x - x_origin|, kg m)."""
     max_unbalanced = 0.0
     max_speed = 0.0
+    kinetic = 0.0
+    travel = 0.0
     for i in range(state.position.shape[0]):
         free = blocks.free[i]
         if free.max() == 0.0:
@@ -153,6 +158,7 @@ def integrate(state, rot, blocks, force, moment, damping, dt):
         bx, by, bz = w[0] * r[0, 0] + w[1] * r[1, 0] + w[2] * r[2, 0], w[0] * r[0, 1] + w[1] * r[1, 1] + w[2] * r[2, 1], w[0] * r[0, 2] + w[1] * r[1, 2] + w[2] * r[2, 2]
         ib = blocks.inertia_body[i]
         lx, ly, lz = _mat_vec(r, *_mat_vec(ib, bx, by, bz))
+        kinetic += 0.5 * (w[0] * lx + w[1] * ly + w[2] * lz)
         tx = moment[i, 0] - (w[1] * lz - w[2] * ly)
         ty = moment[i, 1] - (w[2] * lx - w[0] * lz)
         tz = moment[i, 2] - (w[0] * ly - w[1] * lx)
@@ -171,7 +177,11 @@ def integrate(state, rot, blocks, force, moment, damping, dt):
             speed = np.inf
         max_speed = max(max_speed, speed)
         max_unbalanced = max(max_unbalanced, np.sqrt(f2), np.sqrt(m2) / blocks.radius[i])
-    return max_unbalanced, max_speed
+        kinetic += 0.5 * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) / blocks.inv_mass[i]
+        o = blocks.origin[i]
+        p = state.position[i]
+        travel += blocks.mass[i] * np.sqrt((p[0] - o[0]) ** 2 + (p[1] - o[1]) ** 2 + (p[2] - o[2]) ** 2)
+    return max_unbalanced, max_speed, kinetic, travel
 
 
 @numba.njit(cache=True, inline="always")
@@ -195,41 +205,57 @@ def _angle_bound(cos_half):
     return 2.0 * np.sqrt(1.0 - c * c) / c
 
 
-@numba.njit(cache=True)
-def needs_detection(state, detected, neighbours, radius, relative_limit, absolute_limit):
-    """Whether contacts must be re-detected since the State ``detected`` (a Verlet-list test).
+@numba.njit(cache=True, inline="always")
+def _pair_motion(state, neighbours, k, radius):
+    """Bound on the displacement of any point of block i relative to block j since the pair's
+    snapshot (i, j = neighbours.pairs[k]), m:
 
-    Absolute: a block point moved more than ``absolute_limit`` (|dx| + theta r), so a block
-    outside the neighbour list may have come close. Relative: for a neighbour pair (i, j), every
-    point of i moved relative to j by at most |dx_i - dx_j - (Q_j - 1)(c_i0 - c_j0)| + theta_ij r
-    (Q the rotations since detection, theta_ij the angle of Q_i Q_j^T, r the larger radius);
-    more than ``relative_limit`` means their contact may have changed. Blocks moving together as
-    one rigid body never trigger it. Angles are bounded by 2 tan(theta / 2).
+        |dx_i - dx_j - (Q_j - 1)(c_i0 - c_j0)| + theta_ij max(r_i, r_j)
+
+    with Q the rotations since the snapshot and theta_ij the angle of Q_i Q_j^T. Blocks moving
+    together as one rigid body give zero.
     """
-    nb = state.position.shape[0]
-    rel = np.empty((nb, 4))
-    for i in range(nb):
-        w, x, y, z = _relative_quaternion(state.quaternion[i], detected.quaternion[i])
-        rel[i, 0], rel[i, 1], rel[i, 2], rel[i, 3] = w, x, y, z
-        d = state.position[i] - detected.position[i]
+    i, j = neighbours.pairs[k, 0], neighbours.pairs[k, 1]
+    ci0, cj0 = neighbours.position[k, 0], neighbours.position[k, 1]
+    wi, xi, yi, zi = _relative_quaternion(state.quaternion[i], neighbours.quaternion[k, 0])
+    w, ux, uy, uz = _relative_quaternion(state.quaternion[j], neighbours.quaternion[k, 1])
+    # (Q_j - 1) v with v = c_i0 - c_j0, by v' = v + 2 w (u x v) + 2 u x (u x v)
+    vx, vy, vz = ci0[0] - cj0[0], ci0[1] - cj0[1], ci0[2] - cj0[2]
+    cx, cy, cz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    qx = 2.0 * w * cx + 2.0 * (uy * cz - uz * cy)
+    qy = 2.0 * w * cy + 2.0 * (uz * cx - ux * cz)
+    qz = 2.0 * w * cz + 2.0 * (ux * cy - uy * cx)
+    dx = state.position[i, 0] - ci0[0] - state.position[j, 0] + cj0[0] - qx
+    dy = state.position[i, 1] - ci0[1] - state.position[j, 1] + cj0[1] - qy
+    dz = state.position[i, 2] - ci0[2] - state.position[j, 2] + cj0[2] - qz
+    cos_half = abs(wi * w + xi * ux + yi * uy + zi * uz)
+    return np.sqrt(dx * dx + dy * dy + dz * dz) + _angle_bound(cos_half) * max(radius[i], radius[j])
+
+
+@numba.njit(cache=True)
+def pair_motions(state, neighbours, radius, out):
+    """:func:`_pair_motion` of every neighbour pair into ``out`` (nn,), m."""
+    for k in range(neighbours.pairs.shape[0]):
+        out[k] = _pair_motion(state, neighbours, k, radius)
+
+
+@numba.njit(cache=True)
+def needs_detection(state, broad_state, neighbours, radius, relative_limit, absolute_limit):
+    """Whether contacts must be re-detected (a Verlet-list test).
+
+    Absolute: a block point moved more than ``absolute_limit`` (|dx| + theta r) since the
+    State ``broad_state`` of the last broad phase, so a block outside the neighbour list may
+    have come close. Relative: a neighbour pair moved more than ``relative_limit`` relative to
+    each other since its snapshot (:func:`_pair_motion`), so its contact may have changed.
+    Angles are bounded by 2 tan(theta / 2).
+    """
+    for i in range(state.position.shape[0]):
+        w, _, _, _ = _relative_quaternion(state.quaternion[i], broad_state.quaternion[i])
+        d = state.position[i] - broad_state.position[i]
         if np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) + _angle_bound(abs(w)) * radius[i] > absolute_limit:
             return True
-    for k in range(neighbours.shape[0]):
-        i, j = neighbours[k, 0], neighbours[k, 1]
-        # (Q_j - 1) v with v = c_i0 - c_j0, by v' = v + 2 w (u x v) + 2 u x (u x v)
-        vx = detected.position[i, 0] - detected.position[j, 0]
-        vy = detected.position[i, 1] - detected.position[j, 1]
-        vz = detected.position[i, 2] - detected.position[j, 2]
-        w, ux, uy, uz = rel[j, 0], rel[j, 1], rel[j, 2], rel[j, 3]
-        cx, cy, cz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
-        qx = 2.0 * w * cx + 2.0 * (uy * cz - uz * cy)
-        qy = 2.0 * w * cy + 2.0 * (uz * cx - ux * cz)
-        qz = 2.0 * w * cz + 2.0 * (ux * cy - uy * cx)
-        dx = state.position[i, 0] - detected.position[i, 0] - state.position[j, 0] + detected.position[j, 0] - qx
-        dy = state.position[i, 1] - detected.position[i, 1] - state.position[j, 1] + detected.position[j, 1] - qy
-        dz = state.position[i, 2] - detected.position[i, 2] - state.position[j, 2] + detected.position[j, 2] - qz
-        cos_half = abs(rel[i, 0] * rel[j, 0] + rel[i, 1] * rel[j, 1] + rel[i, 2] * rel[j, 2] + rel[i, 3] * rel[j, 3])
-        if np.sqrt(dx * dx + dy * dy + dz * dz) + _angle_bound(cos_half) * max(radius[i], radius[j]) > relative_limit:
+    for k in range(neighbours.pairs.shape[0]):
+        if _pair_motion(state, neighbours, k, radius) > relative_limit:
             return True
     return False
 
@@ -238,7 +264,7 @@ def needs_detection(state, detected, neighbours, radius, relative_limit, absolut
 def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment):
     """One cycle, steps 1-5 (``rot``, ``force``, ``moment`` are scratch arrays).
 
-    Returns (max unbalanced force over the free blocks, N; max block point speed, m/s)."""
+    Returns what :func:`integrate` returns."""
     for i in range(state.position.shape[0]):
         quaternion_to_matrix(state.quaternion[i], rot[i])
         for k in range(3):
@@ -252,30 +278,36 @@ def make_run_cycles(step_function, *, jit: bool):
     """The cycling loop around ``step_function`` (numba-compiled when ``jit``).
 
     ``run_cycles(state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit,
-    force_scale, divergence_speed, detected, neighbours, relative_limit, absolute_limit)`` cycles
-    until converged, re-detection needed, diverged (a block point faster than
-    ``divergence_speed``, m/s, or NaN) or ``max_cycles``, and returns (cycles run, exit code,
-    StepStats of the last cycle). ``force_scale`` (N) is the ratio's denominator (mean weight of
-    the free blocks); the last four arguments go to :func:`needs_detection`.
+    force_scale, travel_slack, broad_state, neighbours, relative_limit, absolute_limit)`` cycles
+    until converged, re-detection needed, diverged or ``max_cycles``, and returns (cycles run,
+    exit code, StepStats of the last cycle). ``force_scale`` (N) is the ratio's denominator
+    (mean weight of the free blocks); the last four arguments go to :func:`needs_detection`.
+
+    Divergence: a NaN, or more kinetic energy than gravity can have supplied. Damping only
+    removes energy, so the kinetic energy stays below the work of gravity, at most
+    |g| sum m |x - x_origin|; above DIVERGENCE_FACTOR times that (plus ``travel_slack``, kg m,
+    for the settling at the start) the integration has blown up. A block falling freely for
+    any time does not trigger it.
     """
 
     def run_cycles(
-        state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit, force_scale, divergence_speed,
-        detected, neighbours, relative_limit, absolute_limit,
+        state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit, force_scale, travel_slack,
+        broad_state, neighbours, relative_limit, absolute_limit,
     ):
         nb = state.position.shape[0]
         rot = np.empty((nb, 3, 3))
         force = np.empty((nb, 3))
         moment = np.empty((nb, 3))
         stats = StepStats(np.inf, np.inf)
+        g = np.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
         for cycle in range(max_cycles):
-            unbalanced, speed = step_function(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment)
+            unbalanced, speed, kinetic, travel = step_function(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment)
             stats = StepStats(unbalanced / force_scale, speed)
-            if not speed < divergence_speed:
+            if not (speed < np.inf and kinetic <= DIVERGENCE_FACTOR * g * (travel + travel_slack)):
                 return cycle + 1, DIVERGED, stats
             if (criterion == RATIO and stats.ratio < limit) or (criterion == VELOCITY and speed < limit):
                 return cycle + 1, CONVERGED, stats
-            if needs_detection(state, detected, neighbours, blocks.radius, relative_limit, absolute_limit):
+            if needs_detection(state, broad_state, neighbours, blocks.radius, relative_limit, absolute_limit):
                 return cycle + 1, REDETECT, stats
         return max_cycles, RUNNING, stats
 

@@ -76,12 +76,6 @@ class Model:
         return ~self.block_fixed.all(axis=1)
 
     @property
-    def size(self) -> float:
-        """Diagonal of the bounding box of all blocks in the model file, m."""
-        vertices = np.concatenate([s.vertices for s in self.block_shape])
-        return float(np.linalg.norm(vertices.max(0) - vertices.min(0)))
-
-    @property
     def total_mass(self) -> float:
         """Mass of the movable blocks, kg."""
         return float(self.block_mass[self.block_movable].sum())
@@ -92,9 +86,10 @@ class Model:
         except ValueError:
             raise ModelError(f"{self.source}: no block named {name!r}") from None
 
-    def shapes_at(self, position: np.ndarray, rotation: np.ndarray) -> list[ConvexPolyhedron]:
-        """Every block's geometry with centroids ``position`` (nb, 3) and rotations (nb, 3, 3)."""
-        return [s.transformed(r, x - r @ s.centroid) for s, x, r in zip(self.block_shape, position, rotation)]
+    def shapes_at(self, position: np.ndarray, rotation: np.ndarray, blocks: np.ndarray | None = None) -> list[ConvexPolyhedron]:
+        """Geometry of ``blocks`` (default: all) with centroids ``position`` (k, 3) and rotations (k, 3, 3)."""
+        indices = range(self.n_blocks) if blocks is None else blocks
+        return [self.block_shape[b].transformed(r, x - r @ self.block_shape[b].centroid) for b, x, r in zip(indices, position, rotation)]
 
     def replace(self, **changes) -> Model:
         """A copy with some parameters changed (joint, contacts, supports, solver)."""

@@ -46,6 +46,7 @@ class BlockArrays(NamedTuple):
     inv_inertia_body: np.ndarray
     free: np.ndarray
     radius: np.ndarray
+    origin: np.ndarray
 
 
 def contact_stiffness(sub: SubContacts, kn: float, ks: float, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:

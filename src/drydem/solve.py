@@ -39,9 +39,6 @@ G = 9.81
 #: neighbour-list margin in contact tolerances: blocks whose bounding boxes are this close are
 #: watched for relative motion; any block moving (margin - tolerance) / 2 re-detects everything
 NEIGHBOUR_MARGIN = 10.0
-#: a block point faster than this many times the speed of a free fall through the model's
-#: whole size, sqrt(2 |g| L), means the integration has blown up
-DIVERGENCE_FACTOR = 10.0
 #: cycles run in one call of the kernel loop between progress reports
 CHUNK = 5_000
 
@@ -76,6 +73,7 @@ class Simulation:
         self.state = state.copy() if state is not None else State.at_rest(model.block_centroid)
         self.engine = engine
         self.contacts = contacts.SubContacts.empty()
+        self.neighbours = contacts.NeighbourList.empty()
         self.cycles = 0
         self.detections = 0
         self._fixed_timestep = timestep
@@ -84,22 +82,58 @@ class Simulation:
 
     # -- contacts and inertia -------------------------------------------------------------
     def detect_contacts(self) -> None:
-        """Re-detect sub-contacts at the current state, keeping the shear history."""
-        m = self.model
-        rot = matrices(self.state.quaternion)
-        self.contacts = contacts.detect(
-            m.shapes_at(self.state.position, rot),
-            self.state.position,
-            rot,
-            m.block_movable,
-            tolerance=m.contact_tolerance,
-            margin=NEIGHBOUR_MARGIN * m.contact_tolerance,
-            points_per_length=m.contacts.points_per_length,
-            previous=self.contacts if self.contacts.count else None,
-        )
-        self._detected_state = self.state.copy()
+        """Re-detect every contact at the current state (shear stress carried over)."""
+        self._detect(everything=True)
+
+    def _detect(self, *, everything: bool) -> None:
+        """Refresh the contacts (:func:`drydem.kernels.needs_detection` said so, or ``everything``).
+
+        Neighbour pairs that moved less than a quarter of the tolerance relative to each other
+        since their snapshot keep their sub-contacts and shear history untouched; the others go
+        through the narrow phase again, inheriting shear stress from their old sub-contacts
+        (:func:`drydem.contacts.carry_over`). The broad phase runs again only when some block
+        has moved far from where the last one saw it.
+        """
+        m, s = self.model, self.state
+        nb, tol = m.n_blocks, m.contact_tolerance
+        rot = matrices(s.quaternion)
+        old_list, old = self.neighbours, self.contacts
+        motion = np.empty(len(old_list.pairs))
+        kernels.pair_motions(s, old_list, m.block_radius, motion)
+        if everything or self._moved_far():
+            pairs = contacts.broad_phase(m.shapes_at(s.position, rot), m.block_movable, 0.5 * NEIGHBOUR_MARGIN * tol)
+            self._broad_state = s.copy()
+        else:
+            pairs = old_list.pairs
+        old_keys = contacts.pair_keys(old_list.pairs, nb)
+        keys = contacts.pair_keys(pairs, nb)
+        where = np.searchsorted(old_keys, keys).clip(0, max(len(old_keys) - 1, 0))
+        known = (where < len(old_keys)) & (old_keys[where] == keys) if len(old_keys) else np.zeros(len(keys), bool)
+        kept = known & (not everything)
+        kept[known] &= motion[where[known]] <= 0.25 * tol
+        keep_contact = np.isin(old.pair_keys(nb), keys[kept])
+        stale = pairs[~kept]
+        blocks = np.unique(stale)
+        shapes = dict(zip(blocks.tolist(), m.shapes_at(s.position[blocks], rot[blocks], blocks)))
+        fresh = contacts.narrow_phase(shapes, stale, s.position, rot, tolerance=tol, points_per_length=m.contacts.points_per_length)
+        contacts.carry_over(contacts.subset(old, ~keep_contact), fresh, s.position, rot)
+        self.contacts = contacts.concatenate(contacts.subset(old, keep_contact), fresh)
+        snapshot_position, snapshot_quaternion = s.position[pairs], s.quaternion[pairs]
+        snapshot_position[kept] = old_list.position[where[kept]]
+        snapshot_quaternion[kept] = old_list.quaternion[where[kept]]
+        self.neighbours = contacts.NeighbourList(pairs, snapshot_position, snapshot_quaternion)
         self.detections += 1
         self._update_inertia()
+
+    def _moved_far(self) -> bool:
+        """Some block point moved (margin - tolerance) / 2 since the last broad phase."""
+        return kernels.needs_detection(
+            self.state, self._broad_state, contacts.NeighbourList.empty(), self.model.block_radius, np.inf, self._absolute_limit
+        )
+
+    @property
+    def _absolute_limit(self) -> float:
+        return 0.5 * (NEIGHBOUR_MARGIN - 1.0) * self.model.contact_tolerance
 
     def _update_inertia(self) -> None:
         m, solver = self.model, self.model.solver
@@ -129,6 +163,7 @@ class Simulation:
             inv_inertia_body=np.linalg.inv(inertia),
             free=(~m.block_fixed).astype(float),
             radius=m.block_radius,
+            origin=m.block_centroid,
         )
 
     def _free_flight_timestep(self) -> float:
@@ -165,15 +200,14 @@ class Simulation:
             raise ModelError("the 'ratio' criterion needs gravity (it divides by the mean weight); use 'velocity'")
         run_cycles = ENGINES[self.engine]
         joint = JointArrays.of(m.joint)
-        divergence_speed = DIVERGENCE_FACTOR * np.sqrt(2.0 * max(float(np.linalg.norm(g)), G) * m.size)
+        travel_slack = m.total_mass * m.contact_tolerance
         done, detections = 0, 0
         code, stats = kernels.RUNNING, kernels.StepStats(np.inf, np.inf)
         while done < max_cycles:
             n, code, stats = run_cycles(
                 self.state, self._blocks, self.contacts, joint, g, self.timestep,
-                m.solver.damping, min(CHUNK, max_cycles - done), criterion, limit, max(weight, 1e-300), divergence_speed,
-                self._detected_state, self.contacts.neighbours, 0.5 * m.contact_tolerance,
-                0.5 * (NEIGHBOUR_MARGIN - 1.0) * m.contact_tolerance,
+                m.solver.damping, min(CHUNK, max_cycles - done), criterion, limit, max(weight, 1e-300), travel_slack,
+                self._broad_state, self.neighbours, 0.5 * m.contact_tolerance, self._absolute_limit,
             )
             done += n
             self.cycles += n
@@ -181,14 +215,14 @@ class Simulation:
                 progress(done, stats)
             if code == kernels.DIVERGED:
                 raise DivergenceError(
-                    f"{m.source}: the integration diverged after {self.cycles} cycles (a block point moved faster than "
-                    f"{divergence_speed:.3g} m/s; timestep {self.timestep:.3g} s): "
+                    f"{m.source}: the integration diverged after {self.cycles} cycles (more kinetic energy than gravity "
+                    f"can have supplied; timestep {self.timestep:.3g} s): "
                     "reduce the timestep (solver.timestep_safety) or check the stiffness and masses"
                 )
             if code == kernels.CONVERGED:
                 break
             if code == kernels.REDETECT:
-                self.detect_contacts()
+                self._detect(everything=False)
                 detections += 1
         return EquilibriumResult(code == kernels.CONVERGED, done, criterion_name, float(stats.ratio), float(stats.max_speed), detections)
 
