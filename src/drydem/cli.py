@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import time
+from dataclasses import replace
+from datetime import datetime
+from pathlib import Path
 
 import click
 import numpy as np
@@ -10,6 +13,8 @@ import numpy as np
 from drydem import __version__, examples
 from drydem.errors import DrydemError
 from drydem.io.model_file import load_model
+from drydem.model import Model
+from drydem.parameters import CRITERIA
 from drydem.solve import Simulation
 
 
@@ -64,3 +69,82 @@ def _settle(sim: Simulation) -> None:
     click.echo(f"settlement      {drop.max() * 1e3:.4g} mm max, top block {model.block_name[top]!r} {drop[top] * 1e3:.4g} mm")
     if not result.converged:
         raise SystemExit(1)
+
+
+@main.command()
+@click.argument("target")
+@click.option("--kn", type=float, help="Normal joint stiffness, Pa/m (overrides the model file).")
+@click.option("--ks", type=float, help="Shear joint stiffness, Pa/m.")
+@click.option("--friction", type=float, help="Coulomb friction coefficient.")
+@click.option("--points", type=int, help="Sub-contact points per length.")
+@click.option("--density", type=float, help="Density of every block, kg/m3.")
+@click.option("--increment", type=float, default=0.1, show_default=True, help="Tilt step, deg.")
+@click.option("--adaptive", is_flag=True, help="Coarse steps, then bisection down to the increment.")
+@click.option("--stop-displacement", type=float, default=0.10, show_default=True, help="Monitored horizontal displacement that ends the run, m.")
+@click.option("--criterion", type=click.Choice(CRITERIA), help="Equilibrium criterion (default: the model file's).")
+@click.option("--loading", type=click.Choice(["tilt", "multiplier"]), default="tilt", show_default=True, help="Tilt the gravity or add lambda g horizontally.")
+@click.option("--monitor", help="Block whose centroid is monitored (default: the top block nearest the middle).")
+@click.option("--max-angle", type=float, default=80.0, show_default=True, help="Largest tilt tried, deg.")
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), help="Results folder (default: results/TARGET-TIME).")
+def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_displacement, criterion, loading, monitor, max_angle, out) -> None:
+    """Tilting-table analysis of TARGET (a model file or a shipped example): collapse angle,
+    pushover curve, Eurocode 8 drift-limit angles, plots."""
+    from tqdm import tqdm
+
+    from drydem.analysis.tilt import TiltSettings, tilt_analysis
+    from drydem.io.results import PushoverWriter, write_summary
+    from drydem.report.plots import mechanism_figure, pushover_figure
+
+    try:
+        path = examples.resolve(target)
+        model = _with_overrides(load_model(path), kn=kn, ks=ks, friction=friction, points=points, density=density, criterion=criterion)
+        settings = TiltSettings(
+            increment_deg=increment, adaptive=adaptive, stop_displacement_m=stop_displacement, loading=loading,
+            monitor=monitor, max_angle_deg=max_angle,
+        )
+        if monitor is not None:
+            model.block_index(monitor)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    out = out or Path("results") / f"{path.stem}-{datetime.now():%Y%m%d-%H%M%S}"
+    out.mkdir(parents=True, exist_ok=True)
+    click.echo(f"{path}: {model.n_blocks} blocks, kn {model.joint.kn:.3g} Pa/m, ks {model.joint.ks:.3g} Pa/m, "
+               f"mu {model.joint.friction:g}, {model.contacts.points_per_length} points per length -> {out}")
+    with tqdm(desc="tilting", unit=" cycles", unit_scale=True, leave=False) as bar:
+
+        def progress(theta, cycles, ux):
+            bar.update(cycles - bar.n)
+            bar.set_postfix_str(f"{theta:.2f} deg, ux {ux * 1e3:.2f} mm")
+
+        result = tilt_analysis(model, settings, on_record=PushoverWriter(out), on_progress=progress)
+    write_summary(out, result, model)
+    pushover_figure(result, out / "pushover.png", title=path.stem)
+    states = [("last equilibrium" if result.collapse_angle_deg is not None else "under gravity", result.collapse_state or result.final_state),
+              (f"past collapse ({result.ended_by})", result.final_state)]
+    lost = frozenset(name for name, _ in result.lost_blocks)
+    mechanism_figure(model, states, out / "mechanism.png", monitored=result.monitored_block, hidden=lost)
+    if not result.stable_under_gravity:
+        click.echo("the model cannot stand under its own weight (state saved in the plots)")
+    elif result.collapse_angle_deg is None:
+        click.echo(f"no collapse up to {max_angle} deg")
+    else:
+        click.echo(f"collapse angle  {result.collapse_angle_deg:.2f} deg (load multiplier {result.load_multiplier:.4f}; ended by {result.ended_by})")
+    dls = result.drift_limit_angles_deg
+    click.echo("drift limits    " + ", ".join(f"{float(k):.2%}: " + ("not reached" if v is None else f"{v:.2f} deg") for k, v in dls.items()))
+    if result.lost_blocks:
+        first = min(theta for _, theta in result.lost_blocks)
+        click.echo(f"lost blocks     {len(result.lost_blocks)} fell out of the model, the first at {first:.2f} deg (listed in summary.json)")
+    click.echo(f"cycles          {result.cycles} in {result.runtime_s:.1f} s; results in {out}")
+
+
+def _with_overrides(model: Model, *, kn, ks, friction, points, density, criterion) -> Model:
+    """The model with the command-line options that were given."""
+    joint = {k: v for k, v in {"kn": kn, "ks": ks, "friction": friction}.items() if v is not None}
+    changes = {}
+    if joint:
+        changes["joint"] = replace(model.joint, **joint)
+    if points is not None:
+        changes["contacts"] = replace(model.contacts, points_per_length=points)
+    if criterion is not None:
+        changes["solver"] = replace(model.solver, criterion=criterion)
+    return model.replace(density=density, **changes) if changes or density is not None else model

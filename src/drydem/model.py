@@ -91,16 +91,22 @@ class Model:
         indices = range(self.n_blocks) if blocks is None else blocks
         return [self.block_shape[b].transformed(r, x - r @ self.block_shape[b].centroid) for b, x, r in zip(indices, position, rotation)]
 
-    def replace(self, **changes) -> Model:
-        """A copy with some parameters changed (joint, contacts, supports, solver)."""
+    def replace(self, *, density: float | None = None, **changes) -> Model:
+        """A copy with some parameters changed: joint, contacts, supports, solver, or one
+        ``density`` (kg/m3) for every block."""
         allowed = {"joint", "contacts", "supports", "solver"}
         unknown = set(changes) - allowed
         if unknown:
-            raise TypeError(f"Model.replace accepts {sorted(allowed)}, not {sorted(unknown)}")
+            raise TypeError(f"Model.replace accepts density and {sorted(allowed)}, not {sorted(unknown)}")
         blocks = [Block(name=n, shape=s, fixed=bool(f.all())) for n, s, f in zip(self.block_name, self.block_shape, self.block_fixed)]
-        density = self.block_mass / np.array([s.volume for s in self.block_shape])
+        if density is None:
+            per_block = self.block_mass / np.array([s.volume for s in self.block_shape])
+        elif not (np.isfinite(density) and density > 0):
+            raise ModelError(f"{self.source}: density = {density!r}: must be a positive number (kg/m3)")
+        else:
+            per_block = np.full(self.n_blocks, float(density))
         params = dict(joint=self.joint, contacts=self.contacts, supports=self.supports, solver=self.solver) | changes
-        return _assemble(blocks, density, source=self.source, **params)
+        return _assemble(blocks, per_block, source=self.source, **params)
 
 
 def build_model(

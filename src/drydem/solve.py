@@ -60,6 +60,20 @@ class EquilibriumResult:
     detections: int
 
 
+@dataclass(frozen=True)
+class Snapshot:
+    """A saved point of a :class:`Simulation`: state, contacts with their shear history,
+    neighbour list, the blocks still in the analysis, cycles run."""
+
+    state: State
+    contacts: contacts.SubContacts
+    neighbours: contacts.NeighbourList
+    broad_state: State
+    active: np.ndarray
+    cycles: int
+    scaled_timestep: float | None
+
+
 class Simulation:
     """A model being cycled. ``engine`` is "numba" (fast) or "reference" (NumPy oracle).
 
@@ -74,6 +88,7 @@ class Simulation:
         self.engine = engine
         self.contacts = contacts.SubContacts.empty()
         self.neighbours = contacts.NeighbourList.empty()
+        self.active = np.ones(model.n_blocks, dtype=bool)
         self.cycles = 0
         self.detections = 0
         self._fixed_timestep = timestep
@@ -102,6 +117,7 @@ class Simulation:
         kernels.pair_motions(s, old_list, m.block_radius, motion)
         if everything or self._moved_far():
             pairs = contacts.broad_phase(m.shapes_at(s.position, rot), m.block_movable, 0.5 * NEIGHBOUR_MARGIN * tol)
+            pairs = pairs[self.active[pairs].all(axis=1)]
             self._broad_state = s.copy()
         else:
             pairs = old_list.pairs
@@ -138,7 +154,7 @@ class Simulation:
     def _update_inertia(self) -> None:
         m, solver = self.model, self.model.solver
         k_t, k_r = contact_stiffness(self.contacts, m.joint.kn, m.joint.ks, m.n_blocks)
-        critical = critical_timestep(m.block_mass, m.block_inertia, m.block_movable, k_t, k_r)
+        critical = critical_timestep(m.block_mass, m.block_inertia, m.block_movable & self.active, k_t, k_r)
         if self._fixed_timestep is not None:
             if self._fixed_timestep > critical:
                 raise ModelError(
@@ -155,13 +171,13 @@ class Simulation:
             dt = self._scaled_timestep
             mass, inertia = scaled_inertia(mass, inertia, k_t, k_r, dt, solver.timestep_safety)
         self.timestep = float(dt)
-        movable = m.block_movable
+        movable = m.block_movable & self.active
         self._blocks = BlockArrays(
             mass=m.block_mass,
             inv_mass=np.where(movable, 1.0 / mass, 0.0),
             inertia_body=inertia,
             inv_inertia_body=np.linalg.inv(inertia),
-            free=(~m.block_fixed).astype(float),
+            free=(~m.block_fixed & movable[:, None]).astype(float),
             radius=m.block_radius,
             origin=m.block_centroid,
         )
@@ -169,6 +185,35 @@ class Simulation:
     def _free_flight_timestep(self) -> float:
         """Timestep with no springs: a tenth of the time to fall through the contact tolerance."""
         return 0.1 * float(np.sqrt(2.0 * self.model.contact_tolerance / G))
+
+    def remove_blocks(self, blocks) -> None:
+        """Take blocks out of the analysis (e.g. bricks that fell out of the wall): they stop
+        moving, lose their contacts and no longer count for equilibrium."""
+        self.active[np.asarray(blocks, dtype=np.int64)] = False
+        keep = self.active[self.contacts.pairs].all(axis=1)
+        self.contacts = contacts.subset(self.contacts, keep)
+        self.neighbours = contacts.NeighbourList(*(a[self.active[self.neighbours.pairs].all(axis=1)] for a in self.neighbours))
+        self.state.velocity[~self.active] = 0.0
+        self.state.angular_velocity[~self.active] = 0.0
+        self._update_inertia()
+
+    def snapshot(self) -> Snapshot:
+        """Everything needed to resume cycling from now (see :meth:`restore`)."""
+        return Snapshot(
+            state=self.state.copy(), contacts=self.contacts.copy(), neighbours=contacts.NeighbourList(*(a.copy() for a in self.neighbours)),
+            broad_state=self._broad_state.copy(), active=self.active.copy(), cycles=self.cycles, scaled_timestep=self._scaled_timestep,
+        )
+
+    def restore(self, snapshot: Snapshot) -> None:
+        """Go back to a :meth:`snapshot` (its arrays are copied, so it can be restored again)."""
+        self.state = snapshot.state.copy()
+        self.contacts = snapshot.contacts.copy()
+        self.neighbours = contacts.NeighbourList(*(a.copy() for a in snapshot.neighbours))
+        self._broad_state = snapshot.broad_state.copy()
+        self.active = snapshot.active.copy()
+        self.cycles = snapshot.cycles
+        self._scaled_timestep = snapshot.scaled_timestep
+        self._update_inertia()
 
     # -- cycling --------------------------------------------------------------------------
     def cycle(self, n: int, *, gravity=(0.0, 0.0, -G)) -> EquilibriumResult:
@@ -195,7 +240,8 @@ class Simulation:
         g = np.asarray(gravity, dtype=float)
         if g.shape != (3,) or not np.all(np.isfinite(g)):
             raise ModelError(f"gravity must be a finite [gx, gy, gz] in m/s2, got {gravity!r}")
-        weight = float(np.linalg.norm(g)) * m.total_mass / max(int(m.block_movable.sum()), 1)
+        moving = m.block_movable & self.active
+        weight = float(np.linalg.norm(g)) * float(m.block_mass[moving].sum()) / max(int(moving.sum()), 1)
         if criterion_name == "ratio" and weight == 0.0:
             raise ModelError("the 'ratio' criterion needs gravity (it divides by the mean weight); use 'velocity'")
         run_cycles = ENGINES[self.engine]

@@ -1,0 +1,1 @@
+"""Analyses built on the engine: tilting table and pushover (tilt.py), drift limits (drift.py)."""

@@ -1,0 +1,35 @@
+"""Eurocode 8 drift limits on a pushover curve.
+
+The drift of a wall is the horizontal displacement of its monitored point divided by the
+wall's height. EN 1998-1 (4.4.3.2) limits the interstorey drift at the damage limitation
+state to 0.5 %, 0.75 % or 1 % depending on the non-structural elements; Savalle et al.
+(2022, Section 5) read the tilt angles at which each is first reached, the 1 % one being
+their DLS angle.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: EN 1998-1 4.4.3.2 drift limits (the paper's Section 5)
+EC8_DRIFT_LIMITS = (0.005, 0.0075, 0.01)
+
+
+def drift_limit_angles(angle_deg, drift, limits=EC8_DRIFT_LIMITS) -> dict[str, float | None]:
+    """Angle at which ``drift`` first reaches each limit, linearly interpolated between the
+    recorded equilibrium states (``angle_deg`` increasing); None where it never does.
+    Keys are the limits written as in the summary file ("0.005", "0.0075", "0.01")."""
+    angle, d = np.asarray(angle_deg, float), np.asarray(drift, float)
+    result: dict[str, float | None] = {}
+    for limit in limits:
+        reached = np.flatnonzero(d >= limit)
+        if reached.size == 0:
+            result[repr(limit)] = None
+            continue
+        k = int(reached[0])
+        if k == 0:
+            result[repr(limit)] = float(angle[0])
+            continue
+        t = (limit - d[k - 1]) / (d[k] - d[k - 1])
+        result[repr(limit)] = float(angle[k - 1] + t * (angle[k] - angle[k - 1]))
+    return result

@@ -1,0 +1,251 @@
+"""Tilting-table analysis and pushover by a load multiplier (Savalle et al. 2022, Section 3).
+
+Stage 1: vertical gravity in one step, cycled to equilibrium. Stage 2: the tilt theta
+grows by ``increment_deg`` and gravity becomes
+
+    tilt:        g (sin theta, 0, -cos theta)        (paper Eq. 5)
+    multiplier:  g (lambda, 0, -1), lambda = tan theta   (classic pushover, the same statics
+                 direction; theta = atan(lambda) is its tilt equivalent)
+
+cycling to equilibrium at each step, until the monitored point has moved
+``stop_displacement_m`` horizontally or equilibrium cannot be reached within the solver's
+``max_cycles``. The collapse angle is the largest tilt at which the model was in equilibrium.
+
+Adaptive protocol: steps of ``increment_deg * 2**refinements``; a step that fails is undone
+(the last equilibrium is restored, shear history included) and halved, down to
+``increment_deg``; so the collapse angle is found to within one increment, as with fixed steps.
+
+Blocks that fall out of the model (centroid more than ``lost_drop_m`` below where it was
+drawn, e.g. a brick sliding out of a course) are taken out of the analysis and reported, so
+that a local failure does not hide the global collapse.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from drydem.analysis.drift import drift_limit_angles
+from drydem.errors import ModelError
+from drydem.model import Model
+from drydem.solve import G, Simulation
+from drydem.state import State
+
+LOADINGS = ("tilt", "multiplier")
+
+
+@dataclass(frozen=True, kw_only=True)
+class TiltSettings:
+    """Protocol parameters (CLI options of ``drydem tilt``).
+
+    increment_deg : tilt step, deg (paper: 0.1). adaptive : coarse steps and bisection.
+    refinements : adaptive steps start at increment_deg * 2**refinements. stop_displacement_m :
+    horizontal displacement of the monitored point that ends the analysis, m (paper: 0.10).
+    loading : "tilt" or "multiplier". monitor : block name (default: the block whose top is
+    highest, nearest the middle of the wall). max_angle_deg : the analysis ends there, deg.
+    lost_drop_m : a block whose centroid dropped more than this is taken out, m (default:
+    half the stop displacement). chunk_cycles : cycles between checks of the monitored point.
+    """
+
+    increment_deg: float = 0.1
+    adaptive: bool = False
+    refinements: int = 4
+    stop_displacement_m: float = 0.10
+    loading: str = "tilt"
+    monitor: str | None = None
+    max_angle_deg: float = 80.0
+    lost_drop_m: float | None = None
+    chunk_cycles: int = 2000
+
+    def __post_init__(self):
+        checks = {
+            "increment_deg": 0 < self.increment_deg < 90,
+            "refinements": isinstance(self.refinements, int) and 0 <= self.refinements <= 12,
+            "stop_displacement_m": self.stop_displacement_m > 0,
+            "loading": self.loading in LOADINGS,
+            "max_angle_deg": 0 < self.max_angle_deg < 90,
+            "lost_drop_m": self.lost_drop_m is None or self.lost_drop_m > 0,
+            "chunk_cycles": isinstance(self.chunk_cycles, int) and self.chunk_cycles > 0,
+        }
+        for name, ok in checks.items():
+            if not ok:
+                raise ModelError(f"tilt setting {name} = {getattr(self, name)!r} is out of range")
+
+    def gravity(self, theta_deg: float) -> np.ndarray:
+        """Gravity vector (m/s2) at tilt (or tilt-equivalent) ``theta_deg``."""
+        t = math.radians(theta_deg)
+        if self.loading == "tilt":
+            return G * np.array([math.sin(t), 0.0, -math.cos(t)])
+        return G * np.array([math.tan(t), 0.0, -1.0])
+
+
+@dataclass(frozen=True)
+class Record:
+    """One equilibrium state of the pushover curve: tilt (deg), monitored displacement (m),
+    drift (ux / wall height) and the cycles this step took."""
+
+    tilt_deg: float
+    ux_m: float
+    uz_m: float
+    drift: float
+    cycles: int
+
+    @property
+    def load_multiplier(self) -> float:
+        return math.tan(math.radians(self.tilt_deg))
+
+
+@dataclass
+class TiltResult:
+    """Outcome of :func:`tilt_analysis`. States are block positions/orientations (State)."""
+
+    settings: TiltSettings
+    monitored_block: str
+    wall_height_m: float
+    stable_under_gravity: bool
+    collapse_angle_deg: float | None
+    records: list[Record]
+    lost_blocks: list[tuple[str, float]]
+    cycles: int
+    runtime_s: float
+    collapse_state: State | None = field(repr=False)
+    final_state: State = field(repr=False)
+    ended_by: str
+
+    @property
+    def load_multiplier(self) -> float | None:
+        return None if self.collapse_angle_deg is None else math.tan(math.radians(self.collapse_angle_deg))
+
+    @property
+    def drift_limit_angles_deg(self) -> dict[str, float | None]:
+        return drift_limit_angles([r.tilt_deg for r in self.records], [r.drift for r in self.records])
+
+
+def monitored_block(model: Model) -> int:
+    """The movable block whose top is highest; ties go to the one nearest the middle of the wall."""
+    movable = np.flatnonzero(model.block_movable)
+    tops = np.array([model.block_shape[b].vertices[:, 2].max() for b in movable])
+    highest = movable[tops >= tops.max() - 1e-9 * model.contact_tolerance]
+    middle = np.mean([model.block_shape[b].centroid[0] for b in movable])
+    return int(highest[np.argmin(np.abs(model.block_centroid[highest, 0] - middle))])
+
+
+def wall_height(model: Model) -> float:
+    """Height of the movable blocks above their lowest point, m (the drift's denominator)."""
+    z = np.concatenate([model.block_shape[b].vertices[:, 2] for b in np.flatnonzero(model.block_movable)])
+    return float(z.max() - z.min())
+
+
+class _Run:
+    """Bookkeeping of one analysis: the simulation, the monitored point, the lost blocks."""
+
+    def __init__(self, model: Model, settings: TiltSettings, on_progress):
+        self.model, self.settings, self.on_progress = model, settings, on_progress
+        self.sim = Simulation(model)
+        self.monitor = model.block_index(settings.monitor) if settings.monitor else monitored_block(model)
+        self.height = wall_height(model)
+        self.lost: list[tuple[str, float]] = []
+        self.lost_drop = settings.lost_drop_m if settings.lost_drop_m is not None else 0.5 * settings.stop_displacement_m
+
+    def displacement(self) -> tuple[float, float]:
+        moved = self.sim.state.position[self.monitor] - self.model.block_centroid[self.monitor]
+        return float(moved[0]), float(moved[2])
+
+    def equilibrate(self, theta_deg: float, *, vertical: bool = False) -> tuple[bool, int]:
+        """Cycle at ``theta_deg`` until equilibrium (True), the stop displacement or max cycles (False)."""
+        gravity = np.array([0.0, 0.0, -G]) if vertical else self.settings.gravity(theta_deg)
+        solver = self.model.solver
+        done = 0
+        while True:
+            chunk = replace(solver, max_cycles=min(self.settings.chunk_cycles, solver.max_cycles - done))
+            result = self.sim.cycle_to_equilibrium(gravity=gravity, solver=chunk)
+            done += result.cycles
+            self._remove_lost(theta_deg)
+            ux, _ = self.displacement()
+            if self.on_progress is not None:
+                self.on_progress(theta_deg, self.sim.cycles, ux)
+            if result.converged:
+                return True, done
+            if abs(ux) >= self.settings.stop_displacement_m or done >= solver.max_cycles:
+                return False, done
+
+    def _remove_lost(self, theta_deg: float) -> None:
+        drop = self.model.block_centroid[:, 2] - self.sim.state.position[:, 2]
+        lost = np.flatnonzero((drop > self.lost_drop) & self.sim.active & self.model.block_movable)
+        lost = lost[lost != self.monitor]
+        if lost.size:
+            self.sim.remove_blocks(lost)
+            self.lost += [(self.model.block_name[b], theta_deg) for b in lost]
+
+    def record(self, theta_deg: float, cycles: int) -> Record:
+        ux, uz = self.displacement()
+        return Record(tilt_deg=theta_deg, ux_m=ux, uz_m=uz, drift=ux / self.height, cycles=cycles)
+
+
+def tilt_analysis(
+    model: Model,
+    settings: TiltSettings = TiltSettings(),
+    *,
+    on_record: Callable[[Record], None] | None = None,
+    on_progress: Callable[[float, int, float], None] | None = None,
+) -> TiltResult:
+    """Run the tilting-table (or multiplier) protocol on ``model`` (see module docstring).
+
+    ``on_record(record)`` is called at every equilibrium state as it is found (to write results
+    as the run goes); ``on_progress(theta_deg, cycles_so_far, ux_m)`` every few thousand cycles.
+    """
+    start = time.perf_counter()
+    run = _Run(model, settings, on_progress)
+    records: list[Record] = []
+    equilibria: list[State] = []
+
+    def accept(theta: float, cycles: int) -> None:
+        records.append(run.record(theta, cycles))
+        equilibria[:] = [run.sim.state.copy()]
+        if on_record is not None:
+            on_record(records[-1])
+
+    stable, cycles = run.equilibrate(0.0, vertical=True)
+    if not stable:
+        collapse, ended_by = None, "unstable under gravity"
+    else:
+        accept(0.0, cycles)
+        step = settings.increment_deg * (2**settings.refinements if settings.adaptive else 1)
+        theta, last_good = 0.0, run.sim.snapshot()
+        ended_by = "maximum angle"
+        while theta + step <= settings.max_angle_deg + 1e-9:
+            held, cycles = run.equilibrate(theta + step)
+            if held:
+                theta = round(theta + step, 9)
+                accept(theta, cycles)
+                if settings.adaptive:
+                    last_good = run.sim.snapshot()
+                continue
+            if settings.adaptive and step > settings.increment_deg * (1 + 1e-9):
+                lost_before = [entry for entry in run.lost if entry[1] <= theta]
+                run.sim.restore(last_good)
+                run.lost = lost_before
+                step /= 2
+                continue
+            ux, _ = run.displacement()
+            ended_by = "stop displacement" if abs(ux) >= settings.stop_displacement_m else "no equilibrium within max_cycles"
+            break
+        collapse = theta if ended_by != "maximum angle" else None
+    return TiltResult(
+        settings=settings,
+        monitored_block=model.block_name[run.monitor],
+        wall_height_m=run.height,
+        stable_under_gravity=stable,
+        collapse_angle_deg=collapse,
+        records=records,
+        lost_blocks=run.lost,
+        cycles=run.sim.cycles,
+        runtime_s=time.perf_counter() - start,
+        collapse_state=equilibria[0] if equilibria else None,
+        final_state=run.sim.state.copy(),
+        ended_by=ended_by,
+    )

@@ -1,0 +1,77 @@
+"""Result files of an analysis, written as the run goes (a crash keeps what was written).
+
+``pushover.csv``: one row per equilibrium state, appended and flushed as each is found.
+``summary.json``: collapse angle, drift-limit angles, model and analysis parameters,
+cycles, run time, drydem version; written at the end.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from dataclasses import asdict
+from pathlib import Path
+
+from drydem import __version__
+from drydem.analysis.tilt import Record, TiltResult
+from drydem.model import Model
+
+PUSHOVER_COLUMNS = ("tilt_deg", "load_multiplier", "ux_m", "uz_m", "drift", "cycles")
+
+
+class PushoverWriter:
+    """Appends equilibrium states to ``pushover.csv`` in ``folder`` as they are found."""
+
+    def __init__(self, folder: Path):
+        self.path = folder / "pushover.csv"
+        with self.path.open("w", newline="") as f:
+            csv.writer(f).writerow(PUSHOVER_COLUMNS)
+
+    def __call__(self, record: Record) -> None:
+        with self.path.open("a", newline="") as f:
+            csv.writer(f).writerow(
+                [f"{record.tilt_deg:.6f}", f"{record.load_multiplier:.8g}", f"{record.ux_m:.8g}", f"{record.uz_m:.8g}",
+                 f"{record.drift:.8g}", record.cycles]
+            )
+
+
+def read_pushover(path: Path) -> dict[str, list[float]]:
+    """The columns of a ``pushover.csv`` as lists of floats."""
+    with Path(path).open(newline="") as f:
+        rows = list(csv.DictReader(f))
+    return {column: [float(row[column]) for row in rows] for column in PUSHOVER_COLUMNS}
+
+
+def summary(result: TiltResult, model: Model) -> dict:
+    """The content of ``summary.json``."""
+    return {
+        "collapse_angle_deg": result.collapse_angle_deg,
+        "load_multiplier": result.load_multiplier,
+        "stable_under_gravity": result.stable_under_gravity,
+        "ended_by": result.ended_by,
+        "drift_limit_angles_deg": result.drift_limit_angles_deg,
+        "monitored_block": result.monitored_block,
+        "wall_height_m": result.wall_height_m,
+        "lost_blocks": [{"block": name, "tilt_deg": tilt} for name, tilt in result.lost_blocks],
+        "equilibrium_states": len(result.records),
+        "cycles": result.cycles,
+        "runtime_s": round(result.runtime_s, 3),
+        "analysis": asdict(result.settings),
+        "model": {
+            "source": model.source,
+            "blocks": model.n_blocks,
+            "movable_blocks": int(model.block_movable.sum()),
+            "mass_kg": model.total_mass,
+            "joint": asdict(model.joint),
+            "contacts": asdict(model.contacts) | {"tolerance_m": model.contact_tolerance},
+            "supports": asdict(model.supports),
+            "solver": asdict(model.solver),
+        },
+        "drydem_version": __version__,
+    }
+
+
+def write_summary(folder: Path, result: TiltResult, model: Model) -> Path:
+    path = folder / "summary.json"
+    path.write_text(json.dumps(summary(result, model), indent=2) + "\n")
+    return path
