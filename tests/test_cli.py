@@ -24,3 +24,61 @@ def test_bad_model_exits_with_its_message(tmp_path):
     result = CliRunner().invoke(main, ["check", str(path)])
     assert result.exit_code == 1
     assert "broken.toml: [joint] kn = -1.0: must be a positive number" in result.output
+
+
+def small_wall_file(tmp_path):
+    """A 4-brick x 6-course running-bond wall (no openings) as a model file."""
+    from drydem.io.model_file import save_model
+    from drydem.walls import running_bond_wall
+    import drydem as dd
+
+    model = dd.build_model(
+        running_bond_wall(courses=6, bricks_per_course=2), density=1800.0,
+        joint=dd.JointMaterial(kn=1e8, ks=1e8, friction=0.5), supports=dd.Supports(fix_y=True),
+    )
+    path = tmp_path / "small_wall.toml"
+    save_model(model, path)
+    return path
+
+
+def test_tilt_end_to_end_writes_summary_curve_and_plots(tmp_path):
+    import csv
+    import json
+
+    out = tmp_path / "run"
+    result = CliRunner().invoke(main, ["tilt", str(small_wall_file(tmp_path)), "--increment", "1.0", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "collapse angle" in result.output and "drift limits" in result.output
+    summary = json.loads((out / "summary.json").read_text())
+    for key in ("collapse_angle_deg", "stable_under_gravity", "drift_limit_angles_deg", "monitored_block", "wall_height_m",
+                "model", "analysis", "cycles", "runtime_s", "drydem_version"):
+        assert key in summary
+    assert set(summary["drift_limit_angles_deg"]) == {"0.005", "0.0075", "0.01"}
+    assert summary["wall_height_m"] == 6 * 0.0055
+    # a 50 mm x 33 mm solid wall on mu = 0.5: it slides (26.6 deg) before it could topple (56 deg)
+    assert 25.5 <= summary["collapse_angle_deg"] <= 26.6
+    with (out / "pushover.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert [float(r["tilt_deg"]) for r in rows] == [float(k) for k in range(len(rows))]
+    assert float(rows[-1]["tilt_deg"]) == summary["collapse_angle_deg"]
+    for picture in ("pushover.png", "mechanism.png"):
+        assert (out / picture).stat().st_size > 10_000
+
+
+def test_tilt_options_override_the_model_and_the_shipped_example_runs(tmp_path):
+    out = tmp_path / "example"
+    result = CliRunner().invoke(
+        main, ["tilt", "perforated_wall", "--increment", "5", "--max-angle", "10", "--kn", "1e9", "--points", "2", "--out", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    assert "no collapse up to 10.0 deg" in result.output
+    import json
+
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["model"]["joint"]["kn"] == 1e9 and summary["model"]["contacts"]["points_per_length"] == 2
+    assert summary["collapse_angle_deg"] is None and summary["equilibrium_states"] == 3
+
+
+def test_tilt_with_an_unknown_monitored_block_names_it():
+    result = CliRunner().invoke(main, ["tilt", "perforated_wall", "--monitor", "nosuch"])
+    assert result.exit_code == 1 and "no block named 'nosuch'" in result.output
