@@ -50,13 +50,21 @@ class BlockArrays(NamedTuple):
 
 
 def contact_stiffness(sub: SubContacts, kn: float, ks: float, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:
-    """Per-block K_t (nb,) N/m and K_r (nb, 3, 3) N m of its sub-contact springs (body frame)."""
+    """Per-block K_t (nb,) N/m and K_r (nb, 3, 3) N m of its sub-contact springs (body frame).
+
+    K_r = trace(S) 1 - S with S = sum_s k_s r_s r_s^T, summed per block with weighted bincounts.
+    """
     k = max(kn, ks) * sub.area
     k_t = np.bincount(sub.block_ref, k, n_blocks) + np.bincount(sub.block_inc, k, n_blocks)
-    k_r = np.zeros((n_blocks, 3, 3))
+    second = np.zeros((n_blocks, 3, 3))
     for block, arm in ((sub.block_ref, sub.point_ref_body), (sub.block_inc, sub.point_inc_body)):
-        per_spring = np.einsum("n,ni,nj->nij", k, arm, arm)
-        np.add.at(k_r, block, np.einsum("nkk->n", per_spring)[:, None, None] * np.eye(3) - per_spring)
+        for a in range(3):
+            for b in range(a, 3):
+                moment = np.bincount(block, k * arm[:, a] * arm[:, b], n_blocks)
+                second[:, a, b] += moment
+                if a != b:
+                    second[:, b, a] += moment
+    k_r = np.trace(second, axis1=1, axis2=2)[:, None, None] * np.eye(3) - second
     return k_t, k_r
 
 
