@@ -82,3 +82,8 @@ def test_tilt_options_override_the_model_and_the_shipped_example_runs(tmp_path):
 def test_tilt_with_an_unknown_monitored_block_names_it():
     result = CliRunner().invoke(main, ["tilt", "perforated_wall", "--monitor", "nosuch"])
     assert result.exit_code == 1 and "no block named 'nosuch'" in result.output
+
+
+def test_resume_needs_a_checkpoint(tmp_path):
+    result = CliRunner().invoke(main, ["tilt", "perforated_wall", "--resume", "--out", str(tmp_path)])
+    assert result.exit_code == 1 and "--resume needs --out DIR holding a checkpoint.npz" in result.output

@@ -121,3 +121,32 @@ def test_monitored_block_is_the_top_block_nearest_the_middle(benchmark_wall):
     name = benchmark_wall.block_name[monitored_block(benchmark_wall)]
     assert name.startswith("c26")  # top course
     assert wall_height(benchmark_wall) == pytest.approx(27 * 0.0055)
+
+
+class Killed(Exception):
+    """Stands for the run being killed."""
+
+
+def test_an_interrupted_run_resumes_to_the_same_result(tmp_path):
+    model, settings = slender([0.01] * 4, kn=1e8), TiltSettings(increment_deg=STEP)
+    whole = tilt_analysis(model, settings)
+    checkpoint = tmp_path / "checkpoint.npz"
+
+    def kill_at_8_deg(record):
+        if record.tilt_deg >= 8.0:
+            raise Killed
+
+    with pytest.raises(Killed):
+        tilt_analysis(model, settings, checkpoint=checkpoint, on_record=kill_at_8_deg)
+    resumed = tilt_analysis(model, settings, checkpoint=checkpoint, resume=True)
+    assert resumed.collapse_angle_deg == whole.collapse_angle_deg
+    assert resumed.cycles == whole.cycles  # the shear history came back too: the same path
+    np.testing.assert_array_equal([r.ux_m for r in resumed.records], [r.ux_m for r in whole.records])
+
+
+def test_a_checkpoint_of_another_protocol_is_refused(tmp_path):
+    model = slender([0.04], kn=1e8)
+    checkpoint = tmp_path / "checkpoint.npz"
+    tilt_analysis(model, TiltSettings(increment_deg=STEP, max_angle_deg=2.0), checkpoint=checkpoint)
+    with pytest.raises(dd.ModelError, match="another model or protocol"):
+        tilt_analysis(model, TiltSettings(increment_deg=1.0), checkpoint=checkpoint, resume=True)

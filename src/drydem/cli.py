@@ -17,6 +17,9 @@ from drydem.model import Model
 from drydem.parameters import CRITERIA
 from drydem.solve import Simulation
 
+#: the tilting analysis' checkpoint in its results folder
+CHECKPOINT = "checkpoint.npz"
+
 
 @click.group()
 @click.version_option(__version__, prog_name="drydem")
@@ -87,7 +90,8 @@ def _settle(sim: Simulation) -> None:
 @click.option("--monitor", help="Block whose centroid is monitored (default: the top block nearest the middle).")
 @click.option("--max-angle", type=float, default=80.0, show_default=True, help="Largest tilt tried, deg.")
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), help="Results folder (default: results/TARGET-TIME).")
-def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_displacement, criterion, mass_scaling, loading, monitor, max_angle, out) -> None:
+@click.option("--resume", is_flag=True, help="Go on from the checkpoint in --out (same TARGET and options).")
+def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_displacement, criterion, mass_scaling, loading, monitor, max_angle, out, resume) -> None:
     """Tilting-table analysis of TARGET (a model file or a shipped example): collapse angle,
     pushover curve, Eurocode 8 drift-limit angles, plots."""
     from tqdm import tqdm
@@ -109,6 +113,8 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_di
             model.block_index(monitor)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
+    if resume and (out is None or not (out / CHECKPOINT).is_file()):
+        raise click.ClickException(f"--resume needs --out DIR holding a {CHECKPOINT} from an earlier run")
     out = out or Path("results") / f"{path.stem}-{datetime.now():%Y%m%d-%H%M%S}"
     out.mkdir(parents=True, exist_ok=True)
     click.echo(f"{path}: {model.n_blocks} blocks, kn {model.joint.kn:.3g} Pa/m, ks {model.joint.ks:.3g} Pa/m, "
@@ -119,7 +125,12 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_di
             bar.update(cycles - bar.n)
             bar.set_postfix_str(f"{theta:.2f} deg, ux {ux * 1e3:.2f} mm")
 
-        result = tilt_analysis(model, settings, on_record=PushoverWriter(out), on_progress=progress)
+        try:
+            result = tilt_analysis(
+                model, settings, on_record=PushoverWriter(out, append=resume), on_progress=progress, checkpoint=out / CHECKPOINT, resume=resume
+            )
+        except DrydemError as exc:
+            raise click.ClickException(str(exc)) from None
     write_summary(out, result, model)
     pushover_figure(result, out / "pushover.png", title=path.stem)
     states = [("last equilibrium" if result.collapse_angle_deg is not None else "under gravity", result.collapse_state or result.final_state),

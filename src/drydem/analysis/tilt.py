@@ -26,11 +26,13 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 
 from drydem.analysis.drift import drift_limit_angles
 from drydem.errors import ModelError
+from drydem.io.checkpoint import load_checkpoint, save_checkpoint
 from drydem.model import Model
 from drydem.solve import G, Simulation
 from drydem.state import State
@@ -192,36 +194,55 @@ def tilt_analysis(
     *,
     on_record: Callable[[Record], None] | None = None,
     on_progress: Callable[[float, int, float], None] | None = None,
+    checkpoint: Path | None = None,
+    resume: bool = False,
 ) -> TiltResult:
     """Run the tilting-table (or multiplier) protocol on ``model`` (see module docstring).
 
     ``on_record(record)`` is called at every equilibrium state as it is found (to write results
     as the run goes); ``on_progress(theta_deg, cycles_so_far, ux_m)`` every few thousand cycles.
+    With ``checkpoint`` (a path), the run is saved there at every equilibrium state; with
+    ``resume`` too, it goes on from that file instead of starting over.
     """
     start = time.perf_counter()
     run = _Run(model, settings, on_progress)
     records: list[Record] = []
     equilibria: list[State] = []
 
-    def accept(theta: float, cycles: int) -> None:
+    def accept(theta: float, step: float, cycles: int) -> None:
         records.append(run.record(theta, cycles))
         equilibria[:] = [run.sim.state.copy()]
+        if checkpoint is not None:
+            save_checkpoint(checkpoint, run.sim.snapshot(), _progress(records, run.lost, theta, step) | {"fingerprint": fingerprint})
         if on_record is not None:
             on_record(records[-1])
 
-    stable, cycles = run.equilibrate(0.0, vertical=True)
+    step = settings.increment_deg * (2**settings.refinements if settings.adaptive else 1)
+    fingerprint = _fingerprint(model, settings)
+    if resume:
+        snapshot, saved = load_checkpoint(checkpoint)
+        if str(saved.get("fingerprint")) != fingerprint:
+            raise ModelError(f"{checkpoint}: this checkpoint is of another model or protocol ({saved.get('fingerprint')}); not resuming")
+        run.sim.restore(snapshot)
+        records += [Record(*row[:4], int(row[4])) for row in saved["records"].tolist()]
+        run.lost = list(zip(saved["lost_blocks"].tolist(), saved["lost_tilt_deg"].tolist()))
+        theta, step, stable = float(saved["theta_deg"]), float(saved["step_deg"]), True
+        equilibria.append(run.sim.state.copy())
+    else:
+        stable, cycles = run.equilibrate(0.0, vertical=True)
+        theta = 0.0
+        if stable:
+            accept(0.0, step, cycles)
     if not stable:
         collapse, ended_by = None, "unstable under gravity"
     else:
-        accept(0.0, cycles)
-        step = settings.increment_deg * (2**settings.refinements if settings.adaptive else 1)
-        theta, last_good = 0.0, run.sim.snapshot()
+        last_good = run.sim.snapshot()
         ended_by = "maximum angle"
         while theta + step <= settings.max_angle_deg + 1e-9:
             held, cycles = run.equilibrate(theta + step)
             if held:
                 theta = round(theta + step, 9)
-                accept(theta, cycles)
+                accept(theta, step, cycles)
                 if settings.adaptive:
                     last_good = run.sim.snapshot()
                 continue
@@ -249,3 +270,19 @@ def tilt_analysis(
         final_state=run.sim.state.copy(),
         ended_by=ended_by,
     )
+
+
+def _fingerprint(model: Model, settings: TiltSettings) -> str:
+    """What a checkpoint must match to be resumed: the model's blocks, materials and the protocol."""
+    return repr((model.source, model.n_blocks, model.joint, model.contacts, model.supports, model.solver, settings))
+
+
+def _progress(records: list[Record], lost: list[tuple[str, float]], theta: float, step: float) -> dict:
+    """The protocol's position, for a checkpoint."""
+    return {
+        "records": np.array([[r.tilt_deg, r.ux_m, r.uz_m, r.drift, r.cycles] for r in records]),
+        "lost_blocks": np.array([name for name, _ in lost], dtype=str),
+        "lost_tilt_deg": np.array([t for _, t in lost], dtype=float),
+        "theta_deg": theta,
+        "step_deg": step,
+    }

@@ -20,12 +20,14 @@ PUSHOVER_COLUMNS = ("tilt_deg", "load_multiplier", "ux_m", "uz_m", "drift", "cyc
 
 
 class PushoverWriter:
-    """Appends equilibrium states to ``pushover.csv`` in ``folder`` as they are found."""
+    """Appends equilibrium states to ``pushover.csv`` in ``folder`` as they are found
+    (``append``: after the rows already there, when an analysis resumes)."""
 
-    def __init__(self, folder: Path):
+    def __init__(self, folder: Path, *, append: bool = False):
         self.path = folder / "pushover.csv"
-        with self.path.open("w", newline="") as f:
-            csv.writer(f).writerow(PUSHOVER_COLUMNS)
+        if not (append and self.path.is_file()):
+            with self.path.open("w", newline="") as f:
+                csv.writer(f).writerow(PUSHOVER_COLUMNS)
 
     def __call__(self, record: Record) -> None:
         with self.path.open("a", newline="") as f:

@@ -1,0 +1,46 @@
+"""Checkpoints of a running analysis: everything needed to go on after a crash or a kill.
+
+One ``.npz`` file holds a :class:`drydem.solve.Snapshot` (block state, contacts with their
+shear history, neighbour list, blocks still in the analysis) and the analysis' own progress
+(arrays and scalars by name). It is written to a temporary file and renamed, so a kill
+while writing leaves the previous checkpoint intact.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from drydem.contacts import NeighbourList, SubContacts
+from drydem.errors import DrydemError
+from drydem.solve import Snapshot
+from drydem.state import State
+
+_PARTS = {"state": State, "contacts": SubContacts, "neighbours": NeighbourList, "broad_state": State}
+
+
+def save_checkpoint(path: Path, snapshot: Snapshot, progress: dict) -> None:
+    """Write ``snapshot`` and ``progress`` (name -> array or scalar) to ``path`` atomically."""
+    arrays = {f"{part}.{name}": value for part in _PARTS for name, value in getattr(snapshot, part)._asdict().items()}
+    arrays |= {"active": snapshot.active, "cycles": snapshot.cycles, "scaled_timestep": np.nan if snapshot.scaled_timestep is None else snapshot.scaled_timestep}
+    arrays |= {f"progress.{name}": np.asarray(value) for name, value in progress.items()}
+    path = Path(path)
+    temporary = path.with_name(path.name + ".tmp.npz")
+    np.savez(temporary, **arrays)
+    os.replace(temporary, path)
+
+
+def load_checkpoint(path: Path) -> tuple[Snapshot, dict]:
+    """The snapshot and progress saved by :func:`save_checkpoint`."""
+    try:
+        data = np.load(path)
+    except (OSError, ValueError) as exc:
+        raise DrydemError(f"{path}: cannot read the checkpoint ({exc})") from None
+    with data:
+        parts = {part: cls(**{name: data[f"{part}.{name}"] for name in cls._fields}) for part, cls in _PARTS.items()}
+        scaled = float(data["scaled_timestep"])
+        snapshot = Snapshot(**parts, active=data["active"], cycles=int(data["cycles"]), scaled_timestep=None if np.isnan(scaled) else scaled)
+        progress = {key.removeprefix("progress."): data[key] for key in data.files if key.startswith("progress.")}
+    return snapshot, progress
