@@ -15,9 +15,9 @@ Adaptive protocol: steps of ``increment_deg * 2**refinements``; a step that fail
 (the last equilibrium is restored, shear history included) and halved, down to
 ``increment_deg``; so the collapse angle is found to within one increment, as with fixed steps.
 
-Blocks that fall out of the model (centroid more than ``lost_drop_m`` below where it was
-drawn, e.g. a brick sliding out of a course) are taken out of the analysis and reported, so
-that a local failure does not hide the global collapse.
+Blocks that fall out of the model (centroid more than ``lost_drop_heights`` of their own
+heights below where it was drawn, e.g. a brick sliding out of a course) are taken out of the
+analysis and reported, so that a local failure does not hide the global collapse.
 """
 
 from __future__ import annotations
@@ -49,8 +49,8 @@ class TiltSettings:
     horizontal displacement of the monitored point that ends the analysis, m (paper: 0.10).
     loading : "tilt" or "multiplier". monitor : block name (default: the block whose top is
     highest, nearest the middle of the wall). max_angle_deg : the analysis ends there, deg.
-    lost_drop_m : a block whose centroid dropped more than this is taken out, m (default:
-    half the stop displacement). chunk_cycles : cycles between checks of the monitored point.
+    lost_drop_heights : a block whose centroid dropped more than this many times its own
+    height is taken out. chunk_cycles : cycles between checks of the monitored point.
     """
 
     increment_deg: float = 0.1
@@ -60,7 +60,7 @@ class TiltSettings:
     loading: str = "tilt"
     monitor: str | None = None
     max_angle_deg: float = 80.0
-    lost_drop_m: float | None = None
+    lost_drop_heights: float = 2.0
     chunk_cycles: int = 2000
 
     def __post_init__(self):
@@ -70,7 +70,7 @@ class TiltSettings:
             "stop_displacement_m": self.stop_displacement_m > 0,
             "loading": self.loading in LOADINGS,
             "max_angle_deg": 0 < self.max_angle_deg < 90,
-            "lost_drop_m": self.lost_drop_m is None or self.lost_drop_m > 0,
+            "lost_drop_heights": self.lost_drop_heights > 0,
             "chunk_cycles": isinstance(self.chunk_cycles, int) and self.chunk_cycles > 0,
         }
         for name, ok in checks.items():
@@ -151,14 +151,19 @@ class _Run:
         self.monitor = model.block_index(settings.monitor) if settings.monitor else monitored_block(model)
         self.height = wall_height(model)
         self.lost: list[tuple[str, float]] = []
-        self.lost_drop = settings.lost_drop_m if settings.lost_drop_m is not None else 0.5 * settings.stop_displacement_m
+        heights = np.array([np.ptp(shape.vertices[:, 2]) for shape in model.block_shape])
+        self.lost_drop = settings.lost_drop_heights * heights
 
     def displacement(self) -> tuple[float, float]:
         moved = self.sim.state.position[self.monitor] - self.model.block_centroid[self.monitor]
         return float(moved[0]), float(moved[2])
 
     def equilibrate(self, theta_deg: float, *, vertical: bool = False) -> tuple[bool, int]:
-        """Cycle at ``theta_deg`` until equilibrium (True), the stop displacement or max cycles (False)."""
+        """Cycle at ``theta_deg`` until equilibrium (True), the stop displacement or max cycles (False).
+
+        Blocks that fall out are taken out and the cycling goes on, except under vertical
+        gravity (stage 1): a model that loses a block under its own weight cannot stand.
+        """
         gravity = np.array([0.0, 0.0, -G]) if vertical else self.settings.gravity(theta_deg)
         solver = self.model.solver
         done = 0
@@ -166,7 +171,12 @@ class _Run:
             chunk = replace(solver, max_cycles=min(self.settings.chunk_cycles, solver.max_cycles - done))
             result = self.sim.cycle_to_equilibrium(gravity=gravity, solver=chunk)
             done += result.cycles
-            self._remove_lost(theta_deg)
+            lost = self._fallen()
+            if lost.size and vertical:
+                return False, done
+            if lost.size:
+                self.sim.remove_blocks(lost)
+                self.lost += [(self.model.block_name[b], theta_deg) for b in lost]
             ux, _ = self.displacement()
             if self.on_progress is not None:
                 self.on_progress(theta_deg, self.sim.cycles, ux)
@@ -175,13 +185,11 @@ class _Run:
             if abs(ux) >= self.settings.stop_displacement_m or done >= solver.max_cycles:
                 return False, done
 
-    def _remove_lost(self, theta_deg: float) -> None:
+    def _fallen(self) -> np.ndarray:
+        """Blocks still in the analysis (but the monitored one) that dropped out of the model."""
         drop = self.model.block_centroid[:, 2] - self.sim.state.position[:, 2]
-        lost = np.flatnonzero((drop > self.lost_drop) & self.sim.active & self.model.block_movable)
-        lost = lost[lost != self.monitor]
-        if lost.size:
-            self.sim.remove_blocks(lost)
-            self.lost += [(self.model.block_name[b], theta_deg) for b in lost]
+        fallen = np.flatnonzero((drop > self.lost_drop) & self.sim.active & self.model.block_movable)
+        return fallen[fallen != self.monitor]
 
     def record(self, theta_deg: float, cycles: int) -> Record:
         ux, uz = self.displacement()
