@@ -43,7 +43,8 @@ def check(target: str, settle: bool) -> None:
     click.echo(f"model           {path}")
     click.echo(f"blocks          {model.n_blocks} ({int(movable.sum())} movable, {int((~movable).sum())} fixed)")
     click.echo(f"mass            {model.total_mass:.6g} kg (movable blocks)")
-    click.echo(f"contacts        {len(c.pairs)} face contacts, {c.count} sub-contacts ({model.contacts.points_per_length} points per length)")
+    density = model.contact_density
+    click.echo(f"contacts        {len(c.pairs)} face contacts, {c.count} sub-contacts ({density.along} points per length, {density.across} across y)")
     click.echo(f"contact area    {c.area.sum():.6g} m2, tolerance {model.contact_tolerance:.3g} m")
     click.echo(f"joint           kn {model.joint.kn:.3g} Pa/m, ks {model.joint.ks:.3g} Pa/m, friction {model.joint.friction:g}")
     mass_note = " (mass scaled)" if model.solver.mass_scaling else ""

@@ -10,7 +10,8 @@ reference face, is the contact polygon.
 The polygon is discretised into sub-contacts as 3DEC's contact points: a
 tensor grid whose spacing puts ``points_per_length`` points along the full
 length of the smaller face, ends included, each point carrying its trapezoid
-share of the area (the areas sum to the polygon's area); see :func:`_grid`. Each sub-contact is a pair of
+share of the area (the areas sum to the polygon's area); see :func:`_grid`.
+In-plane models need only 2 points across the width (:class:`Density`). Each sub-contact is a pair of
 material points (one on each block, the incident one on the incident face
 straight above the reference one) and the reference normal, all stored in the
 blocks' body frames, so rocking opens or closes them as the blocks turn.
@@ -124,6 +125,17 @@ def concatenate(first: SubContacts, second: SubContacts) -> SubContacts:
 
 
 @dataclass(frozen=True)
+class Density:
+    """Sub-contact density: ``along`` points over a full face length in each in-plane direction
+    (ends included), except ``across`` points in the direction of the world unit vector
+    ``across_axis`` when it lies in the face (in-plane walls: 2 across the width is exact)."""
+
+    along: int
+    across: int
+    across_axis: tuple[float, float, float] = (0.0, 1.0, 0.0)
+
+
+@dataclass(frozen=True)
 class _FaceContact:
     ref: int
     inc: int
@@ -178,7 +190,7 @@ def _best_separation(a: ConvexPolyhedron, b: ConvexPolyhedron) -> tuple[float, b
 
 
 def face_contact(
-    a: ConvexPolyhedron, b: ConvexPolyhedron, ia: int, ib: int, *, tolerance: float, points_per_length: int
+    a: ConvexPolyhedron, b: ConvexPolyhedron, ia: int, ib: int, *, tolerance: float, density: Density
 ) -> _FaceContact | None:
     """Sub-contact points between blocks ``ia`` and ``ib``, or None if they do not touch."""
     separation, ref_is_a, f_ref = _best_separation(a, b)
@@ -203,7 +215,8 @@ def face_contact(
     small = min(ref.size, inc.size)
     if len(overlap) < 3 or polygon.signed_area(overlap) <= 1e-8 * small**2:
         return None
-    uv, areas = _grid(overlap, ref_poly, inc_poly, points_per_length, 1e-9 * small)
+    counts = _PointCounts(density, basis @ np.asarray(density.across_axis))
+    uv, areas = _grid(overlap, ref_poly, inc_poly, counts, 1e-9 * small)
     points = origin + uv @ basis
     # distance from each point, along n, to the incident face plane
     gaps = (n_inc @ inc.face_polygon(f_inc)[0] - points @ n_inc) / np.dot(n_inc, n)
@@ -213,46 +226,62 @@ def face_contact(
     return _FaceContact(i_ref, i_inc, points[keep], gaps[keep], areas[keep], n)
 
 
-def _grid(overlap: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, n: int, tol: float) -> tuple[np.ndarray, np.ndarray]:
+class _PointCounts:
+    """Points over a full face length along a grid direction (2D, in the reference plane)."""
+
+    def __init__(self, density: Density, across_2d: np.ndarray):
+        self.along, self.across, self.across_2d = density.along, density.across, across_2d
+
+    def __call__(self, direction: np.ndarray) -> int:
+        return self.across if abs(float(direction @ self.across_2d)) > 0.999 else self.along
+
+
+def _grid(overlap: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, counts: _PointCounts, tol: float) -> tuple[np.ndarray, np.ndarray]:
     """Grid nodes (k, 2) and their tributary areas (k,) on the contact polygon ``overlap``.
 
-    Along each grid direction the spacing is the smaller face's extent / (n - 1); the overlap
-    is split into the fewest equal intervals not longer than that, with nodes at both ends
-    (trapezoid rule). A quadrilateral overlap (the usual face-on-face case, also when the
-    blocks are turned or rocking) gets a bilinear grid between its corners, so the corners
-    are always points and an affine image of a face maps back to the same material points.
-    Other polygons get an axis-aligned grid whose cells are clipped to the polygon (nodes
-    outside move to their cell's centroid). ``n = 1``: one node at the polygon's centroid.
+    Along each grid direction the spacing is the smaller face's extent / (n - 1), n from
+    ``counts``; the overlap is split into the fewest equal intervals not longer than that,
+    with nodes at both ends (trapezoid rule). A quadrilateral overlap (the usual face-on-face
+    case, also when the blocks are turned or rocking) gets a bilinear grid between its
+    corners, so the corners are always points and an affine image of a face maps back to the
+    same material points. Other polygons get an axis-aligned grid whose cells are clipped to
+    the polygon (nodes outside move to their cell's centroid). n = 1 in both directions: one
+    node at the polygon's centroid.
     """
-    if n == 1:
+    if counts.along == 1 and counts.across == 1:
         return polygon.centroid(overlap)[None, :], np.array([polygon.signed_area(overlap)])
     corners = polygon.without_collinear(overlap, tol)
     if len(corners) == 4:
-        return _bilinear_grid(corners, face_a, face_b, n)
-    return _clipped_grid(overlap, face_a, face_b, n, tol)
+        return _bilinear_grid(corners, face_a, face_b, counts)
+    return _clipped_grid(overlap, face_a, face_b, counts, tol)
 
 
 def _intervals(length: float, direction: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, n: int) -> int:
-    """Fewest equal intervals over ``length`` with spacing <= smaller face extent along ``direction`` / (n - 1)."""
+    """Fewest equal intervals over ``length`` with spacing <= smaller face extent along ``direction`` / (n - 1);
+    0 for n = 1 (a single point in the middle)."""
+    if n == 1:
+        return 0
     extent = min(np.ptp(face_a @ direction), np.ptp(face_b @ direction))
     return max(1, math.ceil(length / (extent / (n - 1)) - 1e-6))
 
 
 def _trapezoid(intervals: int) -> tuple[np.ndarray, np.ndarray]:
-    """Nodes in [0, 1] and trapezoid weights (summing to 1)."""
+    """Nodes in [0, 1] and trapezoid weights (summing to 1); no interval: the midpoint."""
+    if intervals == 0:
+        return np.array([0.5]), np.array([1.0])
     weights = np.full(intervals + 1, 1.0 / intervals)
     weights[[0, -1]] *= 0.5
     return np.linspace(0.0, 1.0, intervals + 1), weights
 
 
-def _bilinear_grid(quad: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+def _bilinear_grid(quad: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, counts: _PointCounts) -> tuple[np.ndarray, np.ndarray]:
     """X(s, t) = (1-s)(1-t) P0 + s(1-t) P1 + s t P2 + (1-s) t P3; areas w_s w_t |X_s x X_t|, scaled to the exact area."""
     p0, p1, p2, p3 = quad
     axes = []
     for a0, a1, b0, b1 in ((p0, p1, p3, p2), (p0, p3, p1, p2)):
         length = max(np.linalg.norm(a1 - a0), np.linalg.norm(b1 - b0))
         direction = (a1 - a0 + b1 - b0) / np.linalg.norm(a1 - a0 + b1 - b0)
-        axes.append(_trapezoid(_intervals(length, direction, face_a, face_b, n)))
+        axes.append(_trapezoid(_intervals(length, direction, face_a, face_b, counts(direction))))
     (s, ws), (t, wt) = axes
     s, t = np.meshgrid(s, t, indexing="ij")
     s, t = s.ravel()[:, None], t.ravel()[:, None]
@@ -264,13 +293,14 @@ def _bilinear_grid(quad: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, n: 
     return nodes, areas * (polygon.signed_area(quad) / areas.sum())
 
 
-def _clipped_grid(overlap: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, n: int, tol: float) -> tuple[np.ndarray, np.ndarray]:
+def _clipped_grid(overlap: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, counts: _PointCounts, tol: float) -> tuple[np.ndarray, np.ndarray]:
     lo, hi = overlap.min(0), overlap.max(0)
     axes = []
     for k in range(2):
-        intervals = _intervals(hi[k] - lo[k], np.eye(2)[k], face_a, face_b, n)
-        nodes = np.linspace(lo[k], hi[k], intervals + 1)
-        half = 0.5 * (hi[k] - lo[k]) / intervals
+        direction = np.eye(2)[k]
+        nodes, weights = _trapezoid(_intervals(hi[k] - lo[k], direction, face_a, face_b, counts(direction)))
+        nodes = lo[k] + nodes * (hi[k] - lo[k])
+        half = 0.5 * (hi[k] - lo[k]) / max(len(nodes) - 1, 0.5)
         axes.append((nodes, np.clip(nodes - half, lo[k], hi[k]), np.clip(nodes + half, lo[k], hi[k])))
     (un, u0, u1), (vn, v0, v1) = axes
     nodes, areas = [], []
@@ -300,14 +330,14 @@ def narrow_phase(
     rotation: np.ndarray,
     *,
     tolerance: float,
-    points_per_length: int,
+    density: Density,
 ) -> SubContacts:
     """Sub-contacts of the candidate block pairs (k, 2), from the blocks' world geometry
     ``shapes`` (by block index, at centroids ``position`` (nb, 3) and rotations (nb, 3, 3)).
     Shear forces start at zero (see :func:`carry_over`)."""
     found = []
     for ia, ib in candidates:
-        fc = face_contact(shapes[ia], shapes[ib], int(ia), int(ib), tolerance=tolerance, points_per_length=points_per_length)
+        fc = face_contact(shapes[ia], shapes[ib], int(ia), int(ib), tolerance=tolerance, density=density)
         if fc is not None:
             found.append(fc)
     if not found:

@@ -76,6 +76,15 @@ class Model:
         return ~self.block_fixed.all(axis=1)
 
     @property
+    def contact_density(self) -> contacts.Density:
+        """Sub-contact density resolved from ``contacts`` and ``supports`` (see ContactSettings)."""
+        along = self.contacts.points_per_length
+        across = self.contacts.points_across
+        if across is None:
+            across = min(2, along) if self.supports.fix_y else along
+        return contacts.Density(along=along, across=across)
+
+    @property
     def total_mass(self) -> float:
         """Mass of the movable blocks, kg."""
         return float(self.block_mass[self.block_movable].sum())

@@ -56,18 +56,26 @@ class ContactSettings:
     points_per_length : sub-contacts along each in-plane direction of a full face,
         ends included (2 = corners only, 3DEC's vertex sub-contacts; 1 = one point at
         the centroid of the contact polygon).
+    points_across : sub-contacts across the wall, along y; ``None`` = 2 when every block is
+        fixed in y (in-plane walls: the contact forces are uniform across the width, so the
+        trapezoid rule on its two edges is exact and half the cost), else points_per_length.
     tolerance : m, gap below which faces are in contact; ``None`` = 5 % of the
-        thinnest free block. Contacts are re-detected whenever a block has moved half
-        of it since the last detection.
+        thinnest free block. Contacts are re-detected whenever neighbouring blocks have
+        moved half of it relative to each other.
     """
 
     points_per_length: int = 4
+    points_across: int | None = None
     tolerance: float | None = None
 
     def __post_init__(self):
         _require(
             isinstance(self.points_per_length, int) and not isinstance(self.points_per_length, bool) and self.points_per_length >= 1,
             "contacts", "points_per_length", self.points_per_length, "must be an integer >= 1",
+        )
+        _require(
+            self.points_across is None or (isinstance(self.points_across, int) and not isinstance(self.points_across, bool) and self.points_across >= 1),
+            "contacts", "points_across", self.points_across, "must be an integer >= 1",
         )
         if self.tolerance is not None:
             _positive("contacts", "tolerance", self.tolerance)

@@ -131,7 +131,7 @@ class Simulation:
         stale = pairs[~kept]
         blocks = np.unique(stale)
         shapes = dict(zip(blocks.tolist(), m.shapes_at(s.position[blocks], rot[blocks], blocks)))
-        fresh = contacts.narrow_phase(shapes, stale, s.position, rot, tolerance=tol, points_per_length=m.contacts.points_per_length)
+        fresh = contacts.narrow_phase(shapes, stale, s.position, rot, tolerance=tol, density=m.contact_density)
         contacts.carry_over(contacts.subset(old, ~keep_contact), fresh, s.position, rot)
         self.contacts = contacts.concatenate(contacts.subset(old, keep_contact), fresh)
         snapshot_position, snapshot_quaternion = s.position[pairs], s.quaternion[pairs]

@@ -111,17 +111,17 @@ def _runs(owner: list[int]) -> list[list[int]]:
     return runs
 
 
-def benchmark_wall(*, kn: float = 3e7, points_per_length: int = 4) -> Model:
+def benchmark_wall(*, kn: float = 3e7, points_per_length: int = 4, points_across: int | None = None) -> Model:
     """The benchmark wall (8 bricks x 27 courses, running bond, 33 % voids, four lintels) as an
     in-plane model (every block fixed in y, paper Section 3), kn = ks, mu = 0.5, on a fixed base.
 
     This is the shipped example ``perforated_wall`` and the wall of ``benchmarks/``; it is not
-    one of the paper's competition walls.
+    one of the paper's competition walls. ``points_across`` as in ContactSettings (default 2).
     """
     return build_model(
         running_bond_wall(courses=27, bricks_per_course=8, openings=BENCHMARK_OPENINGS),
         density=PAPER_DENSITY,
         joint=JointMaterial(kn=kn, ks=kn, friction=0.5),
-        contacts=ContactSettings(points_per_length=points_per_length),
+        contacts=ContactSettings(points_per_length=points_per_length, points_across=points_across),
         supports=Supports(fix_y=True),
     )
