@@ -240,8 +240,8 @@ def pair_motions(state, neighbours, radius, out):
 
 
 @numba.njit(cache=True)
-def needs_detection(state, broad_state, neighbours, radius, relative_limit, absolute_limit):
-    """Whether contacts must be re-detected (a Verlet-list test).
+def detection_slack(state, broad_state, neighbours, radius, relative_limit, absolute_limit):
+    """How far (m) the blocks are from needing re-detection; <= 0: re-detect now (a Verlet-list test).
 
     Absolute: a block point moved more than ``absolute_limit`` (|dx| + theta r) since the
     State ``broad_state`` of the last broad phase, so a block outside the neighbour list may
@@ -249,15 +249,27 @@ def needs_detection(state, broad_state, neighbours, radius, relative_limit, abso
     each other since its snapshot (:func:`_pair_motion`), so its contact may have changed.
     Angles are bounded by 2 tan(theta / 2).
     """
+    slack = np.inf
     for i in range(state.position.shape[0]):
         w, _, _, _ = _relative_quaternion(state.quaternion[i], broad_state.quaternion[i])
         d = state.position[i] - broad_state.position[i]
-        if np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) + _angle_bound(abs(w)) * radius[i] > absolute_limit:
-            return True
+        slack = min(slack, absolute_limit - np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) - _angle_bound(abs(w)) * radius[i])
     for k in range(neighbours.pairs.shape[0]):
-        if _pair_motion(state, neighbours, k, radius) > relative_limit:
-            return True
-    return False
+        slack = min(slack, relative_limit - _pair_motion(state, neighbours, k, radius))
+    return slack
+
+
+@numba.njit(cache=True)
+def _motion_bound(state, largest_radius, dt):
+    """Bound on how far any block point moved this cycle relative to any other block, m:
+    twice (max |v| + max |omega| r_max) dt, with a margin for the angle bound (x 1.25)."""
+    v_max = 0.0
+    w_max = 0.0
+    for i in range(state.velocity.shape[0]):
+        v, w = state.velocity[i], state.angular_velocity[i]
+        v_max = max(v_max, v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+        w_max = max(w_max, w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+    return 2.5 * (np.sqrt(v_max) + np.sqrt(w_max) * largest_radius) * dt
 
 
 @numba.njit(cache=True)
@@ -281,7 +293,8 @@ def make_run_cycles(step_function, *, jit: bool):
     force_scale, travel_slack, broad_state, neighbours, relative_limit, absolute_limit)`` cycles
     until converged, re-detection needed, diverged or ``max_cycles``, and returns (cycles run,
     exit code, StepStats of the last cycle). ``force_scale`` (N) is the ratio's denominator
-    (mean weight of the free blocks); the last four arguments go to :func:`needs_detection`.
+    (mean weight of the free blocks); the last four arguments go to :func:`detection_slack`,
+    which runs only once the blocks may have used up the slack it last found.
 
     Divergence: a NaN, or more kinetic energy than gravity can have supplied. Damping only
     removes energy, so the kinetic energy stays below the work of gravity, at most
@@ -300,6 +313,8 @@ def make_run_cycles(step_function, *, jit: bool):
         moment = np.empty((nb, 3))
         stats = StepStats(np.inf, np.inf)
         g = np.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
+        largest_radius = blocks.radius.max()
+        slack, moved = -1.0, 0.0
         for cycle in range(max_cycles):
             unbalanced, speed, kinetic, travel = step_function(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment)
             stats = StepStats(unbalanced / force_scale, speed)
@@ -307,8 +322,11 @@ def make_run_cycles(step_function, *, jit: bool):
                 return cycle + 1, DIVERGED, stats
             if (criterion == RATIO and stats.ratio < limit) or (criterion == VELOCITY and speed < limit):
                 return cycle + 1, CONVERGED, stats
-            if needs_detection(state, broad_state, neighbours, blocks.radius, relative_limit, absolute_limit):
-                return cycle + 1, REDETECT, stats
+            moved += _motion_bound(state, largest_radius, dt)
+            if moved >= slack:
+                slack, moved = detection_slack(state, broad_state, neighbours, blocks.radius, relative_limit, absolute_limit), 0.0
+                if slack <= 0.0:
+                    return cycle + 1, REDETECT, stats
         return max_cycles, RUNNING, stats
 
     return numba.njit(cache=True)(run_cycles) if jit else run_cycles

@@ -5,7 +5,7 @@ A :class:`Simulation` holds a frozen :class:`~drydem.model.Model`, the mutable
 Contacts are re-detected whenever two neighbouring blocks may have moved half the
 contact tolerance relative to each other since the last detection, or any block may have
 moved far enough for a block outside its neighbour list to reach it (bounds on every
-point's displacement, so no new touch is missed: :func:`drydem.kernels.needs_detection`);
+point's displacement, so no new touch is missed: :func:`drydem.kernels.detection_slack`);
 each detection recomputes the timestep (or, with mass scaling, the fictitious masses at
 the first timestep).
 
@@ -101,7 +101,7 @@ class Simulation:
         self._detect(everything=True)
 
     def _detect(self, *, everything: bool) -> None:
-        """Refresh the contacts (:func:`drydem.kernels.needs_detection` said so, or ``everything``).
+        """Refresh the contacts (:func:`drydem.kernels.detection_slack` said so, or ``everything``).
 
         Neighbour pairs that moved less than a quarter of the tolerance relative to each other
         since their snapshot keep their sub-contacts and shear history untouched; the others go
@@ -143,9 +143,9 @@ class Simulation:
 
     def _moved_far(self) -> bool:
         """Some block point moved (margin - tolerance) / 2 since the last broad phase."""
-        return kernels.needs_detection(
+        return kernels.detection_slack(
             self.state, self._broad_state, contacts.NeighbourList.empty(), self.model.block_radius, np.inf, self._absolute_limit
-        )
+        ) <= 0.0
 
     @property
     def _absolute_limit(self) -> float:
