@@ -16,10 +16,11 @@ def detect_boxes(boxes, *, points, tolerance, rotation=np.eye(3)):
     shapes = [dd.convex_hull(box_vertices(lo, hi) @ rotation.T) for lo, hi in boxes]
     n = len(shapes)
     candidates = contacts.broad_phase(shapes, np.ones(n, bool), 0.5 * tolerance)
-    return contacts.narrow_phase(
+    sub, _ = contacts.narrow_phase(
         dict(enumerate(shapes)), candidates, np.array([s.centroid for s in shapes]), np.repeat(np.eye(3)[None], n, 0),
         tolerance=tolerance, density=contacts.Density(along=points, across=points),
     )
+    return sub
 
 
 def bed_joint(offset_x, points):
@@ -70,7 +71,8 @@ def test_non_rectangular_overlap_areas_sum_to_the_polygon():
     rot = Rotation.from_euler("z", 30, degrees=True).as_matrix()
     slab = dd.box([-0.1, -0.1, -0.01], [0.1, 0.1, 0.0])
     brick = dd.convex_hull(box_vertices([-0.0125, -0.006, 0.0], [0.0125, 0.006, 0.0055]) @ rot.T)
-    fc = contacts.face_contact(slab, brick, 0, 1, tolerance=1e-4, density=contacts.Density(along=4, across=4))
+    fc, separation = contacts.face_contact(slab, brick, 0, 1, tolerance=1e-4, density=contacts.Density(along=4, across=4))
+    assert separation == pytest.approx(0.0, abs=1e-15)
     assert fc.areas.sum() == pytest.approx(BRICK[0] * BRICK[1], rel=1e-9)
     assert fc.ref == 0 and np.allclose(fc.normal, [0, 0, 1])
 

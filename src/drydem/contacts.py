@@ -89,15 +89,18 @@ class SubContacts(NamedTuple):
 class NeighbourList(NamedTuple):
     """The block pairs watched for re-detection (a Verlet list), each with the state of its two
     blocks when its sub-contacts were last made: pairs (nn, 2) int64 (i < j); position
-    (nn, 2, 3) m, the two centroids; quaternion (nn, 2, 4), the two orientations."""
+    (nn, 2, 3) m, the two centroids; quaternion (nn, 2, 4), the two orientations; limit (nn,)
+    m, the relative motion after which the pair must be looked at again (half the tolerance
+    for touching pairs; for separated ones, their separation less half the tolerance)."""
 
     pairs: np.ndarray
     position: np.ndarray
     quaternion: np.ndarray
+    limit: np.ndarray
 
     @classmethod
     def empty(cls) -> NeighbourList:
-        return cls(np.zeros((0, 2), np.int64), np.zeros((0, 2, 3)), np.zeros((0, 2, 4)))
+        return cls(np.zeros((0, 2), np.int64), np.zeros((0, 2, 3)), np.zeros((0, 2, 4)), np.zeros(0))
 
 
 def pair_keys(pairs: np.ndarray, n_blocks: int) -> np.ndarray:
@@ -191,17 +194,18 @@ def _best_separation(a: ConvexPolyhedron, b: ConvexPolyhedron) -> tuple[float, b
 
 def face_contact(
     a: ConvexPolyhedron, b: ConvexPolyhedron, ia: int, ib: int, *, tolerance: float, density: Density
-) -> _FaceContact | None:
-    """Sub-contact points between blocks ``ia`` and ``ib``, or None if they do not touch."""
+) -> tuple[_FaceContact | None, float]:
+    """Sub-contact points between blocks ``ia`` and ``ib`` (None if they do not touch), and their
+    separation along the best face normal, m (a lower bound on their distance when positive)."""
     separation, ref_is_a, f_ref = _best_separation(a, b)
     if separation > tolerance:
-        return None
+        return None, separation
     ref, inc, i_ref, i_inc = (a, b, ia, ib) if ref_is_a else (b, a, ib, ia)
     n = ref.face_normals[f_ref]
     f_inc = int(np.argmin(inc.face_normals @ n))
     n_inc = inc.face_normals[f_inc]
     if np.dot(n_inc, n) >= -1e-6:
-        return None
+        return None, separation
     ref_poly3 = ref.face_polygon(f_ref)
     origin = ref_poly3[0]
     edges = np.roll(ref_poly3, -1, axis=0) - ref_poly3
@@ -214,7 +218,7 @@ def face_contact(
     overlap = polygon.clip(inc_poly, ref_poly)
     small = min(ref.size, inc.size)
     if len(overlap) < 3 or polygon.signed_area(overlap) <= 1e-8 * small**2:
-        return None
+        return None, separation
     counts = _PointCounts(density, basis @ np.asarray(density.across_axis))
     uv, areas = _grid(overlap, ref_poly, inc_poly, counts, 1e-9 * small)
     points = origin + uv @ basis
@@ -222,8 +226,8 @@ def face_contact(
     gaps = (n_inc @ inc.face_polygon(f_inc)[0] - points @ n_inc) / np.dot(n_inc, n)
     keep = gaps <= tolerance
     if not np.any(keep):
-        return None
-    return _FaceContact(i_ref, i_inc, points[keep], gaps[keep], areas[keep], n)
+        return None, separation
+    return _FaceContact(i_ref, i_inc, points[keep], gaps[keep], areas[keep], n), separation
 
 
 class _PointCounts:
@@ -331,17 +335,19 @@ def narrow_phase(
     *,
     tolerance: float,
     density: Density,
-) -> SubContacts:
+) -> tuple[SubContacts, np.ndarray]:
     """Sub-contacts of the candidate block pairs (k, 2), from the blocks' world geometry
     ``shapes`` (by block index, at centroids ``position`` (nb, 3) and rotations (nb, 3, 3)).
-    Shear forces start at zero (see :func:`carry_over`)."""
+    Shear forces start at zero (see :func:`carry_over`). Also returns each candidate pair's
+    separation (k,), m (see :func:`face_contact`)."""
     found = []
-    for ia, ib in candidates:
-        fc = face_contact(shapes[ia], shapes[ib], int(ia), int(ib), tolerance=tolerance, density=density)
+    separations = np.empty(len(candidates))
+    for k, (ia, ib) in enumerate(candidates):
+        fc, separations[k] = face_contact(shapes[ia], shapes[ib], int(ia), int(ib), tolerance=tolerance, density=density)
         if fc is not None:
             found.append(fc)
     if not found:
-        return SubContacts.empty()
+        return SubContacts.empty(), separations
     counts = np.array([len(fc.areas) for fc in found], dtype=np.int64)
     pairs = np.array([(fc.ref, fc.inc) for fc in found], dtype=np.int64)
     contact = np.repeat(np.arange(len(found)), counts)
@@ -354,7 +360,7 @@ def narrow_phase(
     point_ref_body = np.einsum("nji,nj->ni", r_ref[contact], points - position[pairs[contact, 0]])
     incident = points + gaps[:, None] * normals[contact]
     ns = len(areas)
-    return SubContacts(
+    sub = SubContacts(
         pairs=pairs,
         normal_body=normal_body,
         offset=np.einsum("ni,ni->n", normal_body, point_ref_body[np.cumsum(counts) - counts]),
@@ -366,6 +372,7 @@ def narrow_phase(
         normal_force=np.zeros(ns),
         intact=np.ones(ns, dtype=bool),
     )
+    return sub, separations
 
 
 def world_points(sub: SubContacts, position: np.ndarray, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -240,14 +240,14 @@ def pair_motions(state, neighbours, radius, out):
 
 
 @numba.njit(cache=True)
-def detection_slack(state, broad_state, neighbours, radius, relative_limit, absolute_limit):
+def detection_slack(state, broad_state, neighbours, radius, absolute_limit):
     """How far (m) the blocks are from needing re-detection; <= 0: re-detect now (a Verlet-list test).
 
     Absolute: a block point moved more than ``absolute_limit`` (|dx| + theta r) since the
     State ``broad_state`` of the last broad phase, so a block outside the neighbour list may
-    have come close. Relative: a neighbour pair moved more than ``relative_limit`` relative to
-    each other since its snapshot (:func:`_pair_motion`), so its contact may have changed.
-    Angles are bounded by 2 tan(theta / 2).
+    have come close. Relative: a neighbour pair moved more than its ``neighbours.limit``
+    relative to each other since its snapshot (:func:`_pair_motion`), so its contact may have
+    changed. Angles are bounded by 2 tan(theta / 2).
     """
     slack = np.inf
     for i in range(state.position.shape[0]):
@@ -255,7 +255,7 @@ def detection_slack(state, broad_state, neighbours, radius, relative_limit, abso
         d = state.position[i] - broad_state.position[i]
         slack = min(slack, absolute_limit - np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) - _angle_bound(abs(w)) * radius[i])
     for k in range(neighbours.pairs.shape[0]):
-        slack = min(slack, relative_limit - _pair_motion(state, neighbours, k, radius))
+        slack = min(slack, neighbours.limit[k] - _pair_motion(state, neighbours, k, radius))
     return slack
 
 
@@ -290,10 +290,10 @@ def make_run_cycles(step_function, *, jit: bool):
     """The cycling loop around ``step_function`` (numba-compiled when ``jit``).
 
     ``run_cycles(state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit,
-    force_scale, travel_slack, broad_state, neighbours, relative_limit, absolute_limit)`` cycles
+    force_scale, travel_slack, broad_state, neighbours, absolute_limit)`` cycles
     until converged, re-detection needed, diverged or ``max_cycles``, and returns (cycles run,
     exit code, StepStats of the last cycle). ``force_scale`` (N) is the ratio's denominator
-    (mean weight of the free blocks); the last four arguments go to :func:`detection_slack`,
+    (mean weight of the free blocks); the last three arguments go to :func:`detection_slack`,
     which runs only once the blocks may have used up the slack it last found.
 
     Divergence: a NaN, or more kinetic energy than gravity can have supplied. Damping only
@@ -305,7 +305,7 @@ def make_run_cycles(step_function, *, jit: bool):
 
     def run_cycles(
         state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit, force_scale, travel_slack,
-        broad_state, neighbours, relative_limit, absolute_limit,
+        broad_state, neighbours, absolute_limit,
     ):
         nb = state.position.shape[0]
         rot = np.empty((nb, 3, 3))
@@ -324,7 +324,7 @@ def make_run_cycles(step_function, *, jit: bool):
                 return cycle + 1, CONVERGED, stats
             moved += _motion_bound(state, largest_radius, dt)
             if moved >= slack:
-                slack, moved = detection_slack(state, broad_state, neighbours, blocks.radius, relative_limit, absolute_limit), 0.0
+                slack, moved = detection_slack(state, broad_state, neighbours, blocks.radius, absolute_limit), 0.0
                 if slack <= 0.0:
                     return cycle + 1, REDETECT, stats
         return max_cycles, RUNNING, stats

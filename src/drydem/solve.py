@@ -103,8 +103,8 @@ class Simulation:
     def _detect(self, *, everything: bool) -> None:
         """Refresh the contacts (:func:`drydem.kernels.detection_slack` said so, or ``everything``).
 
-        Neighbour pairs that moved less than a quarter of the tolerance relative to each other
-        since their snapshot keep their sub-contacts and shear history untouched; the others go
+        Neighbour pairs that moved less than half their limit relative to each other since their
+        snapshot keep their sub-contacts and shear history untouched; the others go
         through the narrow phase again, inheriting shear stress from their old sub-contacts
         (:func:`drydem.contacts.carry_over`). The broad phase runs again only when some block
         has moved far from where the last one saw it.
@@ -126,25 +126,28 @@ class Simulation:
         where = np.searchsorted(old_keys, keys).clip(0, max(len(old_keys) - 1, 0))
         known = (where < len(old_keys)) & (old_keys[where] == keys) if len(old_keys) else np.zeros(len(keys), bool)
         kept = known & (not everything)
-        kept[known] &= motion[where[known]] <= 0.25 * tol
+        kept[known] &= motion[where[known]] <= 0.5 * old_list.limit[where[known]]
         keep_contact = np.isin(old.pair_keys(nb), keys[kept])
         stale = pairs[~kept]
         blocks = np.unique(stale)
         shapes = dict(zip(blocks.tolist(), m.shapes_at(s.position[blocks], rot[blocks], blocks)))
-        fresh = contacts.narrow_phase(shapes, stale, s.position, rot, tolerance=tol, density=m.contact_density)
+        fresh, separation = contacts.narrow_phase(shapes, stale, s.position, rot, tolerance=tol, density=m.contact_density)
         contacts.carry_over(contacts.subset(old, ~keep_contact), fresh, s.position, rot)
         self.contacts = contacts.concatenate(contacts.subset(old, keep_contact), fresh)
         snapshot_position, snapshot_quaternion = s.position[pairs], s.quaternion[pairs]
         snapshot_position[kept] = old_list.position[where[kept]]
         snapshot_quaternion[kept] = old_list.quaternion[where[kept]]
-        self.neighbours = contacts.NeighbourList(pairs, snapshot_position, snapshot_quaternion)
+        limit = np.empty(len(pairs))
+        limit[kept] = old_list.limit[where[kept]]
+        limit[~kept] = np.maximum(0.5 * tol, separation - 0.5 * tol)
+        self.neighbours = contacts.NeighbourList(pairs, snapshot_position, snapshot_quaternion, limit)
         self.detections += 1
         self._update_inertia()
 
     def _moved_far(self) -> bool:
         """Some block point moved (margin - tolerance) / 2 since the last broad phase."""
         return kernels.detection_slack(
-            self.state, self._broad_state, contacts.NeighbourList.empty(), self.model.block_radius, np.inf, self._absolute_limit
+            self.state, self._broad_state, contacts.NeighbourList.empty(), self.model.block_radius, self._absolute_limit
         ) <= 0.0
 
     @property
@@ -253,7 +256,7 @@ class Simulation:
             n, code, stats = run_cycles(
                 self.state, self._blocks, self.contacts, joint, g, self.timestep,
                 m.solver.damping, min(CHUNK, max_cycles - done), criterion, limit, max(weight, 1e-300), travel_slack,
-                self._broad_state, self.neighbours, 0.5 * m.contact_tolerance, self._absolute_limit,
+                self._broad_state, self.neighbours, self._absolute_limit,
             )
             done += n
             self.cycles += n
