@@ -339,7 +339,10 @@ def narrow_phase(
     """Sub-contacts of the candidate block pairs (k, 2), from the blocks' world geometry
     ``shapes`` (by block index, at centroids ``position`` (nb, 3) and rotations (nb, 3, 3)).
     Shear forces start at zero (see :func:`carry_over`). Also returns each candidate pair's
-    separation (k,), m (see :func:`face_contact`)."""
+    separation (k,), m (see :func:`face_contact`).
+
+    Plain Python, one pair at a time: the reference for :func:`narrow_phase_compiled`.
+    """
     found = []
     separations = np.empty(len(candidates))
     for k, (ia, ib) in enumerate(candidates):
@@ -348,23 +351,54 @@ def narrow_phase(
             found.append(fc)
     if not found:
         return SubContacts.empty(), separations
-    counts = np.array([len(fc.areas) for fc in found], dtype=np.int64)
     pairs = np.array([(fc.ref, fc.inc) for fc in found], dtype=np.int64)
-    contact = np.repeat(np.arange(len(found)), counts)
-    points = np.concatenate([fc.points for fc in found])
-    gaps = np.concatenate([fc.gaps for fc in found])
-    areas = np.concatenate([fc.areas for fc in found])
-    normals = np.array([fc.normal for fc in found])
+    counts = np.array([len(fc.areas) for fc in found], dtype=np.int64)
+    return _assemble(
+        pairs, counts, np.concatenate([fc.points for fc in found]), np.concatenate([fc.gaps for fc in found]),
+        np.concatenate([fc.areas for fc in found]), np.array([fc.normal for fc in found]), position, rotation,
+    ), separations
+
+
+def narrow_phase_compiled(
+    geometry, candidates: np.ndarray, position: np.ndarray, rotation: np.ndarray, *, tolerance: float, density: Density
+) -> tuple[SubContacts, np.ndarray]:
+    """:func:`narrow_phase` for all candidates in one numba call (:mod:`drydem.narrow`), from the
+    model's flattened body geometry (:class:`drydem.narrow.Geometry`)."""
+    from drydem import narrow
+
+    k, m = len(candidates), narrow.max_points(density.along, density.across)
+    found = narrow.Found(
+        count=np.zeros(k, np.int64), ref=np.zeros(k, np.int64), inc=np.zeros(k, np.int64), normal=np.zeros((k, 3)),
+        separation=np.zeros(k), points=np.zeros((k, m, 3)), gaps=np.zeros((k, m)), areas=np.zeros((k, m)),
+    )
+    narrow.narrow_phase(
+        geometry, position, rotation, np.ascontiguousarray(candidates, dtype=np.int64), tolerance, density.along, density.across,
+        np.asarray(density.across_axis, dtype=float), found,
+    )
+    hit = found.count > 0
+    if not hit.any():
+        return SubContacts.empty(), found.separation
+    rows = np.arange(m)[None, :] < found.count[hit][:, None]
+    pairs = np.stack([found.ref[hit], found.inc[hit]], axis=1)
+    return _assemble(
+        pairs, found.count[hit], found.points[hit][rows], found.gaps[hit][rows], found.areas[hit][rows], found.normal[hit], position, rotation
+    ), found.separation
+
+
+def _assemble(pairs, counts, points, gaps, areas, normals, position, rotation) -> SubContacts:
+    """SubContacts from each contact's (ref, inc) pair, point count and normal, and the points
+    (world, on the reference face), gaps and areas of all of them in order."""
+    contact = np.repeat(np.arange(len(pairs)), counts)
     r_ref, r_inc = rotation[pairs[:, 0]], rotation[pairs[:, 1]]
     normal_body = np.einsum("nji,nj->ni", r_ref, normals)  # R^T n
     point_ref_body = np.einsum("nji,nj->ni", r_ref[contact], points - position[pairs[contact, 0]])
     incident = points + gaps[:, None] * normals[contact]
     ns = len(areas)
-    sub = SubContacts(
+    return SubContacts(
         pairs=pairs,
         normal_body=normal_body,
         offset=np.einsum("ni,ni->n", normal_body, point_ref_body[np.cumsum(counts) - counts]),
-        start=np.concatenate([[0], np.cumsum(counts)]),
+        start=np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
         point_ref_body=point_ref_body,
         point_inc_body=np.einsum("nji,nj->ni", r_inc[contact], incident - position[pairs[contact, 1]]),
         area=areas,
@@ -372,7 +406,6 @@ def narrow_phase(
         normal_force=np.zeros(ns),
         intact=np.ones(ns, dtype=bool),
     )
-    return sub, separations
 
 
 def world_points(sub: SubContacts, position: np.ndarray, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -8,6 +8,7 @@ a run lives in :class:`drydem.state.State` and :class:`drydem.contacts.SubContac
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -74,6 +75,13 @@ class Model:
     def block_movable(self) -> np.ndarray:
         """(nb,) bool: the block has at least one free degree of freedom."""
         return ~self.block_fixed.all(axis=1)
+
+    @cached_property
+    def geometry(self):
+        """The blocks' body geometry flattened for the compiled narrow phase (:class:`drydem.narrow.Geometry`)."""
+        from drydem.narrow import Geometry
+
+        return Geometry.of(self.block_shape)
 
     @property
     def contact_density(self) -> contacts.Density:

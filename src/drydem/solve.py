@@ -129,9 +129,7 @@ class Simulation:
         kept[known] &= motion[where[known]] <= 0.5 * old_list.limit[where[known]]
         keep_contact = np.isin(old.pair_keys(nb), keys[kept])
         stale = pairs[~kept]
-        blocks = np.unique(stale)
-        shapes = dict(zip(blocks.tolist(), m.shapes_at(s.position[blocks], rot[blocks], blocks)))
-        fresh, separation = contacts.narrow_phase(shapes, stale, s.position, rot, tolerance=tol, density=m.contact_density)
+        fresh, separation = contacts.narrow_phase_compiled(m.geometry, stale, s.position, rot, tolerance=tol, density=m.contact_density)
         contacts.carry_over(contacts.subset(old, ~keep_contact), fresh, s.position, rot)
         self.contacts = contacts.concatenate(contacts.subset(old, keep_contact), fresh)
         snapshot_position, snapshot_quaternion = s.position[pairs], s.quaternion[pairs]

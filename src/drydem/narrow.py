@@ -1,0 +1,400 @@
+"""The narrow phase of :mod:`drydem.contacts` compiled with numba, for many block pairs at once.
+
+Same algorithm as :func:`drydem.contacts.face_contact` (its plain-Python reference, which the
+tests hold this one to): reference face of least penetration (separating axis over face
+normals, ties to the first block), most opposed incident face, Sutherland-Hodgman overlap in
+the reference plane, sub-contact grid (bilinear on quadrilaterals, clipped cells otherwise,
+trapezoid areas), gaps along the normal, points beyond the tolerance dropped. Geometry comes
+flattened (:class:`Geometry`), so one call handles every stale pair of a re-detection.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+#: largest number of vertices of a face or a clipped polygon
+MAX_POLYGON = 64
+
+
+class Geometry(NamedTuple):
+    """Every block's polyhedron in its body frame, flattened (nb blocks).
+
+    vertex (V, 3) m relative to the centroid, block b's rows vertex_start[b]:vertex_start[b+1];
+    face_vertex (I,) vertex numbers within the block, face f's entries face_start[f]:face_start[f+1];
+    block b's faces block_face_start[b]:block_face_start[b+1]; face_normal (F, 3) outward unit
+    normals; size (nb,) m, bounding-box diagonal.
+    """
+
+    vertex: np.ndarray
+    vertex_start: np.ndarray
+    face_vertex: np.ndarray
+    face_start: np.ndarray
+    block_face_start: np.ndarray
+    face_normal: np.ndarray
+    size: np.ndarray
+
+    @classmethod
+    def of(cls, shapes) -> Geometry:
+        """From a sequence of :class:`drydem.geometry.ConvexPolyhedron` (in the body frame = as given)."""
+        vertex = np.concatenate([s.vertices - s.centroid for s in shapes])
+        vertex_start = np.concatenate([[0], np.cumsum([len(s.vertices) for s in shapes])])
+        faces = [f for s in shapes for f in s.faces]
+        return cls(
+            vertex=vertex,
+            vertex_start=vertex_start.astype(np.int64),
+            face_vertex=np.concatenate(faces).astype(np.int64),
+            face_start=np.concatenate([[0], np.cumsum([len(f) for f in faces])]).astype(np.int64),
+            block_face_start=np.concatenate([[0], np.cumsum([len(s.faces) for s in shapes])]).astype(np.int64),
+            face_normal=np.concatenate([s.face_normals for s in shapes]),
+            size=np.array([s.size for s in shapes]),
+        )
+
+
+class Found(NamedTuple):
+    """Per candidate pair k: count[k] points (0: no contact), ref/inc block, normal (3,) world,
+    separation m; points (k, M, 3) world on the reference face, gaps (k, M) m, areas (k, M) m2."""
+
+    count: np.ndarray
+    ref: np.ndarray
+    inc: np.ndarray
+    normal: np.ndarray
+    separation: np.ndarray
+    points: np.ndarray
+    gaps: np.ndarray
+    areas: np.ndarray
+
+
+def max_points(along: int, across: int) -> int:
+    """Upper bound on the points of one contact: the overlap is no longer than the smaller face,
+    so at most n - 1 intervals (+1 for rounding) per direction."""
+    n = max(along, across) + 1
+    return n * n
+
+
+@numba.njit(cache=True)
+def _world(geom, block, position, rotation):
+    """World vertices and face normals of one block."""
+    v0, v1 = geom.vertex_start[block], geom.vertex_start[block + 1]
+    f0, f1 = geom.block_face_start[block], geom.block_face_start[block + 1]
+    r, x = rotation[block], position[block]
+    verts = np.empty((v1 - v0, 3))
+    for i in range(v1 - v0):
+        p = geom.vertex[v0 + i]
+        for k in range(3):
+            verts[i, k] = x[k] + r[k, 0] * p[0] + r[k, 1] * p[1] + r[k, 2] * p[2]
+    normals = np.empty((f1 - f0, 3))
+    for f in range(f1 - f0):
+        p = geom.face_normal[f0 + f]
+        for k in range(3):
+            normals[f, k] = r[k, 0] * p[0] + r[k, 1] * p[1] + r[k, 2] * p[2]
+    return verts, normals
+
+
+@numba.njit(cache=True)
+def _separations(geom, block, verts, normals, other):
+    """Signed distance of ``other``'s deepest vertex from each face plane of ``block``."""
+    f0 = geom.block_face_start[block]
+    out = np.empty(normals.shape[0])
+    for f in range(normals.shape[0]):
+        first = verts[geom.face_vertex[geom.face_start[f0 + f]]]
+        n = normals[f]
+        lowest = np.inf
+        for j in range(other.shape[0]):
+            lowest = min(lowest, n[0] * other[j, 0] + n[1] * other[j, 1] + n[2] * other[j, 2])
+        out[f] = lowest - (n[0] * first[0] + n[1] * first[1] + n[2] * first[2])
+    return out
+
+
+@numba.njit(cache=True)
+def _face_2d(geom, block, face, verts, origin, u, v, out):
+    """The face's vertices in the (u, v) frame at ``origin``, counter-clockwise; returns their number."""
+    f0 = geom.block_face_start[block] + face
+    count = geom.face_start[f0 + 1] - geom.face_start[f0]
+    for i in range(count):
+        p = verts[geom.face_vertex[geom.face_start[f0] + i]]
+        d0, d1, d2 = p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]
+        out[i, 0] = d0 * u[0] + d1 * u[1] + d2 * u[2]
+        out[i, 1] = d0 * v[0] + d1 * v[1] + d2 * v[2]
+    if _area(out, count) < 0.0:
+        for i in range(count // 2):
+            for k in range(2):
+                out[i, k], out[count - 1 - i, k] = out[count - 1 - i, k], out[i, k]
+    return count
+
+
+@numba.njit(cache=True)
+def _area(poly, count):
+    total = 0.0
+    for i in range(count):
+        j = (i + 1) % count
+        total += poly[i, 0] * poly[j, 1] - poly[j, 0] * poly[i, 1]
+    return 0.5 * total if count >= 3 else 0.0
+
+
+@numba.njit(cache=True)
+def _centroid(poly, count):
+    a, cx, cy = 0.0, 0.0, 0.0
+    for i in range(count):
+        j = (i + 1) % count
+        cross = poly[i, 0] * poly[j, 1] - poly[j, 0] * poly[i, 1]
+        a += cross
+        cx += (poly[i, 0] + poly[j, 0]) * cross
+        cy += (poly[i, 1] + poly[j, 1]) * cross
+    return cx / (3.0 * a), cy / (3.0 * a)
+
+
+@numba.njit(cache=True)
+def _clip(subject, n_subject, clipper, n_clipper, out):
+    """Sutherland-Hodgman: ``subject`` clipped by the convex ``clipper`` into ``out``; returns its size."""
+    work = np.empty((MAX_POLYGON, 2))
+    n = n_subject
+    for i in range(n):
+        out[i, 0], out[i, 1] = subject[i, 0], subject[i, 1]
+    for e in range(n_clipper):
+        if n == 0:
+            break
+        ax, ay = clipper[e, 0], clipper[e, 1]
+        ex, ey = clipper[(e + 1) % n_clipper, 0] - ax, clipper[(e + 1) % n_clipper, 1] - ay
+        for i in range(n):
+            work[i, 0], work[i, 1] = out[i, 0], out[i, 1]
+        m = 0
+        px, py = work[n - 1, 0], work[n - 1, 1]
+        p_in = ex * (py - ay) - ey * (px - ax)
+        for i in range(n):
+            cx, cy = work[i, 0], work[i, 1]
+            c_in = ex * (cy - ay) - ey * (cx - ax)
+            if c_in >= 0.0:
+                if p_in < 0.0:
+                    t = p_in / (p_in - c_in)
+                    out[m, 0], out[m, 1] = px + t * (cx - px), py + t * (cy - py)
+                    m += 1
+                out[m, 0], out[m, 1] = cx, cy
+                m += 1
+            elif p_in >= 0.0:
+                t = p_in / (p_in - c_in)
+                out[m, 0], out[m, 1] = px + t * (cx - px), py + t * (cy - py)
+                m += 1
+            px, py, p_in = cx, cy, c_in
+        n = m
+    return n
+
+
+@numba.njit(cache=True)
+def _without_collinear(poly, count, tol):
+    """Drop vertices within ``tol`` of the line through their neighbours or of the previous one."""
+    changed = True
+    while changed and count > 3:
+        changed = False
+        for i in range(count):
+            p, c, q = poly[(i - 1) % count], poly[i], poly[(i + 1) % count]
+            ex, ey = q[0] - p[0], q[1] - p[1]
+            length = math.sqrt(ex * ex + ey * ey)
+            off = abs(ex * (c[1] - p[1]) - ey * (c[0] - p[0])) / length if length > 0.0 else 0.0
+            if off <= tol or math.sqrt((c[0] - p[0]) ** 2 + (c[1] - p[1]) ** 2) <= tol:
+                for j in range(i, count - 1):
+                    poly[j, 0], poly[j, 1] = poly[j + 1, 0], poly[j + 1, 1]
+                count -= 1
+                changed = True
+                break
+    return count
+
+
+@numba.njit(cache=True)
+def _intervals(length, dx, dy, face_a, na, face_b, nb, n):
+    """As contacts._intervals: 0 for n = 1, else the fewest intervals of spacing <= extent / (n - 1)."""
+    if n == 1:
+        return 0
+    extent = np.inf
+    for face, count in ((face_a, na), (face_b, nb)):
+        lo, hi = np.inf, -np.inf
+        for i in range(count):
+            s = face[i, 0] * dx + face[i, 1] * dy
+            lo, hi = min(lo, s), max(hi, s)
+        extent = min(extent, hi - lo)
+    return max(1, int(math.ceil(length / (extent / (n - 1)) - 1e-6)))
+
+
+@numba.njit(cache=True)
+def _trapezoid(intervals):
+    if intervals == 0:
+        return np.array([0.5]), np.array([1.0])
+    nodes = np.linspace(0.0, 1.0, intervals + 1)
+    weights = np.full(intervals + 1, 1.0 / intervals)
+    weights[0] *= 0.5
+    weights[-1] *= 0.5
+    return nodes, weights
+
+
+@numba.njit(cache=True)
+def _count(dx, dy, across_u, across_v, along, across):
+    return across if abs(dx * across_u + dy * across_v) > 0.999 else along
+
+
+@numba.njit(cache=True)
+def _bilinear(quad, face_a, na, face_b, nb, along, across, au, av, out_uv, out_area):
+    """As contacts._bilinear_grid; returns the number of nodes written."""
+    axes_nodes = []
+    axes_weights = []
+    for a0, a1, b0, b1 in ((0, 1, 3, 2), (0, 3, 1, 2)):
+        l1 = math.sqrt((quad[a1, 0] - quad[a0, 0]) ** 2 + (quad[a1, 1] - quad[a0, 1]) ** 2)
+        l2 = math.sqrt((quad[b1, 0] - quad[b0, 0]) ** 2 + (quad[b1, 1] - quad[b0, 1]) ** 2)
+        dx = quad[a1, 0] - quad[a0, 0] + quad[b1, 0] - quad[b0, 0]
+        dy = quad[a1, 1] - quad[a0, 1] + quad[b1, 1] - quad[b0, 1]
+        norm = math.sqrt(dx * dx + dy * dy)
+        dx, dy = dx / norm, dy / norm
+        n = _count(dx, dy, au, av, along, across)
+        nodes, weights = _trapezoid(_intervals(max(l1, l2), dx, dy, face_a, na, face_b, nb, n))
+        axes_nodes.append(nodes)
+        axes_weights.append(weights)
+    s_nodes, t_nodes = axes_nodes[0], axes_nodes[1]
+    ws, wt = axes_weights[0], axes_weights[1]
+    k = 0
+    total = 0.0
+    for i in range(s_nodes.shape[0]):
+        for j in range(t_nodes.shape[0]):
+            s, t = s_nodes[i], t_nodes[j]
+            for c in range(2):
+                out_uv[k, c] = (1 - s) * (1 - t) * quad[0, c] + s * (1 - t) * quad[1, c] + s * t * quad[2, c] + (1 - s) * t * quad[3, c]
+            dsx = (1 - t) * (quad[1, 0] - quad[0, 0]) + t * (quad[2, 0] - quad[3, 0])
+            dsy = (1 - t) * (quad[1, 1] - quad[0, 1]) + t * (quad[2, 1] - quad[3, 1])
+            dtx = (1 - s) * (quad[3, 0] - quad[0, 0]) + s * (quad[2, 0] - quad[1, 0])
+            dty = (1 - s) * (quad[3, 1] - quad[0, 1]) + s * (quad[2, 1] - quad[1, 1])
+            out_area[k] = ws[i] * wt[j] * abs(dsx * dty - dsy * dtx)
+            total += out_area[k]
+            k += 1
+    exact = _area(quad, 4)
+    for i in range(k):
+        out_area[i] *= exact / total
+    return k
+
+
+@numba.njit(cache=True)
+def _inside(poly, count, x, y, tol):
+    for i in range(count):
+        j = (i + 1) % count
+        ex, ey = poly[j, 0] - poly[i, 0], poly[j, 1] - poly[i, 1]
+        if ex * (y - poly[i, 1]) - ey * (x - poly[i, 0]) < -tol * math.sqrt(ex * ex + ey * ey):
+            return False
+    return True
+
+
+@numba.njit(cache=True)
+def _clipped(overlap, count, face_a, na, face_b, nb, along, across, au, av, tol, out_uv, out_area):
+    """As contacts._clipped_grid; returns the number of nodes written."""
+    lo = np.array([np.inf, np.inf])
+    hi = np.array([-np.inf, -np.inf])
+    for i in range(count):
+        for c in range(2):
+            lo[c], hi[c] = min(lo[c], overlap[i, c]), max(hi[c], overlap[i, c])
+    nodes = []
+    low = []
+    high = []
+    for c in range(2):
+        dx, dy = (1.0, 0.0) if c == 0 else (0.0, 1.0)
+        n = _count(dx, dy, au, av, along, across)
+        t, _ = _trapezoid(_intervals(hi[c] - lo[c], dx, dy, face_a, na, face_b, nb, n))
+        x = lo[c] + t * (hi[c] - lo[c])
+        half = 0.5 * (hi[c] - lo[c]) / max(x.shape[0] - 1, 0.5)
+        nodes.append(x)
+        low.append(np.minimum(np.maximum(x - half, lo[c]), hi[c]))
+        high.append(np.minimum(np.maximum(x + half, lo[c]), hi[c]))
+    rect = np.empty((4, 2))
+    cell = np.empty((MAX_POLYGON, 2))
+    k = 0
+    for i in range(nodes[0].shape[0]):
+        for j in range(nodes[1].shape[0]):
+            rect[0, 0], rect[0, 1] = low[0][i], low[1][j]
+            rect[1, 0], rect[1, 1] = high[0][i], low[1][j]
+            rect[2, 0], rect[2, 1] = high[0][i], high[1][j]
+            rect[3, 0], rect[3, 1] = low[0][i], high[1][j]
+            m = _clip(overlap, count, rect, 4, cell)
+            area = _area(cell, m)
+            if area <= tol * tol:
+                continue
+            x, y = nodes[0][i], nodes[1][j]
+            if not _inside(overlap, count, x, y, tol):
+                x, y = _centroid(cell, m)
+            out_uv[k, 0], out_uv[k, 1] = x, y
+            out_area[k] = area
+            k += 1
+    return k
+
+
+@numba.njit(cache=True)
+def narrow_phase(geom, position, rotation, candidates, tolerance, along, across, across_axis, found):
+    """Fill ``found`` (a :class:`Found` sized for the candidates) for every candidate pair (i < j)."""
+    face_a = np.empty((MAX_POLYGON, 2))
+    face_b = np.empty((MAX_POLYGON, 2))
+    overlap = np.empty((MAX_POLYGON, 2))
+    m = found.gaps.shape[1]
+    uv = np.empty((m, 2))
+    area = np.empty(m)
+    for k in range(candidates.shape[0]):
+        found.count[k] = 0
+        ia, ib = candidates[k, 0], candidates[k, 1]
+        va, na = _world(geom, ia, position, rotation)
+        vb, nb = _world(geom, ib, position, rotation)
+        sa, sb = _separations(geom, ia, va, na, vb), _separations(geom, ib, vb, nb, va)
+        fa, fb = np.argmax(sa), np.argmax(sb)
+        small = min(geom.size[ia], geom.size[ib])
+        if sa[fa] >= sb[fb] - 1e-9 * small:
+            ref, inc, vr, nr, vi, ni, f_ref, separation = ia, ib, va, na, vb, nb, fa, sa[fa]
+        else:
+            ref, inc, vr, nr, vi, ni, f_ref, separation = ib, ia, vb, nb, va, na, fb, sb[fb]
+        found.separation[k] = separation
+        if separation > tolerance:
+            continue
+        n = nr[f_ref]
+        f_inc = np.argmin(ni @ n)
+        n_inc = ni[f_inc]
+        cos_ni = n_inc[0] * n[0] + n_inc[1] * n[1] + n_inc[2] * n[2]
+        if cos_ni >= -1e-6:
+            continue
+        # in-plane frame: origin at the reference face's first vertex, u along its longest edge
+        g0 = geom.block_face_start[ref] + f_ref
+        first, count_ref = geom.face_start[g0], geom.face_start[g0 + 1] - geom.face_start[g0]
+        origin = vr[geom.face_vertex[first]]
+        best, u = -1.0, np.zeros(3)
+        for i in range(count_ref):
+            e = vr[geom.face_vertex[first + (i + 1) % count_ref]] - vr[geom.face_vertex[first + i]]
+            length = e[0] * e[0] + e[1] * e[1] + e[2] * e[2]
+            if length > best:
+                best, u = length, e / math.sqrt(length)
+        v = np.array([n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0]])
+        n_ref_2d = _face_2d(geom, ref, f_ref, vr, origin, u, v, face_a)
+        n_inc_2d = _face_2d(geom, inc, f_inc, vi, origin, u, v, face_b)
+        n_overlap = _clip(face_b, n_inc_2d, face_a, n_ref_2d, overlap)
+        if n_overlap < 3 or _area(overlap, n_overlap) <= 1e-8 * small * small:
+            continue
+        tol = 1e-9 * small
+        au = across_axis[0] * u[0] + across_axis[1] * u[1] + across_axis[2] * u[2]
+        av = across_axis[0] * v[0] + across_axis[1] * v[1] + across_axis[2] * v[2]
+        if along == 1 and across == 1:
+            uv[0, 0], uv[0, 1] = _centroid(overlap, n_overlap)
+            area[0] = _area(overlap, n_overlap)
+            nodes = 1
+        else:
+            corners = overlap.copy()
+            n_corners = _without_collinear(corners, n_overlap, tol)
+            if n_corners == 4:
+                nodes = _bilinear(corners, face_a, n_ref_2d, face_b, n_inc_2d, along, across, au, av, uv, area)
+            else:
+                nodes = _clipped(overlap, n_overlap, face_a, n_ref_2d, face_b, n_inc_2d, along, across, au, av, tol, uv, area)
+        inc_first = vi[geom.face_vertex[geom.face_start[geom.block_face_start[inc] + f_inc]]]
+        plane = n_inc[0] * inc_first[0] + n_inc[1] * inc_first[1] + n_inc[2] * inc_first[2]
+        kept = 0
+        for i in range(nodes):
+            p = origin + uv[i, 0] * u + uv[i, 1] * v
+            gap = (plane - (n_inc[0] * p[0] + n_inc[1] * p[1] + n_inc[2] * p[2])) / cos_ni
+            if gap <= tolerance:
+                found.points[k, kept] = p
+                found.gaps[k, kept] = gap
+                found.areas[k, kept] = area[i]
+                kept += 1
+        found.count[k] = kept
+        found.ref[k], found.inc[k] = ref, inc
+        found.normal[k] = n
