@@ -16,7 +16,7 @@ from conftest import BRICK, box_vertices
 def detect_boxes(boxes, *, points, tolerance, rotation=np.eye(3)):
     shapes = [dd.convex_hull(box_vertices(lo, hi) @ rotation.T) for lo, hi in boxes]
     n = len(shapes)
-    candidates = contacts.broad_phase(shapes, np.ones(n, bool), 0.5 * tolerance)
+    candidates = contacts.broad_phase(*contacts.bounds(shapes), np.ones(n, bool), 0.5 * tolerance)
     sub, _ = contacts.narrow_phase(
         dict(enumerate(shapes)), candidates, np.array([s.centroid for s in shapes]), np.repeat(np.eye(3)[None], n, 0),
         tolerance=tolerance, density=contacts.Density(along=points, across=points),
@@ -131,7 +131,7 @@ def test_broad_phase_matches_all_pairs_bounding_box_test():
     lo = rng.uniform(0, 10, (300, 3))
     shapes = [dd.box(l, l + rng.uniform(0.1, 1.5, 3)) for l in lo]
     movable = rng.random(300) < 0.8
-    found = {tuple(p) for p in contacts.broad_phase(shapes, movable, 0.05)}
+    found = {tuple(p) for p in contacts.broad_phase(*contacts.bounds(shapes), movable, 0.05)}
     lo_b = np.array([s.vertices.min(0) for s in shapes]) - 0.05
     hi_b = np.array([s.vertices.max(0) for s in shapes]) + 0.05
     expected = {
@@ -197,7 +197,7 @@ def test_compiled_narrow_phase_matches_the_python_one_on_random_clouds(seed):
     boxes, tolerance = random_box_cloud(rng)
     rotation = Rotation.random(random_state=rng).as_matrix()
     shapes = [dd.convex_hull(box_vertices(lo, hi) @ rotation.T) for lo, hi in boxes.values()]
-    candidates = contacts.broad_phase(shapes, np.ones(len(shapes), bool), 0.5 * tolerance)
+    candidates = contacts.broad_phase(*contacts.bounds(shapes), np.ones(len(shapes), bool), 0.5 * tolerance)
     sub = compare_narrow_phases(shapes, candidates, tolerance, contacts.Density(along=3, across=3))
     assert sub.count > 50
 
@@ -215,6 +215,6 @@ def test_compiled_narrow_phase_matches_on_a_wall_with_turned_and_rocked_bricks(a
         turn = np.eye(3) if b.fixed else Rotation.from_rotvec(rng.normal(scale=0.01, size=3)).as_matrix()
         c = b.shape.centroid
         shapes.append(dd.convex_hull((b.shape.vertices - c) @ turn.T + c))
-    candidates = contacts.broad_phase(shapes, np.ones(len(shapes), bool), 2e-4)
+    candidates = contacts.broad_phase(*contacts.bounds(shapes), np.ones(len(shapes), bool), 2e-4)
     sub = compare_narrow_phases(shapes, candidates, 2e-4, contacts.Density(along=along, across=across))
     assert sub.count > 0

@@ -148,27 +148,19 @@ class _FaceContact:
     normal: np.ndarray  # (3,) reference outward normal, world
 
 
-def broad_phase(polyhedra: list[ConvexPolyhedron], movable: np.ndarray, margin: float) -> np.ndarray:
-    """Candidate pairs (i < j) whose bounding boxes, grown by ``margin`` m, overlap.
+def bounds(polyhedra: list[ConvexPolyhedron]) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 3) lower and upper corners of the blocks' axis-aligned bounding boxes, m."""
+    return np.array([p.vertices.min(0) for p in polyhedra]), np.array([p.vertices.max(0) for p in polyhedra])
 
-    Sort and sweep along x (Baraff 1992; Cohen et al. 1995, I-COLLIDE), then a
-    y and z overlap test. Pairs of two immovable blocks are left out.
-    """
-    lo = np.array([p.vertices.min(0) for p in polyhedra]) - margin
-    hi = np.array([p.vertices.max(0) for p in polyhedra]) + margin
-    order = np.argsort(lo[:, 0], kind="stable")
-    lo_sorted_x = lo[order, 0]
-    pairs = []
-    for k, i in enumerate(order):
-        end = np.searchsorted(lo_sorted_x, hi[i, 0], side="right")
-        js = order[k + 1 : end]
-        if js.size == 0:
-            continue
-        hit = np.all((lo[js, 1:] <= hi[i, 1:]) & (hi[js, 1:] >= lo[i, 1:]), axis=1)
-        hit &= movable[js] | movable[i]
-        for j in js[hit]:
-            pairs.append((min(i, j), max(i, j)))
-    return np.array(sorted(pairs), dtype=np.int64).reshape(-1, 2)
+
+def broad_phase(lower: np.ndarray, upper: np.ndarray, movable: np.ndarray, margin: float) -> np.ndarray:
+    """Candidate pairs (i < j), sorted, whose bounding boxes ``lower``/``upper`` (n, 3), grown by
+    ``margin`` m, overlap; pairs of two immovable blocks are left out (sort and sweep along x,
+    compiled: :func:`drydem.narrow.sweep`)."""
+    from drydem import narrow
+
+    pairs = narrow.sweep(np.ascontiguousarray(lower), np.ascontiguousarray(upper), np.ascontiguousarray(movable), float(margin))
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
 
 def penetration_depth(a: ConvexPolyhedron, b: ConvexPolyhedron) -> float:

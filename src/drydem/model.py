@@ -83,6 +83,11 @@ class Model:
 
         return Geometry.of(self.block_shape)
 
+    @cached_property
+    def block_inertia_inverse(self) -> np.ndarray:
+        """(nb, 3, 3) inverse inertia tensors, 1/(kg m2)."""
+        return np.linalg.inv(self.block_inertia)
+
     @property
     def contact_density(self) -> contacts.Density:
         """Sub-contact density resolved from ``contacts`` and ``supports`` (see ContactSettings)."""
@@ -192,7 +197,7 @@ def _thickness(shape: ConvexPolyhedron) -> float:
 def _check_overlaps(model: Model) -> None:
     limit = OVERLAP_FRACTION * model.contact_tolerance
     shapes = list(model.block_shape)
-    for i, j in contacts.broad_phase(shapes, model.block_movable, 0.0):
+    for i, j in contacts.broad_phase(*contacts.bounds(shapes), model.block_movable, 0.0):
         depth = contacts.penetration_depth(shapes[i], shapes[j])
         if depth > limit:
             raise ModelError(

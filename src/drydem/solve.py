@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drydem import contacts, kernels, reference
+from drydem import contacts, kernels, narrow, reference
 from drydem.errors import DivergenceError, ModelError
 from drydem.joints import JointArrays
 from drydem.model import Model
@@ -116,7 +116,8 @@ class Simulation:
         motion = np.empty(len(old_list.pairs))
         kernels.pair_motions(s, old_list, m.block_radius, motion)
         if everything or self._moved_far():
-            pairs = contacts.broad_phase(m.shapes_at(s.position, rot), m.block_movable, 0.5 * NEIGHBOUR_MARGIN * tol)
+            lower, upper = narrow.bounding_boxes(m.geometry, s.position, rot)
+            pairs = contacts.broad_phase(lower, upper, m.block_movable, 0.5 * NEIGHBOUR_MARGIN * tol)
             pairs = pairs[self.active[pairs].all(axis=1)]
             self._broad_state = s.copy()
         else:
@@ -177,7 +178,7 @@ class Simulation:
             mass=m.block_mass,
             inv_mass=np.where(movable, 1.0 / mass, 0.0),
             inertia_body=inertia,
-            inv_inertia_body=np.linalg.inv(inertia),
+            inv_inertia_body=np.linalg.inv(inertia) if solver.mass_scaling else m.block_inertia_inverse,
             free=(~m.block_fixed & movable[:, None]).astype(float),
             radius=m.block_radius,
             origin=m.block_centroid,
