@@ -134,10 +134,13 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_di
             raise click.ClickException(str(exc)) from None
     write_summary(out, result, model)
     pushover_figure(result, out / "pushover.png", title=path.stem)
-    states = [("last equilibrium" if result.collapse_angle_deg is not None else "under gravity", result.collapse_state or result.final_state),
-              (f"past collapse ({result.ended_by})", result.final_state)]
-    lost = frozenset(name for name, _ in result.lost_blocks)
-    mechanism_figure(model, states, out / "mechanism.png", monitored=result.monitored_block, hidden=lost)
+    collapse = result.collapse_angle_deg
+    lost_by_then = frozenset(name for name, theta in result.lost_blocks if collapse is not None and theta <= collapse)
+    states = [
+        ("last equilibrium" if collapse is not None else "under gravity", result.collapse_state or result.final_state, lost_by_then),
+        (f"past collapse ({result.ended_by})", result.final_state, frozenset(name for name, _ in result.lost_blocks)),
+    ]
+    mechanism_figure(model, states, out / "mechanism.png", monitored=result.monitored_block)
     if not result.stable_under_gravity:
         click.echo("the model cannot stand under its own weight (state saved in the plots)")
     elif result.collapse_angle_deg is None:

@@ -61,23 +61,22 @@ def block_outlines(model: Model, state: State, blocks: np.ndarray) -> list[np.nd
     return outlines
 
 
-def mechanism_figure(
-    model: Model, states: list[tuple[str, State]], path: Path, *, monitored: str | None = None, hidden: frozenset[str] = frozenset()
-) -> Path:
-    """The model in its plane at each of ``states`` (label, State), blocks coloured by the
-    magnitude of their displacement from the model file (one colour scale for all panels).
-    Blocks named in ``hidden`` (e.g. those that fell away) are left out."""
+def mechanism_figure(model: Model, states: list[tuple[str, State, frozenset[str]]], path: Path, *, monitored: str | None = None) -> Path:
+    """The model in its plane at each of ``states`` (label, State, names of blocks to leave out,
+    e.g. those fallen away by then), blocks coloured by the magnitude of their displacement from
+    the model file, each panel on its own scale (millimetres at equilibrium, decimetres past collapse)."""
     plt = _pyplot()
     from matplotlib.collections import PolyCollection
 
-    shown = np.array([b for b, name in enumerate(model.block_name) if name not in hidden])
-    magnitudes = [np.linalg.norm(s.position[shown] - model.block_centroid[shown], axis=1) * 1e3 for _, s in states]
-    top = max(float(m.max(initial=0.0)) for m in magnitudes) or 1.0
-    fig, axes = plt.subplots(1, len(states), figsize=(5.0 * len(states), 4.2), layout="constrained", squeeze=False)
-    for ax, (label, state), magnitude in zip(axes[0], states, magnitudes):
-        outlines = block_outlines(model, state, shown)
-        polys = PolyCollection(outlines, array=magnitude, cmap="viridis", clim=(0.0, top), edgecolors="k", linewidths=0.3)
+    shown = [np.array([b for b, name in enumerate(model.block_name) if name not in hidden]) for _, _, hidden in states]
+    magnitudes = [np.linalg.norm(s.position[b] - model.block_centroid[b], axis=1) * 1e3 for (_, s, _), b in zip(states, shown)]
+    fig, axes = plt.subplots(1, len(states), figsize=(5.6 * len(states), 4.2), layout="constrained", squeeze=False)
+    for ax, (label, state, _), blocks, magnitude in zip(axes[0], states, shown, magnitudes):
+        outlines = block_outlines(model, state, blocks)
+        polys = PolyCollection(outlines, array=magnitude, cmap="viridis", clim=(0.0, float(magnitude.max(initial=0.0)) or 1.0),
+                               edgecolors="k", linewidths=0.3)
         ax.add_collection(polys)
+        fig.colorbar(polys, ax=ax, label="displacement (mm)", shrink=0.8)
         if monitored is not None:
             b = model.block_index(monitored)
             ax.plot(*state.position[b, [0, 2]], "r+", markersize=10, label=f"monitored: {monitored}")
@@ -85,7 +84,6 @@ def mechanism_figure(
         ax.autoscale_view()
         ax.set_aspect("equal")
         ax.set(title=label, xlabel="x (m)", ylabel="z (m)")
-    fig.colorbar(polys, ax=axes[0].tolist(), label="displacement (mm)", shrink=0.8)
     fig.savefig(path, dpi=150)
     plt.close(fig)
     return path
