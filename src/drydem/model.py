@@ -108,11 +108,6 @@ class Model:
         except ValueError:
             raise ModelError(f"{self.source}: no block named {name!r}") from None
 
-    def shapes_at(self, position: np.ndarray, rotation: np.ndarray, blocks: np.ndarray | None = None) -> list[ConvexPolyhedron]:
-        """Geometry of ``blocks`` (default: all) with centroids ``position`` (k, 3) and rotations (k, 3, 3)."""
-        indices = range(self.n_blocks) if blocks is None else blocks
-        return [self.block_shape[b].transformed(r, x - r @ self.block_shape[b].centroid) for b, x, r in zip(indices, position, rotation)]
-
     def replace(self, *, density: float | None = None, **changes) -> Model:
         """A copy with some parameters changed: joint, contacts, supports, solver, or one
         ``density`` (kg/m3) for every block."""
