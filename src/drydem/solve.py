@@ -3,7 +3,8 @@
 A :class:`Simulation` holds a frozen :class:`~drydem.model.Model`, the mutable
 :class:`~drydem.state.State` and the current :class:`~drydem.contacts.SubContacts`.
 Contacts are re-detected whenever two neighbouring blocks may have moved half the
-contact tolerance relative to each other since the last detection, or any block may have
+contact tolerance relative to each other (separated ones: their separation) since their
+pair was last looked at, or any block may have
 moved far enough for a block outside its neighbour list to reach it (bounds on every
 point's displacement, so no new touch is missed: :func:`drydem.kernels.detection_slack`);
 each detection recomputes the timestep (or, with mass scaling, the fictitious masses at
