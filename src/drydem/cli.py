@@ -86,13 +86,12 @@ def _settle(sim: Simulation) -> None:
 @click.option("--adaptive", is_flag=True, help="Coarse steps, then bisection down to the increment.")
 @click.option("--stop-displacement", type=float, default=0.10, show_default=True, help="Monitored horizontal displacement that ends the run, m.")
 @click.option("--criterion", type=click.Choice(CRITERIA), help="Equilibrium criterion (default: the model file's).")
-@click.option("--mass-scaling", is_flag=True, help="Fictitious inertia for faster statics (about 1.5x fewer cycles).")
 @click.option("--loading", type=click.Choice(["tilt", "multiplier"]), default="tilt", show_default=True, help="Tilt the gravity or add lambda g horizontally.")
 @click.option("--monitor", help="Block whose centroid is monitored (default: the top block nearest the middle).")
 @click.option("--max-angle", type=float, default=80.0, show_default=True, help="Largest tilt tried, deg.")
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), help="Results folder (default: results/TARGET-TIME).")
 @click.option("--resume", is_flag=True, help="Go on from the checkpoint in --out (same TARGET and options).")
-def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_displacement, criterion, mass_scaling, loading, monitor, max_angle, out, resume) -> None:
+def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_displacement, criterion, loading, monitor, max_angle, out, resume) -> None:
     """Tilting-table analysis of TARGET (a model file or a shipped example): collapse angle,
     pushover curve, Eurocode 8 drift-limit angles, plots."""
     from tqdm import tqdm
@@ -103,9 +102,7 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_di
 
     try:
         path = examples.resolve(target)
-        model = _with_overrides(
-            load_model(path), kn=kn, ks=ks, friction=friction, points=points, density=density, criterion=criterion, mass_scaling=mass_scaling
-        )
+        model = _with_overrides(load_model(path), kn=kn, ks=ks, friction=friction, points=points, density=density, criterion=criterion)
         settings = TiltSettings(
             increment_deg=increment, adaptive=adaptive, stop_displacement_m=stop_displacement, loading=loading,
             monitor=monitor, max_angle_deg=max_angle,
@@ -155,15 +152,14 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_di
     click.echo(f"cycles          {result.cycles} in {result.runtime_s:.1f} s; results in {out}")
 
 
-def _with_overrides(model: Model, *, kn, ks, friction, points, density, criterion, mass_scaling) -> Model:
+def _with_overrides(model: Model, *, kn, ks, friction, points, density, criterion) -> Model:
     """The model with the command-line options that were given."""
     joint = {k: v for k, v in {"kn": kn, "ks": ks, "friction": friction}.items() if v is not None}
-    solver = {k: v for k, v in {"criterion": criterion, "mass_scaling": mass_scaling or None}.items() if v is not None}
     changes = {}
     if joint:
         changes["joint"] = replace(model.joint, **joint)
     if points is not None:
         changes["contacts"] = replace(model.contacts, points_per_length=points)
-    if solver:
-        changes["solver"] = replace(model.solver, **solver)
+    if criterion is not None:
+        changes["solver"] = replace(model.solver, criterion=criterion)
     return model.replace(density=density, **changes) if changes or density is not None else model

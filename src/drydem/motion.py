@@ -81,16 +81,15 @@ def critical_timestep(mass: np.ndarray, inertia_body: np.ndarray, movable: np.nd
 def scaled_inertia(
     mass: np.ndarray, inertia_body: np.ndarray, k_t: np.ndarray, k_r: np.ndarray, timestep: float, safety: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Fictitious masses m' = C K_t and inertias I' = C K_r, C = (dt / safety)^2 (see module docstring).
-
-    Blocks whose springs do not hold every rotation (K_r singular: free flight, a single point)
-    keep their true mass and inertia.
-    """
+    """Fictitious masses m' = C K_t and inertias I' = C (K_r + delta 1), C = (dt / safety)^2 (see
+    module docstring); delta = 1e-3 trace(K_r) / 3 keeps I' invertible where the springs do not
+    hold every rotation (a block rocking on one edge) and leaves every block stable at dt.
+    Blocks without springs keep their true mass and inertia (free flight is dynamics)."""
     c = (timestep / safety) ** 2
-    smallest = np.linalg.eigvalsh(k_r)[:, 0]
-    sprung = (k_t > 0) & (smallest > 1e-9 * np.abs(k_r).max(axis=(1, 2)))
+    sprung = k_t > 0
+    delta = 1e-3 * np.trace(k_r, axis1=1, axis2=2) / 3.0
     m = np.where(sprung, c * k_t, mass)
-    inertia = np.where(sprung[:, None, None], c * k_r, inertia_body)
+    inertia = np.where(sprung[:, None, None], c * (k_r + delta[:, None, None] * np.eye(3)), inertia_body)
     return m, inertia
 
 

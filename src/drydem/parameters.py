@@ -112,7 +112,8 @@ class SolverSettings:
 
     damping : local damping coefficient alpha (paper Eq. 4), 0 <= alpha < 1.
     timestep_safety : fraction of the critical timestep used, 0 < f <= 1.
-    mass_scaling : scale each block's inertia to its contact stiffness (statics only).
+    mass_scaling : scale each block's inertia to its contact stiffness (statics only; it can
+        blow up in collapse flows, where fictitious masses differ a lot between neighbours).
     criterion : "ratio" (max unbalanced force / mean weight < ``ratio``) or
         "velocity" (max block point speed < ``max_velocity``, m/s; the paper's 1e-13).
     max_cycles : cycles allowed for one equilibrium before it is reported as not converged.

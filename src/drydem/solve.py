@@ -173,6 +173,7 @@ class Simulation:
                 self._scaled_timestep = dt
             dt = self._scaled_timestep
             mass, inertia = scaled_inertia(mass, inertia, k_t, k_r, dt, solver.timestep_safety)
+            self._keep_kinetic_energy(mass, inertia)
         self.timestep = float(dt)
         movable = m.block_movable & self.active
         self._blocks = BlockArrays(
@@ -184,6 +185,20 @@ class Simulation:
             radius=m.block_radius,
             origin=m.block_centroid,
         )
+
+    def _keep_kinetic_energy(self, mass: np.ndarray, inertia: np.ndarray) -> None:
+        """Rescale velocities when fictitious masses change, so that each block keeps its kinetic
+        energy (a change of fictitious inertia must not create or destroy energy)."""
+        if not hasattr(self, "_blocks"):
+            return
+        old = self._blocks
+        old_mass = np.divide(1.0, old.inv_mass, out=np.zeros_like(old.inv_mass), where=old.inv_mass > 0)
+        self.state.velocity[:] *= np.sqrt(np.divide(old_mass, mass, out=np.ones_like(mass), where=mass > 0))[:, None]
+        rot = matrices(self.state.quaternion)
+        omega_body = np.einsum("nji,nj->ni", rot, self.state.angular_velocity)
+        before = np.einsum("ni,nij,nj->n", omega_body, old.inertia_body, omega_body)
+        after = np.einsum("ni,nij,nj->n", omega_body, inertia, omega_body)
+        self.state.angular_velocity[:] *= np.sqrt(np.divide(before, after, out=np.ones_like(after), where=after > 0))[:, None]
 
     def _free_flight_timestep(self) -> float:
         """Timestep with no springs: a tenth of the time to fall through the contact tolerance."""
