@@ -71,3 +71,35 @@ def test_a_long_free_fall_is_not_mistaken_for_divergence():
     sim = dd.Simulation(model)
     sim.cycle(int(1.5 / sim.timestep))
     assert sim.state.velocity[1, 2] == pytest.approx(-dd.G * sim.cycles * sim.timestep, rel=1e-9)
+
+
+def test_restoring_a_snapshot_replays_the_same_path():
+    # snapshot -> cycle -> restore -> cycle again: the same states, to the bit (shear history,
+    # neighbour snapshots and the blocks in the analysis all come back)
+    sim = dd.Simulation(stack_model([0.0055] * 3))
+    sim.cycle_to_equilibrium(gravity=tilted_gravity(10.0))
+    saved = sim.snapshot()
+    sim.cycle(3000, gravity=tilted_gravity(40.0))
+    first = sim.state.copy(), sim.contacts.shear_force.copy(), sim.cycles
+    sim.restore(saved)
+    sim.cycle(3000, gravity=tilted_gravity(40.0))
+    for a, b in zip(first[0], sim.state):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(first[1], sim.contacts.shear_force)
+    assert first[2] == sim.cycles
+
+
+def test_removed_blocks_stop_moving_and_let_go_of_the_others():
+    # take the middle block of a 3-stack out: it stays where it is, while the top one loses its
+    # support, falls one block height through it and comes to rest on the bottom one
+    sim = dd.Simulation(stack_model([0.0055] * 3))
+    sim.cycle_to_equilibrium()
+    held = sim.state.position[2].copy()
+    sim.remove_blocks([2])
+    assert not (sim.contacts.pairs == 2).any()
+    top = sim.state.position[3, 2]
+    assert sim.cycle_to_equilibrium().converged
+    np.testing.assert_array_equal(sim.state.position[2], held)
+    assert top - sim.state.position[3, 2] == pytest.approx(0.0055, abs=1e-5)  # fell one block height
+    # the bottom block is in equilibrium: the contacts on it (base below, top block above) balance its weight
+    assert sim.reactions(1)[2] == pytest.approx(sim.model.block_mass[1] * dd.G, rel=1e-4)
