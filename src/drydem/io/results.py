@@ -37,13 +37,6 @@ class PushoverWriter:
             )
 
 
-def read_pushover(path: Path) -> dict[str, list[float]]:
-    """The columns of a ``pushover.csv`` as lists of floats."""
-    with Path(path).open(newline="") as f:
-        rows = list(csv.DictReader(f))
-    return {column: [float(row[column]) for row in rows] for column in PUSHOVER_COLUMNS}
-
-
 def summary(result: TiltResult, model: Model) -> dict:
     """The content of ``summary.json``."""
     return {
