@@ -30,7 +30,7 @@ def time_engine(run_cycles, sim, cycles: int, gravity) -> float:
         state = sim.state.copy()
         contacts = sim.contacts.copy()
         start = time.perf_counter()
-        n, code, _ = run_cycles(
+        n, code, _, _ = run_cycles(
             state, sim._blocks, contacts, JointArrays.of(sim.model.joint), gravity, sim.timestep, 0.8, cycles,
             kernels.RATIO, -1.0, 1.0, 1.0, state.copy(), sim.neighbours._replace(limit=np.full(len(sim.neighbours.pairs), np.inf)), np.inf,
         )

@@ -87,3 +87,25 @@ def test_tilt_with_an_unknown_monitored_block_names_it():
 def test_resume_needs_a_checkpoint(tmp_path):
     result = CliRunner().invoke(main, ["tilt", "perforated_wall", "--resume", "--out", str(tmp_path)])
     assert result.exit_code == 1 and "--resume needs --out DIR holding a checkpoint.npz" in result.output
+
+
+def test_ctrl_c_stops_the_tilt_cleanly_and_says_how_to_resume(tmp_path):
+    # a real process and a real SIGINT: numba must not crash on it (it did, while boxing a
+    # NamedTuple return value), and what was found stays on disk for --resume
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "run"
+    command = [sys.executable, "-c", "from drydem.cli import main; main()", "tilt", "perforated_wall", "--out", str(out)]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    csv = out / "pushover.csv"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and not (csv.is_file() and len(csv.read_text().splitlines()) >= 3):
+        time.sleep(0.2)
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 130, err[-500:]
+    assert "--resume" in err
+    assert (out / "checkpoint.npz").is_file() and len(csv.read_text().splitlines()) >= 3

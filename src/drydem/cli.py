@@ -129,6 +129,9 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_di
             )
         except DrydemError as exc:
             raise click.ClickException(str(exc)) from None
+        except KeyboardInterrupt:
+            click.echo(f"\ninterrupted; what was found is in {out}. Go on with the same command plus --out {out} --resume", err=True)
+            raise SystemExit(130) from None
     write_summary(out, result, model)
     pushover_figure(result, out / "pushover.png", title=path.stem)
     collapse = result.collapse_angle_deg

@@ -19,8 +19,6 @@ the tests hold this one to, and shares the loop (``make_run_cycles``).
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import numba
 import numpy as np
 
@@ -38,13 +36,6 @@ RATIO, VELOCITY = 0, 1
 #: LLVM fast-math flags for the contact loop: reassociation and fused multiply-add, but
 #: NaN and infinity keep their meaning (the divergence guard relies on them)
 FASTMATH = {"contract", "reassoc", "arcp", "nsz"}
-
-
-class StepStats(NamedTuple):
-    """What the last cycle measured: unbalanced-force ratio and maximum block point speed (m/s)."""
-
-    ratio: float
-    max_speed: float
 
 
 @numba.njit(cache=True)
@@ -292,7 +283,9 @@ def make_run_cycles(step_function, *, jit: bool):
     ``run_cycles(state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit,
     force_scale, travel_slack, broad_state, neighbours, absolute_limit)`` cycles
     until converged, re-detection needed, diverged or ``max_cycles``, and returns (cycles run,
-    exit code, StepStats of the last cycle). ``force_scale`` (N) is the ratio's denominator
+    exit code, unbalanced-force ratio and max point speed of the last cycle) as plain numbers:
+    boxing a NamedTuple on return calls Python, and a pending Ctrl-C raised there crashes numba.
+    ``force_scale`` (N) is the ratio's denominator
     (mean weight of the free blocks); the last three arguments go to :func:`detection_slack`,
     which runs only once the blocks may have used up the slack it last found.
 
@@ -311,23 +304,23 @@ def make_run_cycles(step_function, *, jit: bool):
         rot = np.empty((nb, 3, 3))
         force = np.empty((nb, 3))
         moment = np.empty((nb, 3))
-        stats = StepStats(np.inf, np.inf)
+        ratio, speed = np.inf, np.inf
         g = np.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
         largest_radius = blocks.radius.max()
         slack, moved = -1.0, 0.0
         for cycle in range(max_cycles):
             unbalanced, speed, kinetic, travel = step_function(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment)
-            stats = StepStats(unbalanced / force_scale, speed)
+            ratio = unbalanced / force_scale
             if not (speed < np.inf and kinetic <= DIVERGENCE_FACTOR * g * (travel + travel_slack)):
-                return cycle + 1, DIVERGED, stats
-            if (criterion == RATIO and stats.ratio < limit) or (criterion == VELOCITY and speed < limit):
-                return cycle + 1, CONVERGED, stats
+                return cycle + 1, DIVERGED, ratio, speed
+            if (criterion == RATIO and ratio < limit) or (criterion == VELOCITY and speed < limit):
+                return cycle + 1, CONVERGED, ratio, speed
             moved += _motion_bound(state, largest_radius, dt)
             if moved >= slack:
                 slack, moved = detection_slack(state, broad_state, neighbours, blocks.radius, absolute_limit), 0.0
                 if slack <= 0.0:
-                    return cycle + 1, REDETECT, stats
-        return max_cycles, RUNNING, stats
+                    return cycle + 1, REDETECT, ratio, speed
+        return max_cycles, RUNNING, ratio, speed
 
     return numba.njit(cache=True)(run_cycles) if jit else run_cycles
 

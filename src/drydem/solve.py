@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -42,6 +43,13 @@ G = 9.81
 NEIGHBOUR_MARGIN = 10.0
 #: cycles run in one call of the kernel loop between progress reports
 CHUNK = 5_000
+
+
+class StepStats(NamedTuple):
+    """What the last cycle measured: unbalanced-force ratio and maximum block point speed (m/s)."""
+
+    ratio: float
+    max_speed: float
 
 
 @dataclass(frozen=True)
@@ -239,7 +247,7 @@ class Simulation:
         return self._run(gravity, n, criterion=kernels.RATIO, limit=-1.0, criterion_name="none")
 
     def cycle_to_equilibrium(
-        self, *, gravity=(0.0, 0.0, -G), solver: SolverSettings | None = None, progress: Callable[[int, kernels.StepStats], None] | None = None
+        self, *, gravity=(0.0, 0.0, -G), solver: SolverSettings | None = None, progress: Callable[[int, StepStats], None] | None = None
     ) -> EquilibriumResult:
         """Cycle until at rest (see module docstring); non-convergence is returned, not hidden.
 
@@ -266,13 +274,14 @@ class Simulation:
         joint = JointArrays.of(m.joint)
         travel_slack = m.total_mass * m.contact_tolerance
         done, detections = 0, 0
-        code, stats = kernels.RUNNING, kernels.StepStats(np.inf, np.inf)
+        code, stats = kernels.RUNNING, StepStats(np.inf, np.inf)
         while done < max_cycles:
-            n, code, stats = run_cycles(
+            n, code, ratio, speed = run_cycles(
                 self.state, self._blocks, self.contacts, joint, g, self.timestep,
                 m.solver.damping, min(CHUNK, max_cycles - done), criterion, limit, max(weight, 1e-300), travel_slack,
                 self._broad_state, self.neighbours, self._absolute_limit,
             )
+            stats = StepStats(ratio, speed)
             done += n
             self.cycles += n
             if progress is not None:
