@@ -98,6 +98,9 @@ class NeighbourList(NamedTuple):
     quaternion: np.ndarray
     limit: np.ndarray
 
+    def copy(self) -> NeighbourList:
+        return NeighbourList(*(a.copy() for a in self))
+
     @classmethod
     def empty(cls) -> NeighbourList:
         return cls(np.zeros((0, 2), np.int64), np.zeros((0, 2, 3)), np.zeros((0, 2, 4)), np.zeros(0))

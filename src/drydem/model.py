@@ -115,15 +115,13 @@ class Model:
         unknown = set(changes) - allowed
         if unknown:
             raise TypeError(f"Model.replace accepts density and {sorted(allowed)}, not {sorted(unknown)}")
-        blocks = [Block(name=n, shape=s, fixed=bool(f.all())) for n, s, f in zip(self.block_name, self.block_shape, self.block_fixed)]
-        if density is None:
-            per_block = self.block_mass / np.array([s.volume for s in self.block_shape])
-        elif not (np.isfinite(density) and density > 0):
-            raise ModelError(f"{self.source}: density = {density!r}: must be a positive number (kg/m3)")
-        else:
-            per_block = np.full(self.n_blocks, float(density))
+        current = self.block_mass / np.array([s.volume for s in self.block_shape])
+        blocks = [
+            Block(name=n, shape=s, fixed=bool(f.all()), density=None if density is not None else float(rho))
+            for n, s, f, rho in zip(self.block_name, self.block_shape, self.block_fixed, current)
+        ]
         params = dict(joint=self.joint, contacts=self.contacts, supports=self.supports, solver=self.solver) | changes
-        return _assemble(blocks, per_block, source=self.source, **params)
+        return build_model(blocks, density=density if density is not None else float(current.max()), source=self.source, **params)
 
 
 def build_model(

@@ -35,9 +35,8 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment):
     moment[:] = 0.0
 
     # sub-contact kinematics, one row per sub-contact
-    contact = np.repeat(np.arange(len(sub.pairs)), np.diff(sub.start))
-    a, b = sub.pairs[contact, 0], sub.pairs[contact, 1]
-    n = _apply(rot[a], sub.normal_body[contact])
+    a, b = sub.block_ref, sub.block_inc
+    n = _apply(rot[a], sub.normal_body[sub.contact])
     arm_b = _apply(rot[b], sub.point_inc_body)
     x_b = pos[b] + arm_b
     arm_a = x_b - pos[a]

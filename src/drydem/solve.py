@@ -98,6 +98,7 @@ class Simulation:
         self.contacts = contacts.SubContacts.empty()
         self.neighbours = contacts.NeighbourList.empty()
         self.active = np.ones(model.n_blocks, dtype=bool)
+        self._blocks: BlockArrays | None = None
         self.cycles = 0
         self.detections = 0
         self._fixed_timestep = timestep
@@ -197,7 +198,7 @@ class Simulation:
     def _keep_kinetic_energy(self, mass: np.ndarray, inertia: np.ndarray) -> None:
         """Rescale velocities when fictitious masses change, so that each block keeps its kinetic
         energy (a change of fictitious inertia must not create or destroy energy)."""
-        if not hasattr(self, "_blocks"):
+        if self._blocks is None:
             return
         old = self._blocks
         old_mass = np.divide(1.0, old.inv_mass, out=np.zeros_like(old.inv_mass), where=old.inv_mass > 0)
@@ -226,7 +227,7 @@ class Simulation:
     def snapshot(self) -> Snapshot:
         """Everything needed to resume cycling from now (see :meth:`restore`)."""
         return Snapshot(
-            state=self.state.copy(), contacts=self.contacts.copy(), neighbours=contacts.NeighbourList(*(a.copy() for a in self.neighbours)),
+            state=self.state.copy(), contacts=self.contacts.copy(), neighbours=self.neighbours.copy(),
             broad_state=self._broad_state.copy(), active=self.active.copy(), cycles=self.cycles, scaled_timestep=self._scaled_timestep,
         )
 
@@ -234,7 +235,7 @@ class Simulation:
         """Go back to a :meth:`snapshot` (its arrays are copied, so it can be restored again)."""
         self.state = snapshot.state.copy()
         self.contacts = snapshot.contacts.copy()
-        self.neighbours = contacts.NeighbourList(*(a.copy() for a in snapshot.neighbours))
+        self.neighbours = snapshot.neighbours.copy()
         self._broad_state = snapshot.broad_state.copy()
         self.active = snapshot.active.copy()
         self.cycles = snapshot.cycles
