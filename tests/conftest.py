@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -55,10 +57,17 @@ def tilted_gravity(theta_deg: float, turn_deg: float = 0.0) -> np.ndarray:
     return turned(dd.G * np.array([np.sin(t), 0.0, -np.cos(t)]), turn_deg)
 
 
+def layout_blocks(courses: str) -> list[dd.Block]:
+    """The blocks of a brick layout (drydem.layout; top course first) of the paper's bricks, on a fixed base."""
+    from drydem.brief import PAPER_BRICK
+    from drydem.layout import parse_layout
+
+    return parse_layout(textwrap.dedent(courses), PAPER_BRICK).blocks(PAPER_BRICK)
+
+
 @pytest.fixture(scope="session")
 def benchmark_wall() -> dd.Model:
-    """The paper's 8 x 27 brick wall, running bond, 33 % voids, in-plane (fixed in y)."""
-    from drydem.walls import BENCHMARK_OPENINGS, running_bond_wall
+    """The built-in perforated_wall: 8 x 27 bricks, running bond, 33 % voids, in-plane (fixed in y), kn = ks = 3e7."""
+    from drydem.walls import benchmark_wall
 
-    blocks = running_bond_wall(courses=27, bricks_per_course=8, openings=BENCHMARK_OPENINGS)
-    return dd.build_model(blocks, density=1800.0, joint=dd.JointMaterial(kn=3e7, ks=3e7), supports=dd.Supports(fix_y=True))
+    return benchmark_wall(kn=3e7)

@@ -27,13 +27,13 @@ def test_bad_model_exits_with_its_message(tmp_path):
 
 
 def small_wall_file(tmp_path):
-    """A 4-brick x 6-course running-bond wall (no openings) as a model file."""
+    """A 2-brick x 6-course running-bond wall (no openings) as a model file."""
     from drydem.io.model_file import save_model
-    from drydem.walls import running_bond_wall
     import drydem as dd
+    from conftest import layout_blocks
 
     model = dd.build_model(
-        running_bond_wall(courses=6, bricks_per_course=2), density=1800.0,
+        layout_blocks("bBb\nBB\n" * 3), density=1800.0,
         joint=dd.JointMaterial(kn=1e8, ks=1e8, friction=0.5), supports=dd.Supports(fix_y=True),
     )
     path = tmp_path / "small_wall.toml"

@@ -10,7 +10,7 @@ from scipy.spatial.transform import Rotation
 import drydem as dd
 from drydem import contacts
 from drydem.rotation import matrices
-from conftest import BRICK, box_vertices
+from conftest import BRICK, box_vertices, layout_blocks
 
 
 def detect_boxes(boxes, *, points, tolerance, rotation=np.eye(3)):
@@ -206,10 +206,16 @@ def test_compiled_narrow_phase_matches_the_python_one_on_random_clouds(seed):
 def test_compiled_narrow_phase_matches_on_a_wall_with_turned_and_rocked_bricks(along, across):
     # every brick of a small wall turned a little about random axes: contact polygons that are
     # not rectangles (clipped grid), rocking gaps, points dropped beyond the tolerance
-    from drydem.walls import Opening, running_bond_wall
-
     rng = np.random.default_rng(along * 10 + across)
-    blocks = running_bond_wall(courses=6, bricks_per_course=3, openings=(Opening(course_start=2, course_stop=4, half_start=2, half_stop=4),))
+    # 4 bricks x 6 courses, a 2 x 2 half-brick opening under a lintel
+    blocks = layout_blocks("""
+        BBBB
+        bBBBb
+        bLb
+        B__B
+        bb__bb
+        BBBB
+    """)
     shapes = []
     for b in blocks:
         turn = np.eye(3) if b.fixed else Rotation.from_rotvec(rng.normal(scale=0.01, size=3)).as_matrix()

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 import drydem as dd
-from drydem import examples
 from drydem.io.model_file import load_model, save_model
 from drydem.walls import benchmark_wall
 
@@ -44,15 +43,6 @@ def test_the_issue_example_loads(tmp_path):
     assert model.block_mass[1] == pytest.approx(1800 * 0.025 * 0.012 * 0.0055)
     assert model.block_fixed[0].all() and model.block_fixed[1].tolist() == [False, True, False, False, False, False]
     assert model.joint == dd.JointMaterial(kn=3e7, ks=3e7, friction=0.5)
-
-
-def test_shipped_example_is_the_benchmark_wall():
-    shipped = load_model(examples.resolve("perforated_wall"))
-    built = benchmark_wall()
-    assert shipped.block_name == built.block_name
-    np.testing.assert_allclose(shipped.block_centroid, built.block_centroid, atol=1e-15)
-    np.testing.assert_allclose(shipped.block_mass, built.block_mass, rtol=1e-12)
-    assert shipped.joint == built.joint and shipped.supports == built.supports and shipped.contacts == built.contacts
 
 
 def test_save_and_load_round_trip(tmp_path):

@@ -10,15 +10,30 @@ from pathlib import Path
 import click
 import numpy as np
 
-from drydem import __version__, examples
+from drydem import __version__, designs
 from drydem.errors import DrydemError
-from drydem.io.model_file import load_model
+from drydem.io.target import Target, load_target
 from drydem.model import Model
 from drydem.parameters import CRITERIA
 from drydem.solve import Simulation
 
 #: the tilting analysis' checkpoint in its results folder
 CHECKPOINT = "checkpoint.npz"
+
+
+#: length units of imported geometry (VRML, OBJ, STL), in metres
+UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001}
+
+unit_option = click.option("--unit", type=click.Choice(list(UNITS)), default="m", show_default=True,
+                           help="Length unit of imported geometry (.wrl, .obj, .stl).")
+
+
+def _target(target: str, unit: str = "m") -> Target:
+    """Load TARGET or exit with its error."""
+    try:
+        return load_target(target, unit_m=UNITS[unit])
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
 
 
 @click.group()
@@ -30,17 +45,25 @@ def main() -> None:
 @main.command()
 @click.argument("target")
 @click.option("--settle", is_flag=True, help="Also cycle to equilibrium under vertical gravity and report the settlement.")
-def check(target: str, settle: bool) -> None:
-    """Validate TARGET (a model file or a shipped example) and print its blocks, contacts and timestep."""
+@unit_option
+def check(target: str, settle: bool, unit: str) -> None:
+    """Validate TARGET (a built-in wall, a wall or model file, or a .wrl/.obj/.stl) and print
+    its blocks, contacts and timestep."""
+    from drydem.brief import brief_violations
+
+    found = _target(target, unit)
+    model = found.model
     try:
-        path = examples.resolve(target)
-        model = load_model(path)
         sim = Simulation(model)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     c = sim.contacts
     movable = model.block_movable
-    click.echo(f"model           {path}")
+    click.echo(f"model           {found.path}")
+    if found.wall is not None:
+        violations = brief_violations(found.wall)
+        click.echo(f"wall            {found.wall.name} {found.wall.title}: {found.wall.layout.void_ratio:.1%} voids, "
+                   + ("meets the competition brief" if not violations else "breaks the brief: " + "; ".join(violations)))
     click.echo(f"blocks          {model.n_blocks} ({int(movable.sum())} movable, {int((~movable).sum())} fixed)")
     click.echo(f"mass            {model.total_mass:.6g} kg (movable blocks)")
     density = model.contact_density
@@ -91,18 +114,19 @@ def _settle(sim: Simulation) -> None:
 @click.option("--max-angle", type=float, default=80.0, show_default=True, help="Largest tilt tried, deg.")
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), help="Results folder (default: results/TARGET-TIME).")
 @click.option("--resume", is_flag=True, help="Go on from the checkpoint in --out (same TARGET and options).")
-def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_displacement, criterion, loading, monitor, max_angle, out, resume) -> None:
-    """Tilting-table analysis of TARGET (a model file or a shipped example): collapse angle,
-    pushover curve, Eurocode 8 drift-limit angles, plots."""
+@unit_option
+def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_displacement, criterion, loading, monitor, max_angle, out, resume, unit) -> None:
+    """Tilting-table analysis of TARGET (a built-in wall, a wall or model file, or a
+    .wrl/.obj/.stl): collapse angle, pushover curve, Eurocode 8 drift-limit angles, plots."""
     from tqdm import tqdm
 
     from drydem.analysis.tilt import TiltSettings, tilt_analysis
     from drydem.io.results import PushoverWriter, write_summary
     from drydem.report.plots import mechanism_figure, pushover_figure
 
+    found = _target(target, unit)
     try:
-        path = examples.resolve(target)
-        model = _with_overrides(load_model(path), kn=kn, ks=ks, friction=friction, points=points, density=density, criterion=criterion)
+        model = _with_overrides(found.model, kn=kn, ks=ks, friction=friction, points=points, density=density, criterion=criterion)
         settings = TiltSettings(
             increment_deg=increment, adaptive=adaptive, stop_displacement_m=stop_displacement, loading=loading,
             monitor=monitor, max_angle_deg=max_angle,
@@ -113,9 +137,9 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_di
         raise click.ClickException(str(exc)) from None
     if resume and (out is None or not (out / CHECKPOINT).is_file()):
         raise click.ClickException(f"--resume needs --out DIR holding a {CHECKPOINT} from an earlier run")
-    out = out or Path("results") / f"{path.stem}-{datetime.now():%Y%m%d-%H%M%S}"
+    out = out or Path("results") / f"{found.name}-{datetime.now():%Y%m%d-%H%M%S}"
     out.mkdir(parents=True, exist_ok=True)
-    click.echo(f"{path}: {model.n_blocks} blocks, kn {model.joint.kn:.3g} Pa/m, ks {model.joint.ks:.3g} Pa/m, "
+    click.echo(f"{found.name} ({found.path}): {model.n_blocks} blocks, kn {model.joint.kn:.3g} Pa/m, ks {model.joint.ks:.3g} Pa/m, "
                f"mu {model.joint.friction:g}, {model.contacts.points_per_length} points per length -> {out}")
     with tqdm(desc="tilting", unit=" cycles", unit_scale=True, leave=False) as bar:
 
@@ -133,7 +157,7 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_di
             click.echo(f"\ninterrupted; what was found is in {out}. Go on with the same command plus --out {out} --resume", err=True)
             raise SystemExit(130) from None
     write_summary(out, result, model)
-    pushover_figure(result, out / "pushover.png", title=path.stem)
+    pushover_figure(result, out / "pushover.png", title=found.name)
     collapse = result.collapse_angle_deg
     lost_by_then = frozenset(name for name, theta in result.lost_blocks if collapse is not None and theta <= collapse)
     states = [
@@ -166,3 +190,65 @@ def _with_overrides(model: Model, *, kn, ks, friction, points, density, criterio
     if criterion is not None:
         changes["solver"] = replace(model.solver, criterion=criterion)
     return model.replace(density=density, **changes) if changes or density is not None else model
+
+
+@main.command(name="designs")
+def list_designs() -> None:
+    """List the built-in walls: WD1-WD7 (reconstructions of the seed paper's competition walls)
+    and the examples, with their void ratio, block count and the competition-brief check."""
+    from drydem.brief import brief_violations
+
+    click.echo(f"{'name':<16} {'title':<28} {'voids':>6} {'blocks':>6}  brief")
+    for name in designs.names():
+        wall = _target(name).wall
+        violations = brief_violations(wall)
+        verdict = "ok" if not violations else "breaks it: " + "; ".join(violations)
+        click.echo(f"{name:<16} {wall.title[:28]:<28} {wall.layout.void_ratio:>6.1%} {len(wall.layout.solid_units):>6}  {verdict}")
+    click.echo("WD1-WD7 are reconstructions that obey the brief, not the original drawings (drydem show NAME draws one).")
+
+
+@main.command()
+@click.argument("target")
+@click.option("--out", "-o", type=click.Path(dir_okay=False, path_type=Path), help="PNG file (default: TARGET.png here).")
+@click.option("--strict", is_flag=True, help="Fail if a wall breaks the competition brief.")
+@unit_option
+def show(target: str, out: Path | None, strict: bool, unit: str) -> None:
+    """Draw TARGET as built (bricks, half bricks, headers, lintel, voids, the monitored block) to a PNG."""
+    from drydem.analysis.tilt import monitored_block
+    from drydem.brief import brief_violations
+    from drydem.report.plots import layout_figure
+
+    found = _target(target, unit)
+    model, wall = found.model, found.wall
+    monitored = model.block_name[monitored_block(model)]
+    out = out or Path(f"{found.name}.png")
+    title = found.name if wall is None else f"{wall.name} {wall.title}: {wall.layout.void_ratio:.1%} voids"
+    kinds = wall.layout.kinds() if wall is not None else None
+    voids = wall.layout.void_outlines(wall.brick) if wall is not None else []
+    layout_figure(model, out, kinds=kinds, voids=voids, monitored=monitored, title=title)
+    click.echo(f"{found.name}: {model.n_blocks} blocks, monitored block {monitored} -> {out}")
+    if wall is not None:
+        violations = brief_violations(wall)
+        for violation in violations:
+            click.echo(f"brief: {violation}", err=True)
+        if strict and violations:
+            raise click.ClickException(f"{found.path}: breaks the competition brief ({len(violations)} violations)")
+
+
+@main.command()
+@click.argument("target")
+@click.argument("output", type=click.Path(dir_okay=False, path_type=Path))
+@unit_option
+def export(target: str, output: Path, unit: str) -> None:
+    """Write TARGET's blocks to OUTPUT: a model file (.toml), ParaView (.vtu) or a mesh (.obj, .stl)."""
+    from drydem.io.mesh import write_mesh
+    from drydem.io.model_file import save_model
+    from drydem.io.vtk import write_vtu
+
+    writers = {".toml": save_model, ".vtu": write_vtu, ".obj": write_mesh, ".stl": write_mesh}
+    writer = writers.get(output.suffix.lower())
+    if writer is None:
+        raise click.ClickException(f"{output}: unknown output type {output.suffix!r}; drydem writes {', '.join(writers)}")
+    found = _target(target, unit)
+    writer(found.model, output)
+    click.echo(f"{found.name}: {found.model.n_blocks} blocks -> {output}")

@@ -302,12 +302,13 @@ def _clipped_grid(overlap: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, c
         half = 0.5 * (hi[k] - lo[k]) / max(len(nodes) - 1, 0.5)
         axes.append((nodes, np.clip(nodes - half, lo[k], hi[k]), np.clip(nodes + half, lo[k], hi[k])))
     (un, u0, u1), (vn, v0, v1) = axes
+    sliver = polygon.SLIVER_FRACTION * polygon.signed_area(overlap)
     nodes, areas = [], []
     for i in range(len(un)):
         for j in range(len(vn)):
             cell = polygon.clip(overlap, polygon.rectangle(u0[i], u1[i], v0[j], v1[j]))
             area = polygon.signed_area(cell)
-            if area <= tol * tol:
+            if area <= sliver:
                 continue
             node = np.array([un[i], vn[j]])
             nodes.append(node if _inside(overlap, node, tol) else polygon.centroid(cell))

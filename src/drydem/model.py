@@ -14,8 +14,9 @@ import numpy as np
 
 from drydem import contacts
 from drydem.errors import ModelError
-from drydem.geometry import ConvexPolyhedron
+from drydem.geometry import ConvexPolyhedron, box
 from drydem.parameters import ContactSettings, JointMaterial, SolverSettings, Supports
+from drydem.rotation import matrices
 
 #: default contact tolerance as a fraction of the thinnest movable block (m/m)
 TOLERANCE_FRACTION = 0.05
@@ -35,6 +36,15 @@ class Block:
     shape: ConvexPolyhedron
     density: float | None = None
     fixed: bool = False
+
+
+def base_under(blocks: list[Block], *, overhang_m: float = 0.05, depth_m: float = 0.01) -> Block:
+    """A fixed block named "base" on which ``blocks`` stand: its top at their lowest point,
+    ``overhang_m`` beyond them at each end along x (the tilt direction), as wide as they are in y."""
+    lo = np.min([b.shape.vertices.min(0) for b in blocks], axis=0)
+    hi = np.max([b.shape.vertices.max(0) for b in blocks], axis=0)
+    shape = box([lo[0] - overhang_m, lo[1], lo[2] - depth_m], [hi[0] + overhang_m, hi[1], lo[2]], name="base")
+    return Block(name="base", shape=shape, fixed=True)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -107,6 +117,12 @@ class Model:
             return self.block_name.index(name)
         except ValueError:
             raise ModelError(f"{self.source}: no block named {name!r}") from None
+
+    def world_vertices(self, block: int, position: np.ndarray, quaternion: np.ndarray) -> np.ndarray:
+        """The vertices of ``block`` at centroid ``position`` (3,) m and orientation
+        ``quaternion`` (4,) (body -> world, drydem.state): x = R(q) (v - c0) + position."""
+        shape = self.block_shape[block]
+        return (shape.vertices - shape.centroid) @ matrices(quaternion[None])[0].T + position
 
     def replace(self, *, density: float | None = None, **changes) -> Model:
         """A copy with some parameters changed: joint, contacts, supports, solver, or one

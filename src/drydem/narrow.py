@@ -17,6 +17,8 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
+from drydem.polygon import SLIVER_FRACTION
+
 #: largest number of vertices of a face or a clipped polygon
 MAX_POLYGON = 64
 
@@ -305,6 +307,7 @@ def _clipped(overlap, count, face_a, na, face_b, nb, along, across, au, av, tol,
         high.append(np.minimum(np.maximum(x + half, lo[c]), hi[c]))
     rect = np.empty((4, 2))
     cell = np.empty((MAX_POLYGON, 2))
+    sliver = SLIVER_FRACTION * _area(overlap, count)
     k = 0
     for i in range(nodes[0].shape[0]):
         for j in range(nodes[1].shape[0]):
@@ -314,7 +317,7 @@ def _clipped(overlap, count, face_a, na, face_b, nb, along, across, au, av, tol,
             rect[3, 0], rect[3, 1] = low[0][i], high[1][j]
             m = _clip(overlap, count, rect, 4, cell)
             area = _area(cell, m)
-            if area <= tol * tol:
+            if area <= sliver:
                 continue
             x, y = nodes[0][i], nodes[1][j]
             if not _inside(overlap, count, x, y, tol):

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+#: a clipped grid cell smaller than this fraction of its polygon is round-off, not a sub-contact
+SLIVER_FRACTION = 1e-9
+
 
 def signed_area(poly: np.ndarray) -> float:
     """Shoelace formula, positive for counter-clockwise vertices, m2.

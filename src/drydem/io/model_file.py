@@ -33,6 +33,7 @@ to the default); so are wrong types. Messages name the file, table, block and ke
 from __future__ import annotations
 
 import tomllib
+from contextlib import contextmanager
 from dataclasses import asdict, fields
 from pathlib import Path
 
@@ -52,29 +53,48 @@ BLOCK_KEYS = {"name", "fixed", "density", "box", "vertices"}
 def load_model(path: str | Path) -> Model:
     """Read and validate a model file; raises ModelError naming the file and the culprit."""
     path = Path(path)
+    return model_from_dict(read_toml(path), source=str(path))
+
+
+def read_toml(path: Path) -> dict:
+    """A TOML file's tables; ModelError naming the file if it cannot be read or parsed."""
     try:
         text = path.read_text()
     except OSError as exc:
-        raise ModelError(f"{path}: cannot read the model file ({exc.strerror})") from None
+        raise ModelError(f"{path}: cannot read the file ({exc.strerror})") from None
     try:
-        data = tomllib.loads(text)
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ModelError(f"{path}: not valid TOML: {exc}") from None
-    return model_from_dict(data, source=str(path))
 
 
 def model_from_dict(data: dict, *, source: str = "<dict>") -> Model:
     """Build a model from the parsed TOML structure (see module docstring)."""
     _no_unknown(data, {"material", "block", *SECTIONS}, source, "top level")
-    try:
-        params = {name: _section(data.get(name, {}), cls, name, source) for name, cls in SECTIONS.items()}
-        material = data.get("material", {})
-        _no_unknown(material, {"density"}, source, "[material]")
-        density = material.get("density", 1800.0)
+    with errors_naming(source):
+        params = parameters_from_dict(data, source)
         blocks = data.get("block")
         if not isinstance(blocks, list) or not blocks:
             raise ModelError(f"{source}: no [[block]] entries")
-        return build_model([_block(b, i, source) for i, b in enumerate(blocks)], density=density, source=source, **params)
+        return build_model([_block(b, i, source) for i, b in enumerate(blocks)], source=source, **params)
+
+
+def parameters_from_dict(data: dict, source: str) -> dict:
+    """The keyword arguments of :func:`build_model` other than the blocks, from the tables
+    ``[material]`` (density, kg/m3, default 1800), ``[joint]``, ``[contacts]``, ``[supports]``
+    and ``[solver]``; each table optional, unknown keys errors."""
+    params = {name: _section(data.get(name, {}), cls, name, source) for name, cls in SECTIONS.items()}
+    material = data.get("material", {})
+    _no_unknown(material, {"density"}, source, "[material]")
+    params["density"] = material.get("density", 1800.0)
+    return params
+
+
+@contextmanager
+def errors_naming(source: str):
+    """Re-raise a DrydemError with ``source`` in front of its message, if not there yet."""
+    try:
+        yield
     except DrydemError as exc:
         message = str(exc)
         raise type(exc)(message if message.startswith(source) else f"{source}: {message}") from None

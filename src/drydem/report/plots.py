@@ -12,7 +12,6 @@ import numpy as np
 from drydem.analysis.drift import EC8_DRIFT_LIMITS
 from drydem.analysis.tilt import TiltResult
 from drydem.model import Model
-from drydem.rotation import matrices
 from drydem.state import State
 
 
@@ -51,12 +50,9 @@ def block_outlines(model: Model, state: State, blocks: np.ndarray) -> list[np.nd
     """Outlines of ``blocks`` in the wall's plane (x, z), m: the hull of the projected vertices."""
     from scipy.spatial import ConvexHull
 
-    rot = matrices(state.quaternion)
     outlines = []
     for b in blocks:
-        shape = model.block_shape[b]
-        world = (shape.vertices - shape.centroid) @ rot[b].T + state.position[b]
-        xz = world[:, [0, 2]]
+        xz = model.world_vertices(b, state.position[b], state.quaternion[b])[:, [0, 2]]
         outlines.append(xz[ConvexHull(xz).vertices])
     return outlines
 
@@ -84,6 +80,42 @@ def mechanism_figure(model: Model, states: list[tuple[str, State, frozenset[str]
         ax.autoscale_view()
         ax.set_aspect("equal")
         ax.set(title=label, xlabel="x (m)", ylabel="z (m)")
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path
+
+
+#: colours of the layout drawing, by unit kind (drydem.layout)
+KIND_COLOURS = {"brick": "#c8703c", "half": "#e0a070", "header": "#8c4a2a", "lintel": "#3c6ec8", "void": "white", "base": "0.6"}
+
+
+def layout_figure(model: Model, path: Path, *, kinds: list[str] | None = None, voids: list[np.ndarray] = (),
+                  monitored: str | None = None, title: str = "") -> Path:
+    """The model in its plane as built: blocks coloured by ``kinds`` (one per block: brick,
+    half, header, lintel, base; default brick, base for fixed blocks), ``voids`` (x-z outlines,
+    m) hatched, the ``monitored`` block ringed."""
+    plt = _pyplot()
+    from matplotlib.collections import PolyCollection
+    from matplotlib.patches import Patch
+
+    fixed = model.block_fixed.all(axis=1)
+    kinds = kinds or ["base" if f else "brick" for f in fixed]
+    outlines = block_outlines(model, State.at_rest(model.block_centroid), np.arange(model.n_blocks))
+    fig, ax = plt.subplots(figsize=(6.4, 5.6), layout="constrained")
+    ax.add_collection(PolyCollection(outlines, facecolors=[KIND_COLOURS[k] for k in kinds], edgecolors="k", linewidths=0.4))
+    if len(voids):
+        ax.add_collection(PolyCollection(voids, facecolors="white", edgecolors="0.5", hatch="////", linewidths=0.3))
+    legend = [Patch(facecolor=KIND_COLOURS[k], edgecolor="k", label=k) for k in dict.fromkeys(kinds)]
+    if len(voids):
+        legend.append(Patch(facecolor="white", edgecolor="0.5", hatch="////", label="void"))
+    if monitored is not None:
+        b = model.block_index(monitored)
+        ax.plot(*model.block_centroid[b, [0, 2]], "o", markersize=9, markerfacecolor="none", markeredgecolor="red", markeredgewidth=2)
+        legend.append(plt.Line2D([], [], marker="o", linestyle="", markerfacecolor="none", markeredgecolor="red", label=f"monitored: {monitored}"))
+    ax.autoscale_view()
+    ax.set_aspect("equal")
+    ax.set(title=title, xlabel="x (m)", ylabel="z (m)")
+    ax.legend(handles=legend, loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize="small")
     fig.savefig(path, dpi=150)
     plt.close(fig)
     return path

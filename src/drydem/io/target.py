@@ -1,0 +1,61 @@
+"""What the commands analyse: a built-in wall, a wall file, a model file or an imported mesh."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from drydem import designs
+from drydem.errors import ModelError
+from drydem.io.model_file import model_from_dict, read_toml
+from drydem.model import Model, base_under, build_model
+from drydem.walls import Wall, is_wall_file, wall_from_dict
+
+#: file suffixes read as geometry to import, each closed convex shape a block
+MESH_SUFFIXES = {".wrl": "VRML", ".vrml": "VRML", ".obj": "OBJ", ".stl": "STL"}
+
+
+@dataclass(frozen=True)
+class Target:
+    """A resolved target: its name (for titles and folders), file, model and, for walls, the wall."""
+
+    name: str
+    path: Path
+    model: Model
+    wall: Wall | None = None
+
+
+def load_target(target: str, *, unit_m: float = 1.0) -> Target:
+    """Resolve ``target``: the name of a built-in wall (``drydem designs``), a wall file or a
+    model file (.toml), or geometry to import (.wrl, .obj, .stl; coordinates times ``unit_m``
+    give metres). Imported blocks stand on a fixed base block (drydem.model.base_under) and
+    get the default material and options. ModelError says what was tried."""
+    path = Path(target)
+    if not path.is_file():
+        builtin = designs.find(target)
+        if builtin is None:
+            raise ModelError(f"{target}: no such file, and not a built-in wall ({', '.join(designs.names())})")
+        path = builtin
+    suffix = path.suffix.lower()
+    if suffix in MESH_SUFFIXES:
+        return Target(path.stem, path, imported_model(path, unit_m=unit_m))
+    if suffix != ".toml":
+        known = ", ".join([".toml", *MESH_SUFFIXES])
+        raise ModelError(f"{path}: unknown file type {path.suffix!r}; drydem reads {known}")
+    data = read_toml(path)
+    if is_wall_file(data):
+        wall = wall_from_dict(data, source=str(path), text=path.read_text(), default_name=path.stem)
+        return Target(wall.name, path, wall.model(), wall)
+    return Target(path.stem, path, model_from_dict(data, source=str(path)))
+
+
+def imported_model(path: Path, *, unit_m: float = 1.0) -> Model:
+    """The blocks of a VRML, OBJ or STL file on a fixed base block, density 1800 kg/m3, the
+    default joint and options, no other supports (``drydem export`` writes it as a model file
+    to edit)."""
+    from drydem.io.mesh import read_mesh
+    from drydem.io.vrml import read_vrml
+
+    reader = read_vrml if MESH_SUFFIXES[path.suffix.lower()] == "VRML" else read_mesh
+    blocks = reader(path, unit_m=unit_m)
+    return build_model([base_under(blocks), *blocks], density=1800.0, source=str(path))
