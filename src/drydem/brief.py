@@ -40,8 +40,8 @@ def brief_violations(wall: Wall, brief: Brief = COMPETITION) -> list[str]:
         b = brief.brick
         found.append(f"bricks are not {b.length_m * 1e3:g} x {b.height_m * 1e3:g} x {b.width_m * 1e3:g} mm with a "
                      f"{b.lintel_length_m * 1e3:g} mm lintel")
-    if layout.cells_per_course != 2 * brief.length_bricks:
-        found.append(f"the wall is {layout.cells_per_course / 2:g} bricks long, not {brief.length_bricks}")
+    if layout.cells_per_course != 4 * brief.length_bricks:
+        found.append(f"the wall is {layout.cells_per_course / 4:g} bricks long, not {brief.length_bricks}")
     if len(layout.courses) != brief.courses:
         found.append(f"the wall has {len(layout.courses)} courses, not {brief.courses}")
     if layout.void_ratio < brief.min_void_ratio:
@@ -53,6 +53,9 @@ def brief_violations(wall: Wall, brief: Brief = COMPETITION) -> list[str]:
         found.append("the top course has a void")
     if layout.count("lintel") != brief.lintels:
         found.append(f"{layout.count('lintel')} lintels, not {brief.lintels}")
+    floating = layout.unsupported()
+    if floating:
+        found.append(f"nothing under block(s) {', '.join(floating)}: the wall cannot be built")
     return found
 
 

@@ -1,15 +1,17 @@
 """The brick-layout text format: a wall drawn one course per line, top course first.
 
 The wall lies in the x-z plane (x along the wall, z up, y through its width). Each course
-is a row of *cells*, a cell being half a brick length; a token fills one or more cells::
+is a row of tokens, each as long as it says along the wall::
 
-    B     a full brick (stretcher): 2 cells
-    b     a half brick: 1 cell
-    H     a header brick (turned 90 deg: its width along the wall, its length across it),
-          1 cell; it is centred in the cell, so it leaves a gap of (length/2 - width)/2 each side
-    L     the lintel: lintel_length_m long (default 3 brick lengths, 6 cells)
-    .     a void half a brick long: 1 cell
-    _     a void a brick long: 2 cells
+    B     a full brick (stretcher)
+    b     a half brick
+    H     a header brick (turned 90 deg: its width along the wall, its length across it) in a
+          half-brick slot, centred, leaving a gap of (length/2 - width)/2 on each side
+    L     the lintel: lintel_length_m long (default 3 brick lengths)
+    .     a void half a brick long
+    _     a void a brick long
+    ,     a void a quarter of a brick long: an offset, e.g. for honeycomb bond, where the
+          bricks of a course bear on the ends of two bricks below
 
 A number before a token repeats it (``7B`` = ``BBBBBBB``); spaces are ignored, ``#`` starts
 a comment. The bond and its offsets are written out: a running-bond course starts with a
@@ -20,6 +22,7 @@ courses, the middle one with half bricks at its ends and a brick-long void betwe
     b_b
     BB            # bottom course, on the base block
 
+Internally a course is a row of quarter-brick *cells*.
 Blocks are named ``c{course}b{k}``: course 0 at the bottom, k counting the course's blocks
 from x = 0. The wall's bottom is at z = 0, its left end at x = 0.
 """
@@ -37,12 +40,13 @@ from drydem.model import Block, base_under
 
 #: token -> (kind, cells); the lintel's cells depend on the brick size (None here)
 TOKENS: dict[str, tuple[str, int | None]] = {
-    "B": ("brick", 2),
-    "b": ("half", 1),
-    "H": ("header", 1),
+    "B": ("brick", 4),
+    "b": ("half", 2),
+    "H": ("header", 2),
     "L": ("lintel", None),
-    ".": ("void", 1),
-    "_": ("void", 2),
+    ".": ("void", 2),
+    "_": ("void", 4),
+    ",": ("void", 1),
 }
 _TOKEN = re.compile(r"(\d*)(\S)")
 
@@ -66,12 +70,12 @@ class BrickSize:
             object.__setattr__(self, "lintel_length_m", 3 * self.length_m)
         cells = self.lintel_length_m / self.cell_m
         if abs(cells - round(cells)) > 1e-9 or round(cells) < 1:
-            raise ModelError(f"[brick] lintel_length_m = {self.lintel_length_m}: must be a whole number of half bricks ({self.cell_m} m)")
+            raise ModelError(f"[brick] lintel_length_m = {self.lintel_length_m}: must be a whole number of quarter bricks ({self.cell_m} m)")
 
     @property
     def cell_m(self) -> float:
-        """The layout's unit: half a brick length, m."""
-        return 0.5 * self.length_m
+        """The layout's unit: a quarter of a brick length, m."""
+        return 0.25 * self.length_m
 
     @property
     def lintel_cells(self) -> int:
@@ -125,6 +129,15 @@ class Layout:
             names += [f"c{u.course}b{k}" for k, u in enumerate(solid)]
         return names
 
+    def unsupported(self) -> list[str]:
+        """Names of the blocks above the first course with a void under every one of their cells:
+        nothing holds them up (drawing mistakes, such as a brick straight over an opening)."""
+        solid = np.zeros((len(self.courses), self.cells_per_course), dtype=bool)
+        for u in self.solid_units:
+            solid[u.course, u.start:u.start + u.cells] = True
+        return [name for name, u in zip(self.block_names(), self.solid_units)
+                if u.course > 0 and not solid[u.course - 1, u.start:u.start + u.cells].any()]
+
     def kinds(self) -> list[str]:
         """Each block's kind, in the order of :meth:`blocks`: "base", then the units' kinds."""
         return ["base", *(u.kind for u in self.solid_units)]
@@ -174,8 +187,8 @@ def parse_layout(text: str, brick: BrickSize, *, source: str = "<layout>", first
         length = sum(cells for _, cells in tokens)
         if length != width:
             raise ModelError(
-                f"{source}, line {number}: the course is {length} half bricks long ({length * brick.cell_m:.4g} m); "
-                f"the wall is {width} ({width * brick.cell_m:.4g} m), set by the top course on line {first_number}"
+                f"{source}, line {number}: the course is {length / 4:g} bricks long ({length * brick.cell_m:.4g} m); "
+                f"the wall is {width / 4:g} ({width * brick.cell_m:.4g} m), set by the top course on line {first_number}"
             )
         start, units = 0, []
         for kind, cells in tokens:

@@ -8,8 +8,10 @@ grows by ``increment_deg`` and gravity becomes
                  direction; theta = atan(lambda) is its tilt equivalent)
 
 cycling to equilibrium at each step, until the monitored point has moved
-``stop_displacement_m`` horizontally or equilibrium cannot be reached within the solver's
-``max_cycles``. The collapse angle is the largest tilt at which the model was in equilibrium.
+``stop_displacement_m`` horizontally, the monitored block has fallen out of the model (below,
+a part of the wall that collapses onto the rubble of another may come to rest within the
+stop displacement), or equilibrium cannot be reached within the solver's ``max_cycles``.
+The collapse angle is the largest tilt at which the model was in equilibrium.
 
 Adaptive protocol: steps of ``increment_deg * 2**refinements``; a step that fails is undone
 (the last equilibrium is restored, shear history included) and halved, down to
@@ -159,7 +161,8 @@ class _Run:
         return float(moved[0]), float(moved[2])
 
     def equilibrate(self, theta_deg: float, *, vertical: bool = False) -> tuple[bool, int]:
-        """Cycle at ``theta_deg`` until equilibrium (True), the stop displacement or max cycles (False).
+        """Cycle at ``theta_deg`` until equilibrium (True), the stop displacement, the fall of
+        the monitored block or max cycles (False).
 
         Blocks that fall out are taken out and the cycling goes on, except under vertical
         gravity (stage 1): a model that loses a block under its own weight cannot stand.
@@ -180,16 +183,24 @@ class _Run:
             ux, _ = self.displacement()
             if self.on_progress is not None:
                 self.on_progress(theta_deg, self.sim.cycles, ux)
+            if self.monitor_fell():
+                return False, done
             if result.converged:
                 return True, done
             if abs(ux) >= self.settings.stop_displacement_m or done >= solver.max_cycles:
                 return False, done
 
+    def _dropped(self) -> np.ndarray:
+        """Whether each block's centroid is more than its lost-drop below where it was drawn."""
+        return self.model.block_centroid[:, 2] - self.sim.state.position[:, 2] > self.lost_drop
+
     def _fallen(self) -> np.ndarray:
         """Blocks still in the analysis (but the monitored one) that dropped out of the model."""
-        drop = self.model.block_centroid[:, 2] - self.sim.state.position[:, 2]
-        fallen = np.flatnonzero((drop > self.lost_drop) & self.sim.active & self.model.block_movable)
+        fallen = np.flatnonzero(self._dropped() & self.sim.active & self.model.block_movable)
         return fallen[fallen != self.monitor]
+
+    def monitor_fell(self) -> bool:
+        return bool(self._dropped()[self.monitor])
 
     def record(self, theta_deg: float, cycles: int) -> Record:
         ux, uz = self.displacement()
@@ -261,7 +272,12 @@ def tilt_analysis(
                 step /= 2
                 continue
             ux, _ = run.displacement()
-            ended_by = "stop displacement" if abs(ux) >= settings.stop_displacement_m else "no equilibrium within max_cycles"
+            if run.monitor_fell():
+                ended_by = "monitored block fell"
+            elif abs(ux) >= settings.stop_displacement_m:
+                ended_by = "stop displacement"
+            else:
+                ended_by = "no equilibrium within max_cycles"
             break
         collapse = theta if ended_by != "maximum angle" else None
     return TiltResult(

@@ -1,0 +1,152 @@
+"""Geometry in and out: VRML import, OBJ/STL round trips, VTK export for ParaView."""
+
+import textwrap
+
+import numpy as np
+import pytest
+
+from drydem.errors import ModelError
+from drydem.io.mesh import read_mesh, write_mesh
+from drydem.io.target import load_target
+from drydem.io.vrml import read_vrml
+from drydem.io.vtk import write_vtu
+from drydem.state import State
+from drydem.walls import benchmark_wall
+
+#: two 20 x 12 x 10 mm boxes in millimetres, as Rhino writes them: an IndexedFaceSet under a
+#: Transform, and a Box under a Transform turned 90 deg about z (its 12 x 20 footprint becomes 20 x 12)
+TWO_BOXES = """\
+#VRML V2.0 utf8
+WorldInfo { title "two boxes" info [ "written by the test" ] }
+DEF left Transform {
+  translation 10 0 5
+  children [
+    Shape {
+      appearance Appearance { material Material { diffuseColor 0.8 0.4 0.2 } }
+      geometry IndexedFaceSet {
+        coord Coordinate { point [ -10 -6 -5, 10 -6 -5, 10 6 -5, -10 6 -5,
+                                   -10 -6 5, 10 -6 5, 10 6 5, -10 6 5 ] }
+        coordIndex [ 0 3 2 1 -1, 4 5 6 7 -1, 0 1 5 4 -1, 1 2 6 5 -1, 2 3 7 6 -1, 3 0 4 7 -1 ]
+      }
+    }
+  ]
+}
+Transform {
+  translation 30 0 5
+  rotation 0 0 1 1.5707963267948966
+  children DEF right Shape { geometry Box { size 12 20 10 } }
+}
+"""
+
+
+def write(tmp_path, text, name="wall.wrl"):
+    path = tmp_path / name
+    path.write_text(textwrap.dedent(text))
+    return path
+
+
+def extent(block):
+    return block.shape.vertices.min(0), block.shape.vertices.max(0)
+
+
+def test_vrml_boxes_under_transforms_import_to_the_right_blocks(tmp_path):
+    blocks = read_vrml(write(tmp_path, TWO_BOXES), unit_m=1e-3)
+    assert [b.name for b in blocks] == ["left", "right"]
+    for block, x0 in zip(blocks, (0.0, 0.02)):
+        assert block.shape.volume == pytest.approx(0.02 * 0.012 * 0.01)
+        lo, hi = extent(block)
+        np.testing.assert_allclose(lo, [x0, -0.006, 0.0], atol=1e-12)
+        np.testing.assert_allclose(hi, [x0 + 0.02, 0.006, 0.01], atol=1e-12)
+
+
+def test_vrml_transform_applies_scale_about_its_centre_and_use_repeats_a_node(tmp_path):
+    # ISO/IEC 14772-1, 6.52: P' = T C R SR S SR^-1 C^-1 P; a unit cube scaled x2 in x about
+    # the centre (1, 0, 0) spans x in [-1.5, 0.5] - 1 + ... worked out: x' = 2 (x - 1) + 1
+    text = """\
+    #VRML V2.0 utf8
+    Transform { scale 2 1 1 center 1 0 0 children DEF cube Shape { geometry Box { size 1 1 1 } } }
+    Transform { translation 0 0 5 children USE cube }
+    """
+    scaled, moved = read_vrml(write(tmp_path, text))
+    lo, hi = extent(scaled)
+    np.testing.assert_allclose(lo, [2 * (-0.5 - 1) + 1, -0.5, -0.5])
+    np.testing.assert_allclose(hi, [2 * (0.5 - 1) + 1, 0.5, 0.5])
+    assert (scaled.name, moved.name) == ("cube", "cube-2")
+    np.testing.assert_allclose(moved.shape.centroid, [0, 0, 5])
+
+
+@pytest.mark.parametrize("text, message", [
+    ("#VRML V1.0 ascii\n", r"line 1: not a VRML 2.0 / VRML97 file"),
+    ("#VRML V2.0 utf8\nShape {\n geometry Sphere { radius 1 }\n}\n", r"line 3: unsupported geometry node 'Sphere'"),
+    ("#VRML V2.0 utf8\nPROTO Brick [] { Group {} }\n", r"line 2: PROTO is not supported"),
+    ("#VRML V2.0 utf8\nTransform {\n children [ Shape { geometry Box { size 1 1 1 } }\n", r"unexpected end of file"),
+    ("#VRML V2.0 utf8\nTransform { translation 1 2 children [] }\n", r"line 2: Transform.translation must be 3 numbers"),
+    ("#VRML V2.0 utf8\nShape { geometry IndexedFaceSet {\n coord Coordinate { point [0 0 0, 1 0 0, 0 1 0, 0 0 1] }\n"
+     " coordIndex [0 2 1 -1, 0 1 3 -1, 1 2 3 -1] } }\n", r"line 2: Shape 'shape0': the surface is not closed"),
+])
+def test_bad_vrml_is_named_with_its_line(tmp_path, text, message):
+    path = write(tmp_path, text)
+    with pytest.raises(ModelError, match=message) as caught:
+        read_vrml(path)
+    assert str(caught.value).startswith(str(path))
+
+
+def test_a_non_convex_vrml_shape_is_refused(tmp_path):
+    # an L-shaped prism: its inner corner lies on the hull's top and bottom faces, so only its
+    # volume (3 of the hull's 3.5) gives it away
+    points = [[0, 0, 0], [2, 0, 0], [2, 1, 0], [1, 1, 0], [1, 2, 0], [0, 2, 0]]
+    top = [[x, y, 1] for x, y, _ in points]
+    coords = ", ".join(" ".join(map(str, p)) for p in points + top)
+    sides = ", ".join(f"{i} {(i + 1) % 6} {(i + 1) % 6 + 6} {i + 6} -1" for i in range(6))
+    text = (f"#VRML V2.0 utf8\nDEF ell Shape {{ geometry IndexedFaceSet {{ coord Coordinate {{ point [{coords}] }}\n"
+            f"coordIndex [5 4 3 2 1 0 -1, 6 7 8 9 10 11 -1, {sides}] }} }}\n")
+    with pytest.raises(ModelError, match=r"Shape 'ell': the surface is not convex: it encloses 3 m3, its convex hull 3.5 m3"):
+        read_vrml(write(tmp_path, text))
+
+
+@pytest.mark.parametrize("suffix", [".obj", ".stl"])
+def test_mesh_round_trip_keeps_every_block(tmp_path, suffix):
+    model = load_target("WD3").model
+    path = tmp_path / f"wall{suffix}"
+    write_mesh(model, path)
+    blocks = read_mesh(path)
+    # touching blocks share corners and edges; each comes back whole, in the order written
+    assert len(blocks) == model.n_blocks
+    np.testing.assert_allclose([b.shape.centroid for b in blocks], model.block_centroid, atol=1e-9)
+    np.testing.assert_allclose([b.shape.volume for b in blocks], [s.volume for s in model.block_shape], rtol=1e-6)
+
+
+def test_an_imported_mesh_stands_on_a_fixed_base(tmp_path):
+    path = tmp_path / "boxes.wrl"
+    path.write_text(TWO_BOXES)
+    model = load_target(str(path), unit_m=1e-3).model
+    assert model.block_name == ("base", "left", "right")
+    assert model.block_fixed[0].all() and not model.block_fixed[1:].any()
+    assert model.block_shape[0].vertices[:, 2].max() == pytest.approx(0.0)
+
+
+def test_an_open_mesh_names_its_free_edge(tmp_path):
+    path = tmp_path / "open.obj"
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\n")
+    with pytest.raises(ModelError, match=r"open.obj: part 0 \(from face 0\) is not a closed surface: 3 edge\(s\) are not in exactly two faces"):
+        read_mesh(path)
+
+
+def test_vtk_export_reads_back_with_its_cells_points_and_fields(tmp_path):
+    import meshio
+
+    model = benchmark_wall()
+    state = State.at_rest(model.block_centroid)
+    state.position[5] += [1e-3, 0.0, -2e-3]
+    mesh = meshio.read(write_vtu(model, tmp_path / "wall.vtu", state))
+    assert sum(len(c.data) for c in mesh.cells) == model.n_blocks
+    assert len(mesh.points) == sum(len(s.vertices) for s in model.block_shape)
+    fields = {name: np.concatenate(values) for name, values in mesh.cell_data.items()}
+    assert set(fields) == {"block_id", "fixed", "mass", "displacement", "displacement_magnitude"}
+    np.testing.assert_array_equal(fields["block_id"], np.arange(model.n_blocks))
+    np.testing.assert_allclose(fields["displacement"][5], [1e-3, 0.0, -2e-3])
+    np.testing.assert_allclose(fields["mass"], model.block_mass)
+    assert fields["fixed"].tolist() == [1] + [0] * (model.n_blocks - 1)
+    # the points of block 5 moved with it
+    first = sum(len(s.vertices) for s in model.block_shape[:5])
+    np.testing.assert_allclose(mesh.points[first:first + 8], model.block_shape[5].vertices + [1e-3, 0.0, -2e-3])
