@@ -1,5 +1,7 @@
 """The command line: drydem check."""
 
+import math
+
 import pytest
 from click.testing import CliRunner
 
@@ -172,3 +174,16 @@ def test_tilt_on_a_built_in_design_end_to_end(tmp_path):
     assert summary["stable_under_gravity"] and summary["collapse_angle_deg"] == 4.0
     assert summary["monitored_block"] == "c26b3" and summary["wall_height_m"] == pytest.approx(0.1485)
     assert all((out / name).is_file() for name in ("pushover.csv", "pushover.png", "mechanism.png", "checkpoint.npz"))
+
+
+def test_limit_writes_its_summary_and_mechanism(tmp_path):
+    import json
+
+    out = tmp_path / "la"
+    result = CliRunner().invoke(main, ["limit", "WD2", "--non-associative", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "LA-NA load multiplier" in result.output and "(converged)" in result.output
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["method"] == "non-associative" and "Optimal" in summary["solver_status"]
+    assert summary["collapse_angle_deg"] == pytest.approx(math.degrees(math.atan(summary["load_multiplier"])))
+    assert (out / "mechanism.png").stat().st_size > 10_000

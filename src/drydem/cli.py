@@ -121,7 +121,7 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_di
     from tqdm import tqdm
 
     from drydem.analysis.tilt import TiltSettings, tilt_analysis
-    from drydem.io.results import PushoverWriter, write_summary
+    from drydem.io.results import PushoverWriter, tilt_summary, write_summary
     from drydem.report.plots import mechanism_figure, pushover_figure
 
     found = _target(target, unit)
@@ -156,7 +156,7 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_di
         except KeyboardInterrupt:
             click.echo(f"\ninterrupted; what was found is in {out}. Go on with the same command plus --out {out} --resume", err=True)
             raise SystemExit(130) from None
-    write_summary(out, result, model)
+    write_summary(out, tilt_summary(result, model))
     pushover_figure(result, out / "pushover.png", title=found.name)
     collapse = result.collapse_angle_deg
     lost_by_then = frozenset(name for name, theta in result.lost_blocks if collapse is not None and theta <= collapse)
@@ -177,6 +177,42 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_di
         first = min(theta for _, theta in result.lost_blocks)
         click.echo(f"lost blocks     {len(result.lost_blocks)} fell out of the model, the first at {first:.2f} deg (listed in summary.json)")
     click.echo(f"cycles          {result.cycles} in {result.runtime_s:.1f} s; results in {out}")
+
+
+@main.command()
+@click.argument("target")
+@click.option("--non-associative", is_flag=True, help="Friction without dilatancy (iterative LP of Gilbert et al. 2006).")
+@click.option("--friction", type=float, help="Coulomb friction coefficient (overrides the model file).")
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), help="Results folder (default: results/TARGET-limit-TIME).")
+@unit_option
+def limit(target, non_associative, friction, out, unit) -> None:
+    """Limit analysis of TARGET: the largest horizontal load multiplier (tilt angle atan(lambda))
+    that rigid blocks can carry, with its collapse mechanism."""
+    from drydem.analysis.limit import LimitSettings, limit_analysis
+    from drydem.analysis.tilt import wall_height
+    from drydem.io.results import limit_summary, write_summary
+    from drydem.report.plots import mechanism_figure
+
+    found = _target(target, unit)
+    settings = LimitSettings(non_associative=non_associative)
+    start = time.perf_counter()
+    try:
+        model = _with_overrides(found.model, kn=None, ks=None, friction=friction, points=None, density=None, criterion=None)
+        result = limit_analysis(model, settings)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    runtime = time.perf_counter() - start
+    out = out or Path("results") / f"{found.name}-limit-{datetime.now():%Y%m%d-%H%M%S}"
+    out.mkdir(parents=True, exist_ok=True)
+    write_summary(out, limit_summary(result, settings, model, runtime))
+    label = "LA-NA" if non_associative else "LA-A"
+    moved = result.mechanism_state(model, 0.1 * wall_height(model))
+    mechanism_figure(model, [(f"{label} mechanism (scaled)", moved, frozenset())], out / "mechanism.png")
+    click.echo(f"{found.name}: {label} load multiplier {result.load_multiplier:.4f}, collapse angle {result.collapse_angle_deg:.2f} deg")
+    if non_associative:
+        state = "converged" if result.converged else "NOT converged (last iterate reported)"
+        click.echo(f"iterations      {result.iterations} ({state}): lambda {result.history[0]:.4f} (LA-A) -> {result.history[-1]:.4f}")
+    click.echo(f"solver          {result.status}; {runtime:.1f} s; results in {out}")
 
 
 def _with_overrides(model: Model, *, kn, ks, friction, points, density, criterion) -> Model:

@@ -1,8 +1,9 @@
 """Result files of an analysis, written as the run goes (a crash keeps what was written).
 
 ``pushover.csv``: one row per equilibrium state, appended and flushed as each is found.
-``summary.json``: collapse angle, drift-limit angles, model and analysis parameters,
-cycles, run time, drydem version; written at the end.
+``summary.json``: collapse angle, load multiplier, model and analysis parameters, run time,
+drydem version (a tilting analysis adds drift-limit angles, cycles, lost blocks; a limit
+analysis its method and solver status); written at the end.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 from drydem import __version__
+from drydem.analysis.limit import LimitResult, LimitSettings
 from drydem.analysis.tilt import Record, TiltResult
 from drydem.model import Model
 
@@ -37,8 +39,8 @@ class PushoverWriter:
             )
 
 
-def summary(result: TiltResult, model: Model) -> dict:
-    """The content of ``summary.json``."""
+def tilt_summary(result: TiltResult, model: Model) -> dict:
+    """The content of a tilting analysis' ``summary.json``."""
     return {
         "collapse_angle_deg": result.collapse_angle_deg,
         "load_multiplier": result.load_multiplier,
@@ -52,21 +54,44 @@ def summary(result: TiltResult, model: Model) -> dict:
         "cycles": result.cycles,
         "runtime_s": round(result.runtime_s, 3),
         "analysis": asdict(result.settings),
-        "model": {
-            "source": model.source,
-            "blocks": model.n_blocks,
-            "movable_blocks": int(model.block_movable.sum()),
-            "mass_kg": model.total_mass,
-            "joint": asdict(model.joint),
-            "contacts": asdict(model.contacts) | {"tolerance_m": model.contact_tolerance},
-            "supports": asdict(model.supports),
-            "solver": asdict(model.solver),
-        },
+        "model": model_summary(model),
         "drydem_version": __version__,
     }
 
 
-def write_summary(folder: Path, result: TiltResult, model: Model) -> Path:
+def limit_summary(result: LimitResult, settings: LimitSettings, model: Model, runtime_s: float) -> dict:
+    """The content of a limit analysis' ``summary.json``."""
+    return {
+        "collapse_angle_deg": result.collapse_angle_deg,
+        "load_multiplier": result.load_multiplier,
+        "method": result.method,
+        "solver_status": result.status,
+        "iterations": result.iterations,
+        "converged": result.converged,
+        "load_multiplier_history": result.history,
+        "runtime_s": round(runtime_s, 3),
+        "analysis": asdict(settings),
+        "model": model_summary(model),
+        "drydem_version": __version__,
+    }
+
+
+def model_summary(model: Model) -> dict:
+    """What a result says of its model: source, size, mass and parameters."""
+    return {
+        "source": model.source,
+        "blocks": model.n_blocks,
+        "movable_blocks": int(model.block_movable.sum()),
+        "mass_kg": model.total_mass,
+        "joint": asdict(model.joint),
+        "contacts": asdict(model.contacts) | {"tolerance_m": model.contact_tolerance},
+        "supports": asdict(model.supports),
+        "solver": asdict(model.solver),
+    }
+
+
+def write_summary(folder: Path, content: dict) -> Path:
+    """``content`` as ``folder/summary.json``."""
     path = folder / "summary.json"
-    path.write_text(json.dumps(summary(result, model), indent=2) + "\n")
+    path.write_text(json.dumps(content, indent=2) + "\n")
     return path

@@ -101,7 +101,7 @@ def layout_figure(model: Model, path: Path, *, kinds: list[str] | None = None, v
     fixed = model.block_fixed.all(axis=1)
     kinds = kinds or ["base" if f else "brick" for f in fixed]
     outlines = block_outlines(model, State.at_rest(model.block_centroid), np.arange(model.n_blocks))
-    fig, ax = plt.subplots(figsize=(6.4, 5.6), layout="constrained")
+    fig, ax = plt.subplots(figsize=(8.0, 4.4), layout="constrained")
     ax.add_collection(PolyCollection(outlines, facecolors=[KIND_COLOURS[k] for k in kinds], edgecolors="k", linewidths=0.4))
     if len(voids):
         ax.add_collection(PolyCollection(voids, facecolors="white", edgecolors="0.5", hatch="////", linewidths=0.3))
