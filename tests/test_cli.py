@@ -146,6 +146,13 @@ def test_export_writes_a_model_file_that_loads_back_and_vtk(tmp_path):
     assert result.exit_code == 1 and "unknown output type '.ply'" in result.output
 
 
+def test_check_reports_the_brief_and_strict_fails_on_a_violation():
+    result = CliRunner().invoke(main, ["check", "WD2", "--strict"])
+    assert result.exit_code == 0 and "31.5% voids, meets the competition brief" in result.output
+    result = CliRunner().invoke(main, ["check", "perforated_wall", "--strict"])
+    assert result.exit_code == 1 and "breaks the brief: 4 lintels, not 1" in result.output
+
+
 def test_check_reads_vrml_in_millimetres(tmp_path):
     from test_geometry_io import TWO_BOXES
 

@@ -91,6 +91,12 @@ def test_bad_vrml_is_named_with_its_line(tmp_path, text, message):
     assert str(caught.value).startswith(str(path))
 
 
+def test_overlapping_imported_blocks_are_named(tmp_path):
+    text = TWO_BOXES.replace("translation 30 0 5", "translation 25 0 5")  # 5 mm into the left box
+    with pytest.raises(ModelError, match=r"'left' and 'right' overlap by 0.005 m"):
+        load_target(str(write(tmp_path, text)), unit_m=1e-3)
+
+
 def test_a_non_convex_vrml_shape_is_refused(tmp_path):
     # an L-shaped prism: its inner corner lies on the hull's top and bottom faces, so only its
     # volume (3 of the hull's 3.5) gives it away

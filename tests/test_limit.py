@@ -118,8 +118,12 @@ def test_bad_input_is_a_clear_error():
     overhang = dd.build_model(
         [dd.Block(name="base", shape=dd.box([-0.1, 0, -0.01], [0.0, 0.012, 0]), fixed=True),
          dd.Block(name="overhang", shape=dd.box([-0.01, 0, 0], [0.03, 0.012, 0.0055]))], density=1800.0)
-    with pytest.raises(LimitAnalysisError, match="unstable under its dead load alone"):
+    with pytest.raises(LimitAnalysisError, match="unstable under its dead load alone: no contact forces hold"):
         limit_analysis(overhang)
+    # with mu = 5 a push of lambda = -(10 mm) / (2.75 mm) = -3.64 towards the base would hold it
+    rough = overhang.replace(joint=dd.JointMaterial(friction=5.0))
+    with pytest.raises(LimitAnalysisError, match=r"unstable under its dead load alone: lambda = -3.636 < 0"):
+        limit_analysis(rough)
 
 
 def test_an_unconverged_non_associative_run_says_so():

@@ -45,8 +45,9 @@ def main() -> None:
 @main.command()
 @click.argument("target")
 @click.option("--settle", is_flag=True, help="Also cycle to equilibrium under vertical gravity and report the settlement.")
+@click.option("--strict", is_flag=True, help="Fail if a wall breaks the competition brief.")
 @unit_option
-def check(target: str, settle: bool, unit: str) -> None:
+def check(target: str, settle: bool, strict: bool, unit: str) -> None:
     """Validate TARGET (a built-in wall, a wall or model file, or a .wrl/.obj/.stl) and print
     its blocks, contacts and timestep."""
     from drydem.brief import brief_violations
@@ -64,6 +65,7 @@ def check(target: str, settle: bool, unit: str) -> None:
         violations = brief_violations(found.wall)
         click.echo(f"wall            {found.wall.name} {found.wall.title}: {found.wall.layout.void_ratio:.1%} voids, "
                    + ("meets the competition brief" if not violations else "breaks the brief: " + "; ".join(violations)))
+        _fail_if_strict(strict, violations, found)
     click.echo(f"blocks          {model.n_blocks} ({int(movable.sum())} movable, {int((~movable).sum())} fixed)")
     click.echo(f"mass            {model.total_mass:.6g} kg (movable blocks)")
     density = model.contact_density
@@ -74,6 +76,11 @@ def check(target: str, settle: bool, unit: str) -> None:
     click.echo(f"timestep        {sim.timestep:.4g} s{mass_note}")
     if settle:
         _settle(sim)
+
+
+def _fail_if_strict(strict: bool, violations: list[str], found: Target) -> None:
+    if strict and violations:
+        raise click.ClickException(f"{found.path}: breaks the competition brief ({len(violations)} violations)")
 
 
 def _settle(sim: Simulation) -> None:
@@ -267,8 +274,7 @@ def show(target: str, out: Path | None, strict: bool, unit: str) -> None:
         violations = brief_violations(wall)
         for violation in violations:
             click.echo(f"brief: {violation}", err=True)
-        if strict and violations:
-            raise click.ClickException(f"{found.path}: breaks the competition brief ({len(violations)} violations)")
+        _fail_if_strict(strict, violations, found)
 
 
 @main.command()
