@@ -52,7 +52,8 @@ class Model:
     """Frozen description of a block assembly (nb blocks).
 
     block_name : names. block_shape : geometry as given (this is the body frame: a block's
-    body coordinates are its model-file coordinates minus its centroid). block_mass : (nb,) kg.
+    body coordinates are its model-file coordinates minus its centroid). block_density : (nb,)
+    kg/m3, as given. block_mass : (nb,) kg.
     block_inertia : (nb, 3, 3) kg m2 about the centroid. block_fixed : (nb, 6) bool, fixed
     degrees of freedom (x, y, z, rx, ry, rz). block_radius : (nb,) m, centroid-to-vertex
     maximum. contact_tolerance : m, resolved from ``contacts.tolerance``. source : where the
@@ -61,6 +62,7 @@ class Model:
 
     block_name: tuple[str, ...]
     block_shape: tuple[ConvexPolyhedron, ...] = field(repr=False)
+    block_density: np.ndarray = field(repr=False)
     block_mass: np.ndarray = field(repr=False)
     block_inertia: np.ndarray = field(repr=False)
     block_fixed: np.ndarray = field(repr=False)
@@ -131,13 +133,13 @@ class Model:
         unknown = set(changes) - allowed
         if unknown:
             raise TypeError(f"Model.replace accepts density and {sorted(allowed)}, not {sorted(unknown)}")
-        current = self.block_mass / np.array([s.volume for s in self.block_shape])
         blocks = [
             Block(name=n, shape=s, fixed=bool(f.all()), density=None if density is not None else float(rho))
-            for n, s, f, rho in zip(self.block_name, self.block_shape, self.block_fixed, current)
+            for n, s, f, rho in zip(self.block_name, self.block_shape, self.block_fixed, self.block_density)
         ]
         params = dict(joint=self.joint, contacts=self.contacts, supports=self.supports, solver=self.solver) | changes
-        return build_model(blocks, density=density if density is not None else float(current.max()), source=self.source, **params)
+        common = density if density is not None else float(self.block_density.max())
+        return build_model(blocks, density=common, source=self.source, **params)
 
 
 def build_model(
@@ -182,6 +184,7 @@ def _assemble(blocks, density, *, joint, contacts, supports, solver, source) -> 
     model = Model(
         block_name=tuple(b.name for b in blocks),
         block_shape=shapes,
+        block_density=density,
         block_mass=density * np.array([s.volume for s in shapes]),
         block_inertia=np.array([s.inertia_tensor(rho) for s, rho in zip(shapes, density)]),
         block_fixed=fixed,

@@ -144,7 +144,7 @@ def model_to_dict(model: Model) -> dict:
 
     Axis-aligned boxes are written as ``box = {min, max}``, other blocks as their hull vertices.
     """
-    density = model.block_mass / np.array([s.volume for s in model.block_shape])
+    density = model.block_density
     common = float(np.median(density))
     data: dict = {"material": {"density": common}}
     for name in SECTIONS:
