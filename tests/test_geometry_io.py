@@ -148,7 +148,8 @@ def test_vtk_export_reads_back_with_its_cells_points_and_fields(tmp_path):
     assert sum(len(c.data) for c in mesh.cells) == model.n_blocks
     assert len(mesh.points) == sum(len(s.vertices) for s in model.block_shape)
     fields = {name: np.concatenate(values) for name, values in mesh.cell_data.items()}
-    assert set(fields) == {"block_id", "fixed", "mass", "displacement", "displacement_magnitude"}
+    assert set(fields) == {"block_id", "fixed", "active", "mass", "displacement", "displacement_magnitude", "rotation",
+                           "velocity", "angular_velocity"}
     np.testing.assert_array_equal(fields["block_id"], np.arange(model.n_blocks))
     np.testing.assert_allclose(fields["displacement"][5], [1e-3, 0.0, -2e-3])
     np.testing.assert_allclose(fields["mass"], model.block_mass)

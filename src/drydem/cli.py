@@ -121,14 +121,20 @@ def _settle(sim: Simulation) -> None:
 @click.option("--max-angle", type=float, default=80.0, show_default=True, help="Largest tilt tried, deg.")
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), help="Results folder (default: results/TARGET-TIME).")
 @click.option("--resume", is_flag=True, help="Go on from the checkpoint in --out (same TARGET and options).")
+@click.option("--vtk", is_flag=True, help="Write a VTK time series for ParaView (OUT/vtk: blocks and sub-contacts).")
+@click.option("--save-every", type=click.IntRange(min=1), default=1, show_default=True,
+              help="With --vtk: keep every N-th equilibrium state (the states past collapse are all kept).")
+@click.option("--video", is_flag=True, help="Also render OUT/collapse.mp4 (GIF if ffmpeg is missing); implies --vtk.")
 @unit_option
-def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_displacement, criterion, loading, monitor, max_angle, out, resume, unit) -> None:
+def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_displacement, criterion, loading, monitor, max_angle, out,
+         resume, vtk, save_every, video, unit) -> None:
     """Tilting-table analysis of TARGET (a built-in wall, a wall or model file, or a
     .wrl/.obj/.stl): collapse angle, pushover curve, Eurocode 8 drift-limit angles, plots."""
     from tqdm import tqdm
 
     from drydem.analysis.tilt import TiltSettings, tilt_analysis
     from drydem.io.results import PushoverWriter, tilt_summary, write_summary
+    from drydem.io.vtk import VtkSeries
     from drydem.report.plots import mechanism_figure, pushover_figure
 
     found = _target(target, unit)
@@ -154,9 +160,11 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_di
             bar.update(cycles - bar.n)
             bar.set_postfix_str(f"{theta:.2f} deg, ux {ux * 1e3:.2f} mm")
 
+        series = VtkSeries(out / "vtk", model, every=save_every) if vtk or video else None
         try:
             result = tilt_analysis(
-                model, settings, on_record=PushoverWriter(out, append=resume), on_progress=progress, checkpoint=out / CHECKPOINT, resume=resume
+                model, settings, on_record=PushoverWriter(out, append=resume), on_progress=progress, on_frame=series,
+                checkpoint=out / CHECKPOINT, resume=resume,
             )
         except DrydemError as exc:
             raise click.ClickException(str(exc)) from None
@@ -184,6 +192,10 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_di
         first = min(theta for _, theta in result.lost_blocks)
         click.echo(f"lost blocks     {len(result.lost_blocks)} fell out of the model, the first at {first:.2f} deg (listed in summary.json)")
     click.echo(f"cycles          {result.cycles} in {result.runtime_s:.1f} s; results in {out}")
+    if series is not None:
+        click.echo(f"vtk             {len(series.rows)} states in {series.folder} (open blocks.pvd and contacts.pvd in ParaView)")
+    if video:
+        _render(series.folder, out / "collapse.mp4", fps=8.0)
 
 
 @main.command()
@@ -220,6 +232,26 @@ def limit(target, non_associative, friction, out, unit) -> None:
         state = "converged" if result.converged else "NOT converged (last iterate reported)"
         click.echo(f"iterations      {result.iterations} ({state}): lambda {result.history[0]:.4f} (LA-A) -> {result.history[-1]:.4f}")
     click.echo(f"solver          {result.status}; {runtime:.1f} s; results in {out}")
+
+
+@main.command()
+@click.argument("result_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.option("--out", "-o", type=click.Path(dir_okay=False, path_type=Path), help="Video file, .mp4 or .gif (default: RESULT_DIR/collapse.mp4).")
+@click.option("--fps", type=click.FloatRange(min=0.1), default=8.0, show_default=True, help="Frames per second.")
+def animate(result_dir: Path, out: Path | None, fps: float) -> None:
+    """Render the VTK series of a `drydem tilt --vtk` run (RESULT_DIR or RESULT_DIR/vtk) to a video."""
+    folder = result_dir / "vtk" if (result_dir / "vtk").is_dir() else result_dir
+    _render(folder, out or result_dir / "collapse.mp4", fps=fps)
+
+
+def _render(folder: Path, path: Path, *, fps: float) -> None:
+    from drydem.report.animation import render_video
+
+    try:
+        written = render_video(folder, path, fps=fps)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"video           {written}")
 
 
 def _with_overrides(model: Model, *, kn, ks, friction, points, density, criterion) -> Model:

@@ -36,10 +36,13 @@ from drydem.analysis.drift import drift_limit_angles
 from drydem.errors import ModelError
 from drydem.io.checkpoint import load_checkpoint, save_checkpoint
 from drydem.model import Model
+from drydem.contacts import SubContacts
 from drydem.solve import G, Simulation
 from drydem.state import State
 
 LOADINGS = ("tilt", "multiplier")
+#: states past collapse are sampled this many times per chunk_cycles (drydem tilt --vtk)
+FRAME_SAMPLING = 10
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -103,6 +106,40 @@ class Record:
         return math.tan(math.radians(self.tilt_deg))
 
 
+@dataclass(frozen=True)
+class Frame:
+    """A state of the analysis to show: ``kind`` "equilibrium" or "past collapse", the tilt
+    (deg), the monitored horizontal displacement (m), the blocks' State, their sub-contacts and
+    which blocks are still in the analysis (``active``, (nb,) bool)."""
+
+    kind: str
+    tilt_deg: float
+    ux_m: float
+    state: State = field(repr=False)
+    contacts: SubContacts = field(repr=False)
+    active: np.ndarray = field(repr=False)
+
+
+class _Trace:
+    """The frames of the step being cycled, one per chunk, at most ``limit``: past that, every
+    other frame is dropped and only every other chunk kept, so a long flow stays evenly sampled."""
+
+    def __init__(self, limit: int = 240):
+        self.frames: list[Frame] = []
+        self.limit, self.stride, self.seen = limit, 1, 0
+
+    def add(self, make: Callable[[], Frame]) -> None:
+        self.seen += 1
+        if self.seen % self.stride:
+            return
+        self.frames.append(make())
+        if len(self.frames) > self.limit:
+            self.frames, self.stride = self.frames[1::2], 2 * self.stride
+
+    def clear(self) -> None:
+        self.frames, self.stride, self.seen = [], 1, 0
+
+
 @dataclass
 class TiltResult:
     """Outcome of :func:`tilt_analysis`. States are block positions/orientations (State)."""
@@ -160,9 +197,11 @@ class _Run:
         moved = self.sim.state.position[self.monitor] - self.model.block_centroid[self.monitor]
         return float(moved[0]), float(moved[2])
 
-    def equilibrate(self, theta_deg: float, *, vertical: bool = False) -> tuple[bool, int]:
+    def equilibrate(self, theta_deg: float, *, vertical: bool = False, chunk_cycles: int | None = None,
+                    trace: _Trace | None = None) -> tuple[bool, int]:
         """Cycle at ``theta_deg`` until equilibrium (True), the stop displacement, the fall of
-        the monitored block or max cycles (False).
+        the monitored block or max cycles (False), checking every ``chunk_cycles`` (default the
+        settings'), and adding a frame to ``trace`` at every check.
 
         Blocks that fall out are taken out and the cycling goes on, except under vertical
         gravity (stage 1): a model that loses a block under its own weight cannot stand.
@@ -171,7 +210,7 @@ class _Run:
         solver = self.model.solver
         done = 0
         while True:
-            chunk = replace(solver, max_cycles=min(self.settings.chunk_cycles, solver.max_cycles - done))
+            chunk = replace(solver, max_cycles=min(chunk_cycles or self.settings.chunk_cycles, solver.max_cycles - done))
             result = self.sim.cycle_to_equilibrium(gravity=gravity, solver=chunk)
             done += result.cycles
             lost = self._fallen()
@@ -183,6 +222,8 @@ class _Run:
             ux, _ = self.displacement()
             if self.on_progress is not None:
                 self.on_progress(theta_deg, self.sim.cycles, ux)
+            if trace is not None:
+                trace.add(lambda: self.frame("past collapse", theta_deg))
             if self.monitor_fell():
                 return False, done
             if result.converged:
@@ -202,6 +243,9 @@ class _Run:
     def monitor_fell(self) -> bool:
         return bool(self._dropped()[self.monitor])
 
+    def frame(self, kind: str, theta_deg: float) -> Frame:
+        return Frame(kind, theta_deg, self.displacement()[0], self.sim.state.copy(), self.sim.contacts.copy(), self.sim.active.copy())
+
     def record(self, theta_deg: float, cycles: int) -> Record:
         ux, uz = self.displacement()
         return Record(tilt_deg=theta_deg, ux_m=ux, uz_m=uz, drift=ux / self.height, cycles=cycles)
@@ -213,18 +257,24 @@ def tilt_analysis(
     *,
     on_record: Callable[[Record], None] | None = None,
     on_progress: Callable[[float, int, float], None] | None = None,
+    on_frame: Callable[[Frame], None] | None = None,
     checkpoint: Path | None = None,
     resume: bool = False,
 ) -> TiltResult:
     """Run the tilting-table (or multiplier) protocol on ``model`` (see module docstring).
 
     ``on_record(record)`` is called at every equilibrium state as it is found (to write results
-    as the run goes); ``on_progress(theta_deg, cycles_so_far, ux_m)`` every few thousand cycles.
+    as the run goes); ``on_progress(theta_deg, cycles_so_far, ux_m)`` every few thousand cycles;
+    ``on_frame(frame)`` (a :class:`Frame`) at every equilibrium state and, at the end, for the
+    states past collapse: the last step is replayed from the last equilibrium, sampled every
+    ``chunk_cycles / FRAME_SAMPLING`` cycles (the result is that of the analysis itself; the
+    replay only shows it, and costs nothing unless ``on_frame`` is given).
     With ``checkpoint`` (a path), the run is saved there at every equilibrium state; with
     ``resume`` too, it goes on from that file instead of starting over.
     """
     start = time.perf_counter()
     run = _Run(model, settings, on_progress)
+    keep_snapshots = settings.adaptive or on_frame is not None
     records: list[Record] = []
     equilibria: list[State] = []
 
@@ -235,6 +285,8 @@ def tilt_analysis(
             save_checkpoint(checkpoint, run.sim.snapshot(), _progress(records, run.lost, theta, step) | {"fingerprint": fingerprint})
         if on_record is not None:
             on_record(records[-1])
+        if on_frame is not None:
+            on_frame(run.frame("equilibrium", theta))
 
     step = settings.increment_deg * (2**settings.refinements if settings.adaptive else 1)
     fingerprint = _fingerprint(model, settings)
@@ -248,27 +300,28 @@ def tilt_analysis(
         theta, step, stable = float(saved["theta_deg"]), float(saved["step_deg"]), True
         equilibria.append(run.sim.state.copy())
     else:
+        initial = run.sim.snapshot() if on_frame is not None else None
         stable, cycles = run.equilibrate(0.0, vertical=True)
         theta = 0.0
         if stable:
             accept(0.0, step, cycles)
     if not stable:
         collapse, ended_by = None, "unstable under gravity"
+        last_good, lost_at_good = initial, []
     else:
-        last_good = run.sim.snapshot()
+        last_good, lost_at_good = run.sim.snapshot(), list(run.lost)
         ended_by = "maximum angle"
         while theta + step <= settings.max_angle_deg + 1e-9:
             held, cycles = run.equilibrate(theta + step)
             if held:
                 theta = round(theta + step, 9)
                 accept(theta, step, cycles)
-                if settings.adaptive:
-                    last_good = run.sim.snapshot()
+                if keep_snapshots:
+                    last_good, lost_at_good = run.sim.snapshot(), list(run.lost)
                 continue
             if settings.adaptive and step > settings.increment_deg * (1 + 1e-9):
-                lost_before = [entry for entry in run.lost if entry[1] <= theta]
                 run.sim.restore(last_good)
-                run.lost = lost_before
+                run.lost = list(lost_at_good)
                 step /= 2
                 continue
             ux, _ = run.displacement()
@@ -280,7 +333,7 @@ def tilt_analysis(
                 ended_by = "no equilibrium within max_cycles"
             break
         collapse = theta if ended_by != "maximum angle" else None
-    return TiltResult(
+    result = TiltResult(
         settings=settings,
         monitored_block=model.block_name[run.monitor],
         wall_height_m=run.height,
@@ -294,6 +347,15 @@ def tilt_analysis(
         final_state=run.sim.state.copy(),
         ended_by=ended_by,
     )
+    if on_frame is not None and ended_by != "maximum angle":
+        run.sim.restore(last_good)
+        run.lost = list(lost_at_good)
+        trace = _Trace()
+        run.equilibrate(0.0 if not stable else theta + step, vertical=not stable,
+                        chunk_cycles=max(1, settings.chunk_cycles // FRAME_SAMPLING), trace=trace)
+        for frame in trace.frames:
+            on_frame(frame)
+    return result
 
 
 def _fingerprint(model: Model, settings: TiltSettings) -> str:

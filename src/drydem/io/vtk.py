@@ -1,27 +1,43 @@
-"""The model to VTK unstructured grids (``.vtu``, via meshio) for ParaView.
+"""VTK output for ParaView (unstructured grids ``.vtu`` via meshio, ``.pvd`` series index).
 
-Every block is one polyhedron cell (VTK_POLYHEDRON: its faces as vertex loops), in model
-order, with cell fields ``block_id`` (index into the model's blocks), ``fixed`` (1 for a
-block with all six degrees of freedom fixed), ``mass`` (kg), ``displacement`` (m, of the
-centroid from the model file) and ``displacement_magnitude`` (m).
+Blocks: one polyhedron cell (VTK_POLYHEDRON) per block, in model order, with cell fields
+``block_id`` (index into the model's blocks), ``fixed`` (1: all six degrees of freedom fixed),
+``active`` (0: taken out of the analysis), ``mass`` (kg), ``displacement`` (m, of the centroid
+from the model file) and its ``displacement_magnitude``, ``rotation`` (rotation vector from the
+model file, rad), ``velocity`` (m/s) and ``angular_velocity`` (rad/s).
+
+Sub-contacts: one vertex cell per sub-contact at its incident material point, with point
+fields ``normal_force`` (N, compression positive), ``shear_force`` (N, on the incident block)
+and its magnitude, ``slip`` (0 open, 1 stuck, 2 sliding: the shear force at the Coulomb limit
+c A + mu N), ``gap`` (m, negative when closed) and the two blocks.
 """
 
 from __future__ import annotations
 
+import csv
+import os
 from itertools import groupby
 from pathlib import Path
+from xml.sax.saxutils import quoteattr
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
+from drydem import contacts as contact_geometry
+from drydem.contacts import SubContacts
 from drydem.model import Model
+from drydem.rotation import matrices
 from drydem.state import State
 
+OPEN, STUCK, SLIDING = 0, 1, 2
 
-def write_vtu(model: Model, path: str | Path, state: State | None = None) -> Path:
+
+def write_vtu(model: Model, path: str | Path, state: State | None = None, active: np.ndarray | None = None) -> Path:
     """Write the blocks at ``state`` (default: as in the model file) to ``path`` (.vtu)."""
     import meshio
 
     state = state or State.at_rest(model.block_centroid)
+    active = np.ones(model.n_blocks, dtype=bool) if active is None else active
     points, cells, offset = [], [], 0
     for b, shape in enumerate(model.block_shape):
         points.append(model.world_vertices(b, state.position[b], state.quaternion[b]))
@@ -29,14 +45,83 @@ def write_vtu(model: Model, path: str | Path, state: State | None = None) -> Pat
         offset += len(shape.vertices)
     blocks = [(kind, [faces for _, faces in run]) for kind, run in groupby(cells, key=lambda cell: cell[0])]
     displacement = state.position - model.block_centroid
+    rotation = Rotation.from_quat(np.roll(state.quaternion, -1, axis=1)).as_rotvec()  # (x, y, z, w) order
     fields = {
         "block_id": np.arange(model.n_blocks),
         "fixed": model.block_fixed.all(axis=1).astype(np.int8),
+        "active": active.astype(np.int8),
         "mass": model.block_mass,
         "displacement": displacement,
         "displacement_magnitude": np.linalg.norm(displacement, axis=1),
+        "rotation": rotation,
+        "velocity": state.velocity,
+        "angular_velocity": state.angular_velocity,
     }
     sizes = np.cumsum([0] + [len(faces) for _, faces in blocks])
     cell_data = {name: [values[a:b] for a, b in zip(sizes[:-1], sizes[1:])] for name, values in fields.items()}
     meshio.write(Path(path), meshio.Mesh(np.vstack(points), blocks, cell_data=cell_data), file_format="vtu")
     return Path(path)
+
+
+def write_contacts_vtu(model: Model, path: str | Path, state: State, sub: SubContacts) -> Path:
+    """Write the sub-contacts at ``state`` to ``path`` (.vtu): points with their forces and slip state."""
+    import meshio
+
+    point, gap, _ = contact_geometry.world_points(sub, state.position, matrices(state.quaternion))
+    shear = np.linalg.norm(sub.shear_force, axis=1)
+    joint = model.joint
+    limit = joint.cohesion * sub.area * sub.intact + joint.friction * sub.normal_force
+    slip = np.where(sub.normal_force <= 0.0, OPEN, np.where(shear >= limit * (1 - 1e-6), SLIDING, STUCK))
+    data = {
+        "normal_force": sub.normal_force, "shear_force": sub.shear_force, "shear_force_magnitude": shear,
+        "slip": slip.astype(np.int8), "gap": gap, "block_ref": sub.block_ref, "block_inc": sub.block_inc,
+    }
+    cells = [("vertex", np.arange(sub.count)[:, None])] if sub.count else []
+    meshio.write(Path(path), meshio.Mesh(point.reshape(-1, 3), cells, point_data=data), file_format="vtu")
+    return Path(path)
+
+
+class VtkSeries:
+    """Frames of a tilting analysis (drydem.analysis.tilt.Frame) as two VTK time series in
+    ``folder``: ``blocks_NNNN.vtu`` and ``contacts_NNNN.vtu``, indexed by ``blocks.pvd`` and
+    ``contacts.pvd`` (time = frame number), and ``frames.csv`` (frame, kind, tilt, monitored
+    displacement). Each frame is written as it comes, and the indexes rewritten atomically, so a
+    crash keeps what was written. Equilibrium frames are kept every ``every``-th; the states
+    past collapse all. Use an instance as ``tilt_analysis(..., on_frame=series)``."""
+
+    def __init__(self, folder: Path, model: Model, *, every: int = 1):
+        if every < 1:
+            raise ValueError(f"every = {every}: must be at least 1")
+        self.folder, self.model, self.every = Path(folder), model, every
+        self.folder.mkdir(parents=True, exist_ok=True)
+        self.rows: list[tuple[int, str, float, float]] = []
+        self.equilibria = 0
+
+    def __call__(self, frame) -> None:
+        if frame.kind == "equilibrium":
+            self.equilibria += 1
+            if (self.equilibria - 1) % self.every:
+                return
+        k = len(self.rows)
+        write_vtu(self.model, self.folder / f"blocks_{k:04d}.vtu", frame.state, frame.active)
+        write_contacts_vtu(self.model, self.folder / f"contacts_{k:04d}.vtu", frame.state, frame.contacts)
+        self.rows.append((k, frame.kind, frame.tilt_deg, frame.ux_m))
+        for series in ("blocks", "contacts"):
+            _atomic_write(self.folder / f"{series}.pvd", _pvd([f"{series}_{i:04d}.vtu" for i, *_ in self.rows]))
+        with (self.folder / "frames.csv.tmp").open("w", newline="") as f:
+            writer = csv.writer(f)
+            writer.writerow(("frame", "kind", "tilt_deg", "ux_m"))
+            writer.writerows((i, kind, f"{tilt:.6f}", f"{ux:.8g}") for i, kind, tilt, ux in self.rows)
+        os.replace(self.folder / "frames.csv.tmp", self.folder / "frames.csv")
+
+
+def _pvd(files: list[str]) -> str:
+    """A ParaView collection: one DataSet per file, time = its position."""
+    entries = "\n".join(f'    <DataSet timestep="{t}" part="0" file={quoteattr(name)}/>' for t, name in enumerate(files))
+    return f'<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n{entries}\n  </Collection>\n</VTKFile>\n'
+
+
+def _atomic_write(path: Path, text: str) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)

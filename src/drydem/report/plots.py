@@ -15,7 +15,7 @@ from drydem.model import Model
 from drydem.state import State
 
 
-def _pyplot():
+def pyplot():
     import matplotlib
 
     matplotlib.use("Agg")
@@ -26,7 +26,7 @@ def _pyplot():
 
 def pushover_figure(result: TiltResult, path: Path, *, title: str = "") -> Path:
     """Tilt angle against the monitored horizontal displacement, with the EC8 drift limits."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.4), layout="constrained")
     ux_mm = np.array([r.ux_m for r in result.records]) * 1e3
     tilt = [r.tilt_deg for r in result.records]
@@ -46,40 +46,52 @@ def pushover_figure(result: TiltResult, path: Path, *, title: str = "") -> Path:
     return path
 
 
-def block_outlines(model: Model, state: State, blocks: np.ndarray) -> list[np.ndarray]:
-    """Outlines of ``blocks`` in the wall's plane (x, z), m: the hull of the projected vertices."""
+def xz_outline(points: np.ndarray) -> np.ndarray:
+    """A block's outline in the wall's plane (x, z): the hull of its projected vertices, m."""
     from scipy.spatial import ConvexHull
 
-    outlines = []
-    for b in blocks:
-        xz = model.world_vertices(b, state.position[b], state.quaternion[b])[:, [0, 2]]
-        outlines.append(xz[ConvexHull(xz).vertices])
-    return outlines
+    xz = np.asarray(points)[:, [0, 2]]
+    return xz[ConvexHull(xz).vertices]
+
+
+def block_outlines(model: Model, state: State, blocks: np.ndarray) -> list[np.ndarray]:
+    """Outlines of ``blocks`` in the wall's plane (x, z) at ``state``, m."""
+    return [xz_outline(model.world_vertices(b, state.position[b], state.quaternion[b])) for b in blocks]
+
+
+def draw_displacements(fig, ax, outlines: list[np.ndarray], magnitude_mm: np.ndarray, *, title: str,
+                       norm=None, marker: tuple[np.ndarray, str] | None = None) -> None:
+    """The renderer of mechanisms and videos: block outlines coloured by displacement magnitude
+    (mm, on ``norm``, default 0 to the largest), a colour bar, an optional ``marker`` (x-z point,
+    label) for the monitored block, equal axes."""
+    from matplotlib.collections import PolyCollection
+    from matplotlib.colors import Normalize
+
+    norm = norm or Normalize(0.0, float(magnitude_mm.max(initial=0.0)) or 1.0)
+    polys = PolyCollection(outlines, array=magnitude_mm, cmap="viridis", norm=norm, edgecolors="k", linewidths=0.3)
+    ax.add_collection(polys)
+    fig.colorbar(polys, ax=ax, label="displacement (mm)", shrink=0.8)
+    if marker is not None:
+        ax.plot(*marker[0], "r+", markersize=10, label=marker[1])
+        ax.legend(loc="upper right", fontsize="small")
+    ax.autoscale_view()
+    ax.set_aspect("equal")
+    ax.set(title=title, xlabel="x (m)", ylabel="z (m)")
 
 
 def mechanism_figure(model: Model, states: list[tuple[str, State, frozenset[str]]], path: Path, *, monitored: str | None = None) -> Path:
     """The model in its plane at each of ``states`` (label, State, names of blocks to leave out,
     e.g. those fallen away by then), blocks coloured by the magnitude of their displacement from
     the model file, each panel on its own scale (millimetres at equilibrium, decimetres past collapse)."""
-    plt = _pyplot()
-    from matplotlib.collections import PolyCollection
-
-    shown = [np.array([b for b, name in enumerate(model.block_name) if name not in hidden]) for _, _, hidden in states]
-    magnitudes = [np.linalg.norm(s.position[b] - model.block_centroid[b], axis=1) * 1e3 for (_, s, _), b in zip(states, shown)]
+    plt = pyplot()
     fig, axes = plt.subplots(1, len(states), figsize=(5.6 * len(states), 4.2), layout="constrained", squeeze=False)
-    for ax, (label, state, _), blocks, magnitude in zip(axes[0], states, shown, magnitudes):
-        outlines = block_outlines(model, state, blocks)
-        polys = PolyCollection(outlines, array=magnitude, cmap="viridis", clim=(0.0, float(magnitude.max(initial=0.0)) or 1.0),
-                               edgecolors="k", linewidths=0.3)
-        ax.add_collection(polys)
-        fig.colorbar(polys, ax=ax, label="displacement (mm)", shrink=0.8)
+    for ax, (label, state, hidden) in zip(axes[0], states):
+        blocks = np.array([b for b, name in enumerate(model.block_name) if name not in hidden])
+        magnitude = np.linalg.norm(state.position[blocks] - model.block_centroid[blocks], axis=1) * 1e3
+        marker = None
         if monitored is not None:
-            b = model.block_index(monitored)
-            ax.plot(*state.position[b, [0, 2]], "r+", markersize=10, label=f"monitored: {monitored}")
-            ax.legend(loc="upper right", fontsize="small")
-        ax.autoscale_view()
-        ax.set_aspect("equal")
-        ax.set(title=label, xlabel="x (m)", ylabel="z (m)")
+            marker = (state.position[model.block_index(monitored), [0, 2]], f"monitored: {monitored}")
+        draw_displacements(fig, ax, block_outlines(model, state, blocks), magnitude, title=label, marker=marker)
     fig.savefig(path, dpi=150)
     plt.close(fig)
     return path
@@ -94,7 +106,7 @@ def layout_figure(model: Model, path: Path, *, kinds: list[str] | None = None, v
     """The model in its plane as built: blocks coloured by ``kinds`` (one per block: brick,
     half, header, lintel, base; default brick, base for fixed blocks), ``voids`` (x-z outlines,
     m) hatched, the ``monitored`` block ringed."""
-    plt = _pyplot()
+    plt = pyplot()
     from matplotlib.collections import PolyCollection
     from matplotlib.patches import Patch
 

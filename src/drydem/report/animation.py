@@ -1,0 +1,93 @@
+"""Videos of a tilting analysis from its VTK series (drydem.io.vtk.VtkSeries), as the paper's
+supplementary videos: the wall in its plane coloured by displacement magnitude, the tilt angle
+and the monitored displacement on every frame, the states past collapse at the end.
+
+Frames are drawn by the renderer of ``mechanism.png`` (drydem.report.plots.draw_displacements),
+so pictures and videos agree. MP4 through imageio-ffmpeg (the ffmpeg binary ships in that
+package); GIF (Pillow) when MP4 cannot be written or is not asked for.
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from drydem.errors import DrydemError
+from drydem.report.plots import pyplot, draw_displacements, xz_outline
+
+#: frame size: 1280 x 720 pixels (a multiple of 16, as H.264 wants)
+FIGURE_IN, DPI = (8.0, 4.5), 160
+
+
+@dataclass(frozen=True)
+class VideoFrame:
+    """One frame: the outlines of the blocks still in the analysis (x-z, m), their displacement
+    magnitudes (mm) and the caption."""
+
+    outlines: list[np.ndarray]
+    magnitude_mm: np.ndarray
+    caption: str
+
+
+def series_frames(folder: Path) -> list[VideoFrame]:
+    """The frames of the VTK series in ``folder`` (``frames.csv`` and ``blocks_NNNN.vtu``)."""
+    import meshio
+
+    folder = Path(folder)
+    index = folder / "frames.csv"
+    if not index.is_file():
+        raise DrydemError(f"{folder}: no frames.csv: not a VTK series of drydem tilt --vtk")
+    with index.open() as f:
+        rows = list(csv.DictReader(f))
+    if not rows:
+        raise DrydemError(f"{index}: no frames")
+    frames = []
+    for row in rows:
+        mesh = meshio.read(folder / f"blocks_{int(row['frame']):04d}.vtu")
+        active = np.concatenate(mesh.cell_data["active"]).astype(bool)
+        magnitude = np.concatenate(mesh.cell_data["displacement_magnitude"]) * 1e3
+        cells = [cell for block in mesh.cells for cell in block.data]
+        outlines = [xz_outline(mesh.points[np.unique(np.concatenate(faces))]) for faces, on in zip(cells, active) if on]
+        caption = f"{row['kind']}: tilt {float(row['tilt_deg']):.2f} deg, monitored ux {float(row['ux_m']) * 1e3:.2f} mm"
+        frames.append(VideoFrame(outlines, magnitude[active], caption))
+    return frames
+
+
+def render_video(folder: Path, path: Path, *, fps: float = 8.0) -> Path:
+    """Render the VTK series in ``folder`` to ``path`` (.mp4 or .gif); an .mp4 that ffmpeg
+    cannot write falls back to a .gif beside it. Returns the file written."""
+    import imageio.v2 as imageio
+    from matplotlib.colors import LogNorm
+
+    frames = series_frames(folder)
+    largest = max(float(f.magnitude_mm.max(initial=0.0)) for f in frames) or 1.0
+    norm = LogNorm(largest * 1e-3, largest)  # equilibria (mm) and collapse (dm) on one scale
+    points = np.vstack([np.vstack(f.outlines) for f in frames if f.outlines])
+    low, high = points.min(axis=0), points.max(axis=0)
+    margin = 0.05 * (high - low).max()
+    images = [_image(frame, norm, low - margin, high + margin) for frame in frames]
+    path = Path(path)
+    if path.suffix.lower() == ".mp4":
+        try:
+            with imageio.get_writer(path, fps=fps, codec="libx264", macro_block_size=16) as writer:
+                for image in images:
+                    writer.append_data(image)
+            return path
+        except (ImportError, RuntimeError, OSError):  # no ffmpeg: fall back to a GIF
+            path = path.with_suffix(".gif")
+    imageio.mimsave(path, images, duration=1.0 / fps, loop=0)
+    return path
+
+
+def _image(frame: VideoFrame, norm, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=FIGURE_IN, dpi=DPI, layout="constrained")
+    draw_displacements(fig, ax, frame.outlines, np.clip(frame.magnitude_mm, norm.vmin, None), title=frame.caption, norm=norm)
+    ax.set(xlim=(low[0], high[0]), ylim=(low[1], high[1]))
+    fig.canvas.draw()
+    image = np.asarray(fig.canvas.buffer_rgba())[:, :, :3].copy()
+    plt.close(fig)
+    return image
