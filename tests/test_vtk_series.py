@@ -119,3 +119,26 @@ def test_nothing_is_written_without_the_flags(wall, tmp_path):
 def test_animate_names_a_folder_without_a_series(tmp_path):
     result = CliRunner().invoke(main, ["animate", str(tmp_path)])
     assert result.exit_code == 1 and "no frames.csv: not a VTK series" in result.output
+
+
+def test_without_ffmpeg_the_video_falls_back_to_a_gif(run, tmp_path, monkeypatch):
+    import imageio.v2 as imageio
+
+    from drydem.report.animation import render_video
+
+    import shutil
+
+    _, folder = run
+    short = tmp_path / "three"  # the first three frames of the series
+    short.mkdir()
+    for k in range(3):
+        shutil.copy(folder / f"blocks_{k:04d}.vtu", short)
+    lines = (folder / "frames.csv").read_text().splitlines()[:4]
+    (short / "frames.csv").write_text("\n".join(lines) + "\n")
+
+    def no_ffmpeg(*args, **kwargs):
+        raise RuntimeError("no ffmpeg here")
+
+    monkeypatch.setattr(imageio, "get_writer", no_ffmpeg)
+    written = render_video(short, tmp_path / "collapse.mp4", fps=4)
+    assert written == tmp_path / "collapse.gif" and len(imageio.mimread(written)) == 3
