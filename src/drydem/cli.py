@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import replace
 from datetime import datetime
@@ -252,6 +253,65 @@ def _render(folder: Path, path: Path, *, fps: float) -> None:
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     click.echo(f"video           {written}")
+
+
+@main.command()
+@click.argument("study_file")
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), help="Results folder (default: results/STUDY-NAME).")
+@click.option("--workers", type=click.IntRange(min=1), help="Local processes (default: all cores).")
+@click.option("--scheduler", help="Address of a Dask distributed scheduler to run on instead (tcp://host:8786).")
+@click.option("--retry-failed", is_flag=True, help="Run again the runs recorded as failed.")
+def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str | None, retry_failed: bool) -> None:
+    """Run a parametric study (STUDY_FILE, TOML, or a shipped study: savalle2022): every run a
+    tilting or limit analysis, each recorded in OUT/runs as it finishes; run again to go on
+    where it stopped."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    from tqdm import tqdm
+
+    from drydem.analysis.sweep import load_study, pending
+    from drydem.analysis.sweep import sweep as run_sweep
+
+    from drydem import studies
+
+    path = Path(study_file) if Path(study_file).is_file() else studies.find(study_file)
+    if path is None:
+        raise click.ClickException(f"{study_file}: no such study file, and not a shipped study (savalle2022)")
+    try:
+        study = load_study(path)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    out = out or Path("results") / study.name
+    out.mkdir(parents=True, exist_ok=True)
+    todo = len(pending(study.runs, out, retry_failed=retry_failed))
+    click.echo(f"{study.name}: {len(study.runs)} runs, {len(study.runs) - todo} already recorded in {out}")
+    if scheduler:
+        from distributed import Client
+
+        client = Client(scheduler)
+        executor, where = client.get_executor(), f"Dask scheduler {scheduler}"
+    else:
+        workers = workers or os.cpu_count() or 1
+        executor, where = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")), f"{workers} local processes"
+    click.echo(f"running {todo} on {where}")
+    with executor, tqdm(total=todo, desc="runs", unit=" run") as bar:
+        failures = []
+
+        def done(record):
+            bar.update(1)
+            if record["status"] == "failed":
+                failures.append(f"{record['id']}: {record['error']}")
+                bar.set_postfix(failed=len(failures))
+
+        try:
+            outcome = run_sweep(study.runs, out, executor, retry_failed=retry_failed, on_done=done)
+        except KeyboardInterrupt:
+            click.echo(f"\ninterrupted; the finished runs are recorded in {out}; the same command goes on", err=True)
+            raise SystemExit(130) from None
+    for failure in failures:
+        click.echo(f"failed: {failure}", err=True)
+    click.echo(f"{outcome.finished} runs done ({outcome.failed} failed), {outcome.skipped} skipped; records in {out / 'runs'}")
 
 
 def _with_overrides(model: Model, *, kn, ks, friction, points, density, criterion) -> Model:
