@@ -1,0 +1,138 @@
+"""Parametric studies: local and Dask runs agree, a killed sweep resumes, failures are recorded."""
+
+import json
+import multiprocessing
+from concurrent.futures import ProcessPoolExecutor
+
+import pytest
+
+from drydem.analysis.sweep import RunSpec, load_study, load_records, pending, record_path, sweep
+from drydem.errors import ModelError
+
+#: two small walls (tilting in a second or two) as wall files beside the study
+WALLS = {
+    "stack.toml": "BB\nbBb\nBB\nbBb\n",
+    "pier.toml": "B\n" * 10,  # rocks at atan(25 / 55) = 24.4 deg when rigid
+}
+WALL_FILE = '''[brick]
+length_m = 0.025
+height_m = 0.0055
+width_m = 0.012
+[supports]
+fix_y = true
+[layout]
+courses = """
+{courses}"""
+'''
+STUDY = """
+[study]
+name = "small"
+[defaults]
+increment_deg = 5.0
+[[grid]]
+name = "stiffness"
+targets = ["stack.toml", "pier.toml"]
+kn = [1e7, 1e8, 1e9]
+protocol = ["fixed"]
+[[grid]]
+name = "limit"
+analysis = "limit"
+targets = ["stack.toml", "pier.toml"]
+"""
+
+
+@pytest.fixture
+def study_file(tmp_path):
+    for name, courses in WALLS.items():
+        (tmp_path / name).write_text(WALL_FILE.format(courses=courses))
+    path = tmp_path / "small.toml"
+    path.write_text(STUDY)
+    return path
+
+
+def local(workers=2):
+    return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+
+
+def outcomes(results):
+    return {r["id"]: (r["status"], r["summary"]["collapse_angle_deg"], r["pushover"]) for r in load_records(results)}
+
+
+def test_a_study_expands_its_grids_and_shares_repeated_runs(study_file):
+    study = load_study(study_file)
+    assert study.name == "small" and len(study.runs) == 2 * 3 + 2
+    assert len({spec.id for spec in study.runs}) == len(study.runs)
+    tilt = [s for s in study.runs if s.analysis == "tilt"]
+    assert all(s.ks == s.kn and s.protocol == "fixed" and s.increment_deg == 5.0 for s in tilt)
+    twice = study_file.with_name("twice.toml")
+    twice.write_text(STUDY + STUDY[STUDY.index("[[grid]]"):].replace('"stiffness"', '"again"'))
+    assert load_study(twice).runs == study.runs
+
+
+@pytest.mark.slow
+def test_local_processes_and_a_dask_cluster_give_the_same_records(study_file, tmp_path):
+    from distributed import Client, LocalCluster
+
+    runs = load_study(study_file).runs
+    with local() as executor:
+        outcome = sweep(runs, tmp_path / "local", executor)
+    assert (outcome.finished, outcome.skipped, outcome.failed) == (len(runs), 0, 0)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, Client(cluster) as client:
+        sweep(runs, tmp_path / "dask", client.get_executor())
+    assert outcomes(tmp_path / "local") == outcomes(tmp_path / "dask")
+    # softer joints, lower collapse angle (paper Fig. 6): on the pier, 1e7 < 1e9
+    pier = {r["spec"]["kn"]: r["summary"]["collapse_angle_deg"] for r in load_records(tmp_path / "local")
+            if r["spec"]["analysis"] == "tilt" and "pier" in r["spec"]["target"]}
+    assert pier[1e7] < pier[1e9]
+
+
+def test_a_sweep_started_again_skips_what_is_recorded(study_file, tmp_path):
+    runs = load_study(study_file).runs
+    results = tmp_path / "results"
+    with local(1) as executor:
+        sweep(runs[:3], results, executor)  # as if killed after three runs
+        written = {spec.id: record_path(results, spec.id).stat().st_mtime_ns for spec in runs[:3]}
+        assert len(pending(runs, results)) == len(runs) - 3
+        outcome = sweep(runs, results, executor)
+    assert (outcome.finished, outcome.skipped) == (len(runs) - 3, 3)
+    assert {spec_id: record_path(results, spec_id).stat().st_mtime_ns for spec_id in written} == written
+    assert len(load_records(results)) == len(runs)
+    assert not list((results / "runs").glob("*.tmp"))
+
+
+def test_a_failing_run_is_recorded_and_the_sweep_goes_on(study_file, tmp_path):
+    good = load_study(study_file).runs[0]
+    bad = RunSpec(analysis="tilt", target=str(tmp_path / "missing.toml"), protocol="fixed")
+    negative = RunSpec(analysis="tilt", target=good.target, protocol="fixed", kn=-1.0, ks=-1.0)
+    with local(1) as executor:
+        outcome = sweep([bad, good, negative], tmp_path / "results", executor)
+    assert (outcome.finished, outcome.failed) == (3, 2)
+    records = {r["id"]: r for r in load_records(tmp_path / "results")}
+    assert "missing.toml: no such file" in records[bad.id]["error"]
+    assert "kn = -1.0: must be a positive number" in records[negative.id]["error"]
+    assert records[good.id]["status"] == "ok"
+    # retried on request only
+    assert [s.id for s in pending([bad, good], tmp_path / "results")] == []
+    assert [s.id for s in pending([bad, good], tmp_path / "results", retry_failed=True)] == [bad.id]
+
+
+@pytest.mark.parametrize("change, message", [
+    (('protocol = ["fixed"]', 'protocol = ["fast"]'), r"protocol \['fast'\] is not one of \['fixed', 'adaptive'\]"),
+    (('kn = [1e7', 'kk = [1e7'), r"unknown key\(s\) \['kk'\] in the grid"),
+    (('analysis = "limit"', 'analysis = "modal"'), r"analysis = 'modal': must be one of"),
+])
+def test_bad_study_files_name_the_grid_and_key(study_file, change, message):
+    study_file.write_text(STUDY.replace(*change))
+    with pytest.raises(ModelError, match=message) as caught:
+        load_study(study_file)
+    assert str(caught.value).startswith(str(study_file))
+
+
+def test_a_record_holds_parameters_summary_and_curve(study_file, tmp_path):
+    spec = load_study(study_file).runs[0]
+    with local(1) as executor:
+        sweep([spec], tmp_path, executor)
+    record = json.loads(record_path(tmp_path, spec.id).read_text())
+    assert record["spec"]["kn"] == spec.kn and record["status"] == "ok" and record["error"] is None
+    assert record["summary"]["collapse_angle_deg"] == record["pushover"][-1][0]
+    assert {"drift_limit_angles_deg", "model", "cycles"} <= set(record["summary"])
