@@ -29,6 +29,10 @@ unit_option = click.option("--unit", type=click.Choice(list(UNITS)), default="m"
                            help="Length unit of imported geometry (.wrl, .obj, .stl).")
 
 
+workers_option = click.option("--workers", type=click.IntRange(min=1), help="Local processes (default: all cores).")
+scheduler_option = click.option("--scheduler", help="Address of a Dask distributed scheduler to run on instead (tcp://host:8786).")
+
+
 def _target(target: str, unit: str = "m") -> Target:
     """Load TARGET or exit with its error."""
     try:
@@ -258,16 +262,13 @@ def _render(folder: Path, path: Path, *, fps: float) -> None:
 @main.command()
 @click.argument("study_file")
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), help="Results folder (default: results/STUDY-NAME).")
-@click.option("--workers", type=click.IntRange(min=1), help="Local processes (default: all cores).")
-@click.option("--scheduler", help="Address of a Dask distributed scheduler to run on instead (tcp://host:8786).")
+@workers_option
+@scheduler_option
 @click.option("--retry-failed", is_flag=True, help="Run again the runs recorded as failed.")
 def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str | None, retry_failed: bool) -> None:
     """Run a parametric study (STUDY_FILE, TOML, or a shipped study: savalle2022): every run a
     tilting or limit analysis, each recorded in OUT/runs as it finishes; run again to go on
     where it stopped."""
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
-
     from tqdm import tqdm
 
     from drydem.analysis.sweep import load_study, pending
@@ -286,14 +287,7 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
     out.mkdir(parents=True, exist_ok=True)
     todo = len(pending(study.runs, out, retry_failed=retry_failed))
     click.echo(f"{study.name}: {len(study.runs)} runs, {len(study.runs) - todo} already recorded in {out}")
-    if scheduler:
-        from distributed import Client
-
-        client = Client(scheduler)
-        executor, where = client.get_executor(), f"Dask scheduler {scheduler}"
-    else:
-        workers = workers or os.cpu_count() or 1
-        executor, where = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")), f"{workers} local processes"
+    executor, where = _executor(workers, scheduler)
     click.echo(f"running {todo} on {where}")
     with executor, tqdm(total=todo, desc="runs", unit=" run") as bar:
         failures = []
@@ -312,6 +306,78 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
     for failure in failures:
         click.echo(f"failed: {failure}", err=True)
     click.echo(f"{outcome.finished} runs done ({outcome.failed} failed), {outcome.skipped} skipped; records in {out / 'runs'}")
+
+
+def _executor(workers: int | None, scheduler: str | None):
+    """Where runs go: ``workers`` local processes (default: all cores), or a Dask scheduler's
+    cluster; returns a concurrent.futures executor and its description."""
+    if scheduler:
+        from distributed import Client
+
+        return Client(scheduler).get_executor(), f"Dask scheduler {scheduler}"
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    workers = workers or os.cpu_count() or 1
+    return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")), f"{workers} local processes"
+
+
+@main.command()
+@click.argument("results_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), help="Report folder (default: RESULTS_DIR/report).")
+def report(results_dir: Path, out: Path | None) -> None:
+    """Write the report of a study (Markdown, HTML, PNG figures in the style of the paper)."""
+    from drydem.report.study import build_report
+
+    path = build_report(results_dir, out)
+    click.echo(f"report          {path} and {path.with_suffix('.html')}")
+
+
+@main.command()
+@click.argument("results_dir", type=click.Path(file_okay=False, path_type=Path))
+@click.option("--designs", default="WD1,WD2,WD3,WD4,WD5,WD6,WD7", show_default=True, help="Walls to fit, comma-separated.")
+@click.option("--kn-min", type=float, default=1e7, show_default=True, help="Smallest kn searched, Pa/m.")
+@click.option("--kn-max", type=float, default=1e9, show_default=True, help="Largest kn searched, Pa/m.")
+@click.option("--ks-ratio", type=float, default=1.0, show_default=True, help="ks = ratio x kn.")
+@click.option("--increment", type=float, default=0.1, show_default=True, help="Tilt step of the (adaptive) runs, deg.")
+@workers_option
+@scheduler_option
+def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, workers, scheduler) -> None:
+    """Find the kn that best reproduces the experimental collapse angles (paper Table 1) of
+    DESIGNS, reusing and adding runs in RESULTS_DIR (the paper's post-diction, Section 4.4)."""
+    from drydem.analysis.calibrate import calibrate as search
+    from drydem.analysis.calibrate import mean_absolute_relative_error
+    from drydem.analysis.sweep import RunSpec, load_records
+    from drydem.analysis.sweep import sweep as run_sweep
+    from drydem.published import savalle2022
+    from drydem.report.study import Runs
+
+    names = [d.strip() for d in designs.split(",") if d.strip()]
+    experiment = savalle2022()["table1_experiment"]["collapse_angle_deg"]
+    unknown = [d for d in names if d not in experiment]
+    if unknown:
+        raise click.ClickException(f"no experimental collapse angle for {unknown}; known: {sorted(experiment)}")
+    results_dir.mkdir(parents=True, exist_ok=True)
+    executor, where = _executor(workers, scheduler)
+    click.echo(f"calibrating kn over [{kn_min:.3g}, {kn_max:.3g}] Pa/m on {', '.join(names)} ({where}; runs kept in {results_dir})")
+
+    def error(kn: float) -> float:
+        specs = [RunSpec(analysis="tilt", target=d, protocol="adaptive", kn=kn, ks=ks_ratio * kn, increment_deg=increment) for d in names]
+        run_sweep(specs, results_dir, executor)
+        runs = Runs(load_records(results_dir))
+        found = {d: runs.tilt(d, kn, ks=ks_ratio * kn) for d in names}
+        missing = [d for d, run in found.items() if run is None]
+        if missing:
+            raise click.ClickException(f"kn = {kn:.4g}: the runs of {missing} failed (see {results_dir / 'runs'})")
+        # a wall that cannot stand under its own weight has no capacity: 0 deg (paper: WD4, 6, 7 at 1e7)
+        angles = {d: run["summary"]["collapse_angle_deg"] or 0.0 for d, run in found.items()}
+        value = mean_absolute_relative_error(angles, experiment)
+        click.echo(f"  kn {kn:10.4g} Pa/m   mean absolute error {value:.2%}")
+        return value
+
+    with executor:
+        result = search(error, kn_min, kn_max)
+    click.echo(f"best kn         {result.best_kn:.4g} Pa/m (ks = {ks_ratio:g} kn): mean absolute error {result.best_error:.2%}")
 
 
 def _with_overrides(model: Model, *, kn, ks, friction, points, density, criterion) -> Model:

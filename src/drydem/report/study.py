@@ -1,0 +1,235 @@
+"""The report of a parametric study (``drydem report RESULTS_DIR``), in the style of the seed
+paper: its figures (3, 6, 9-13) and tables (2-4) from the study's run records, drydem's values
+beside the paper's (drydem.published), in Markdown and HTML with PNG figures.
+
+A figure or table whose runs are missing says so instead of failing: a report can be built
+from a study still running.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from drydem.analysis.drift import EC8_DRIFT_LIMITS
+from drydem.analysis.sweep import load_records
+from drydem.published import savalle2022
+from drydem.report.plots import pyplot
+
+DESIGNS = [f"WD{k}" for k in range(1, 8)]
+#: the paper's grouping of the pushover figures
+PUSHOVER_FIGURES = {"fig09_pushover": ["WD1", "WD2"], "fig10_pushover": ["WD3", "WD4"], "fig11_pushover": ["WD5", "WD6", "WD7"]}
+POINTS = 4  # the paper's contact density for its parametric study
+NOTE = ("drydem's WD1-WD7 are reconstructions that obey the competition brief, not the original drawings "
+        "(which drydem does not have): compare trends and rankings, not single numbers.")
+
+
+class Runs:
+    """The ok records of a study, looked up by what they are."""
+
+    def __init__(self, records: list[dict]):
+        self.ok = [r for r in records if r["status"] == "ok"]
+        self.failed = [r for r in records if r["status"] != "ok"]
+
+    def tilt(self, design: str, kn: float, *, ks: float | None = None, points: int = POINTS, protocol: str | None = None) -> dict | None:
+        """The tilting run of ``design`` at kn (ks = kn by default); adaptive preferred to fixed
+        (both find the collapse angle within one increment)."""
+        ks = kn if ks is None else ks
+        found = [r for r in self.ok if r["spec"]["analysis"] == "tilt" and _design(r) == design
+                 and _close(r["spec"]["kn"], kn) and _close(r["spec"]["ks"], ks) and r["spec"]["points"] in (points, None)
+                 and (protocol is None or r["spec"]["protocol"] == protocol)]
+        found.sort(key=lambda r: r["spec"]["protocol"] != "adaptive")
+        return found[0] if found else None
+
+    def angle(self, design: str, kn: float, **kw) -> float | None:
+        run = self.tilt(design, kn, **kw)
+        return None if run is None else run["summary"]["collapse_angle_deg"]
+
+    def dls(self, design: str, kn: float) -> float | None:
+        run = self.tilt(design, kn)
+        return None if run is None else run["summary"]["drift_limit_angles_deg"]["0.01"]
+
+    def limit(self, design: str, method: str) -> float | None:
+        found = [r for r in self.ok if r["spec"]["analysis"] == "limit" and _design(r) == design and r["summary"]["method"] == method]
+        return found[0]["summary"]["collapse_angle_deg"] if found else None
+
+    def stiffnesses(self, design: str, *, protocol: str | None = None) -> list[float]:
+        """The kn of the runs of ``design`` with ks = kn, sorted."""
+        return sorted({r["spec"]["kn"] for r in self.ok if r["spec"]["analysis"] == "tilt" and _design(r) == design
+                       and r["spec"]["kn"] is not None and _close(r["spec"]["ks"], r["spec"]["kn"])
+                       and (protocol is None or r["spec"]["protocol"] == protocol)})
+
+
+def _design(record: dict) -> str:
+    return Path(record["spec"]["target"]).stem
+
+
+def _close(a, b) -> bool:
+    return a is not None and b is not None and math.isclose(a, b, rel_tol=1e-9)
+
+
+def build_report(results: Path, out: Path | None = None) -> Path:
+    """Write ``report.md``, ``report.html`` and ``figures/*.png`` for the study in ``results``."""
+    import markdown
+
+    results = Path(results)
+    runs = Runs(load_records(results))
+    out = Path(out or results / "report")
+    figures = out / "figures"
+    figures.mkdir(parents=True, exist_ok=True)
+    paper = savalle2022()
+    sections = [
+        f"# Report of the study in `{results}`",
+        f"{len(runs.ok)} runs recorded ({len(runs.failed)} failed). {NOTE} Published values: {paper['source'].split(' - ')[0]}.",
+        _table2(runs, paper), _table3(runs, paper), _table4(runs, paper),
+        _figure(figures, "fig03_contact_points", "Fig. 3: collapse angle of WD3 against contact points per length, kn = 3e7",
+                lambda ax: _contact_points(ax, runs)),
+        _figure(figures, "fig06_stiffness", "Fig. 6: collapse angle over the experimental one against kn = ks; grey: the experiments' mean CoV",
+                lambda ax: _stiffness(ax, runs, paper)),
+        *(_figure(figures, name, f"Figs 9-11: pushover curves of {', '.join(designs)} (fixed protocol), EC8 drift limits dashed",
+                  lambda axes, designs=designs: _pushover(axes, runs, designs), panels=len(designs)) for name, designs in PUSHOVER_FIGURES.items()),
+        _figure(figures, "fig12_dls", "Fig. 12: tilt angle at 1 % drift (damage limit state) against kn = ks", lambda ax: _dls(ax, runs)),
+        _figure(figures, "fig13_ks", "Fig. 13: WD6, influence of ks on the pushover curve (panels: kn)", lambda axes: _ks(axes, runs), panels=4),
+    ]
+    text = "\n\n".join(sections) + "\n"
+    (out / "report.md").write_text(text)
+    body = markdown.markdown(text, extensions=["tables"])
+    (out / "report.html").write_text(f"<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>drydem report</title>"
+                                     f"<style>table{{border-collapse:collapse}}td,th{{border:1px solid #999;padding:2px 6px}}</style>"
+                                     f"</head><body>\n{body}\n</body></html>\n")
+    return out / "report.md"
+
+
+def _cell(value: float | None, fmt: str = "{:.1f}") -> str:
+    return "-" if value is None else fmt.format(value)
+
+
+def _table(title: str, header: list[str], rows: list[list[str]]) -> str:
+    lines = [f"## {title}", "", "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    return "\n".join(lines + ["| " + " | ".join(row) + " |" for row in rows])
+
+
+def _table2(runs: Runs, paper: dict) -> str:
+    published = paper["table2_collapse_angle_deg"]
+    rows = []
+    for d in DESIGNS:
+        exp, la_a, la_na, dem9, dem10 = published[d]
+        ours = [runs.limit(d, "associative"), runs.limit(d, "non-associative"), runs.angle(d, 1e9), runs.angle(d, 1e10)]
+        rows.append([d, _cell(exp)] + [f"{_cell(p)} / {_cell(o)}" for p, o in zip((la_a, la_na, dem9, dem10), ours)])
+    return _table("Table 2: collapse angles (deg), paper / drydem",
+                  ["wall", "experiment", "LA-A", "LA-NA", "DEM kn = 1e9", "DEM kn = 1e10"], rows)
+
+
+def _table3(runs: Runs, paper: dict) -> str:
+    experiment = paper["table1_experiment"]["collapse_angle_deg"]
+    published = paper["table3_kn_3e7"]
+    rows, errors = [], []
+    for d in DESIGNS:
+        ours = runs.angle(d, 3e7)
+        error = None if ours is None else 100 * (ours - experiment[d]) / experiment[d]
+        if error is not None:
+            errors.append(abs(error))
+        rows.append([d, _cell(experiment[d]), _cell(published["numerical_collapse_angle_deg"][d]), _cell(ours),
+                     _cell(published["relative_error_percent"][d], "{:+.1f}"), _cell(error, "{:+.1f}")])
+    mean = np.mean(errors) if errors else None
+    rows.append(["mean absolute", "", "", "", _cell(published["mean_abs_error_percent"]), _cell(mean)])
+    return _table("Table 3: kn = ks = 3e7 against the experiments",
+                  ["wall", "experiment (deg)", "paper (deg)", "drydem (deg)", "paper error (%)", "drydem error (%)"], rows)
+
+
+def _table4(runs: Runs, paper: dict) -> str:
+    published = paper["table4_ratio_kn1e9_over_kn3e7"]
+    rows = []
+    for d in DESIGNS:
+        pairs = [(runs.angle(d, 1e9), runs.angle(d, 3e7)), (runs.dls(d, 1e9), runs.dls(d, 3e7))]
+        ours = [None if a is None or b is None else a / b for a, b in pairs]
+        rows.append([d, f"{_cell(published['collapse_angle'][d])} / {_cell(ours[0], '{:.2f}')}",
+                     f"{_cell(published['dls_angle_drift_1pct'][d])} / {_cell(ours[1], '{:.2f}')}"])
+    return _table("Table 4: ratios kn = 1e9 over kn = 3e7, paper / drydem", ["wall", "collapse angle", "DLS angle (1 % drift)"], rows)
+
+
+def _figure(folder: Path, name: str, caption: str, draw, *, panels: int = 1) -> str:
+    plt = pyplot()
+    fig, axes = plt.subplots(1, panels, figsize=(4.4 * max(panels, 1.4), 3.8), layout="constrained", squeeze=False)
+    drew = draw(axes[0][0] if panels == 1 else axes[0])
+    path = folder / f"{name}.png"
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    missing = "" if drew else " (no runs for this figure in the study)"
+    return f"## {caption}{missing}\n\n![{name}](figures/{path.name})"
+
+
+def _contact_points(ax, runs: Runs) -> bool:
+    points = sorted({r["spec"]["points"] for r in runs.ok if _design(r) == "WD3" and r["spec"]["analysis"] == "tilt"
+                     and r["spec"]["points"] is not None and _close(r["spec"]["kn"], 3e7)})
+    angles = [runs.angle("WD3", 3e7, points=p) for p in points]
+    ax.plot(points, angles, "o-")
+    ax.set(xlabel="contact points per block length", ylabel="collapse angle (deg)")
+    if points:
+        ax.set(xscale="log", xticks=points, xticklabels=[str(p) for p in points])
+    ax.grid(alpha=0.3)
+    return bool(points)
+
+
+def _stiffness(ax, runs: Runs, paper: dict) -> bool:
+    experiment, cov = paper["table1_experiment"]["collapse_angle_deg"], paper["table1_experiment"]["cov_percent"]
+    band = np.mean(list(cov.values())) / 100
+    ax.axhspan(1 - band, 1 + band, color="0.85")
+    drew = False
+    for d in DESIGNS:
+        kns = runs.stiffnesses(d)
+        ratio = [runs.angle(d, kn) / experiment[d] for kn in kns]
+        drew |= bool(kns)
+        ax.plot(kns, ratio, "o-", label=d, markersize=3)
+    ax.axhline(1.0, color="k", linewidth=0.8)
+    ax.set(xscale="log" if drew else "linear", xlabel="kn = ks (Pa/m)", ylabel="collapse angle / experiment")
+    _legend(ax)
+    return drew
+
+
+def _pushover(axes, runs: Runs, designs: list[str]) -> bool:
+    drew = False
+    for ax, d in zip(axes, designs):
+        height = None
+        for kn in runs.stiffnesses(d, protocol="fixed"):
+            run = runs.tilt(d, kn, protocol="fixed")
+            curve = np.array(run["pushover"])
+            ax.plot(curve[:, 1] * 1e3, curve[:, 0], label=f"kn {kn:.0e}")
+            height = run["summary"]["wall_height_m"]
+        for limit in EC8_DRIFT_LIMITS if height is not None else ():
+            ax.axvline(limit * height * 1e3, color="0.5", linestyle="--", linewidth=0.8)
+        drew |= height is not None
+        ax.set(title=d, xlabel="monitored displacement (mm)", ylabel="tilt (deg)", xlim=(0, None))
+        _legend(ax)
+    return drew
+
+
+def _dls(ax, runs: Runs) -> bool:
+    drew = False
+    for d in DESIGNS:
+        kns = [kn for kn in runs.stiffnesses(d) if runs.dls(d, kn) is not None]
+        drew |= bool(kns)
+        ax.plot(kns, [runs.dls(d, kn) for kn in kns], "o-", label=d, markersize=3)
+    ax.set(xscale="log" if drew else "linear", xlabel="kn = ks (Pa/m)", ylabel="DLS tilt angle (deg)")
+    _legend(ax)
+    return drew
+
+
+def _ks(axes, runs: Runs) -> bool:
+    drew = False
+    wd6 = [r for r in runs.ok if _design(r) == "WD6" and r["spec"]["analysis"] == "tilt" and r["spec"]["protocol"] == "fixed"]
+    for ax, kn in zip(axes, (1e7, 4e7, 7e7, 1e8)):
+        for run in sorted((r for r in wd6 if _close(r["spec"]["kn"], kn)), key=lambda r: r["spec"]["ks"]):
+            curve = np.array(run["pushover"])
+            ax.plot(curve[:, 1] * 1e3, curve[:, 0], label=f"ks {run['spec']['ks']:.0e}")
+            drew = True
+        ax.set(title=f"WD6, kn {kn:.0e}", xlabel="displacement (mm)", ylabel="tilt (deg)", xlim=(0, None))
+        _legend(ax)
+    return drew
+
+
+def _legend(ax) -> None:
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize="x-small", ncol=2)
