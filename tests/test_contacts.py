@@ -9,7 +9,6 @@ from scipy.spatial.transform import Rotation
 
 import drydem as dd
 from drydem import contacts
-from drydem.rotation import matrices
 from conftest import BRICK, box_vertices, layout_blocks
 
 

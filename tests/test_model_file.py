@@ -7,7 +7,6 @@ import pytest
 
 import drydem as dd
 from drydem.io.model_file import load_model, save_model
-from drydem.walls import benchmark_wall
 
 GOOD = """
 [material]

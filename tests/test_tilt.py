@@ -7,7 +7,6 @@ angle lies in (theta_c - d, theta_c]; with stiff joints (kn = 1e10) the elastic 
 moves theta_c by less than 0.01 deg (stated discretisation error: 0).
 """
 
-import json
 import math
 
 import numpy as np

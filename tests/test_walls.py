@@ -1,7 +1,5 @@
 """Wall files, the built-in designs WD1-WD7 and the competition brief."""
 
-import textwrap
-
 import numpy as np
 import pytest
 

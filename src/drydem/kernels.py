@@ -22,10 +22,9 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from drydem.joints import JointArrays, normal_law, shear_law
-from drydem.motion import BlockArrays, local_damping
+from drydem.joints import normal_law, shear_law
+from drydem.motion import local_damping
 from drydem.rotation import quaternion_to_matrix, rotate_by_vector
-from drydem.state import State
 
 #: kinetic energy above this many times the work gravity can have done means a blow-up
 DIVERGENCE_FACTOR = 10.0
