@@ -136,3 +136,20 @@ def test_a_record_holds_parameters_summary_and_curve(study_file, tmp_path):
     assert record["spec"]["kn"] == spec.kn and record["status"] == "ok" and record["error"] is None
     assert record["summary"]["collapse_angle_deg"] == record["pushover"][-1][0]
     assert {"drift_limit_angles_deg", "model", "cycles"} <= set(record["summary"])
+
+
+def test_drydem_sweep_then_again_then_report(study_file, tmp_path):
+    from click.testing import CliRunner
+
+    from drydem.cli import main
+
+    out = tmp_path / "results"
+    result = CliRunner().invoke(main, ["sweep", str(study_file), "--out", str(out), "--workers", "2"])
+    assert result.exit_code == 0, result.output
+    assert "small: 8 runs, 0 already recorded" in result.output and "8 runs done (0 failed), 0 skipped" in result.output
+    result = CliRunner().invoke(main, ["sweep", str(study_file), "--out", str(out)])
+    assert "8 already recorded" in result.output and "0 runs done (0 failed), 8 skipped" in result.output
+    result = CliRunner().invoke(main, ["report", str(out)])
+    assert result.exit_code == 0 and (out / "report" / "report.html").is_file()
+    result = CliRunner().invoke(main, ["sweep", "nosuchstudy"])
+    assert result.exit_code == 1 and "not a shipped study (savalle2022)" in result.output

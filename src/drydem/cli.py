@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import time
+from contextlib import contextmanager
 from dataclasses import replace
 from datetime import datetime
 from pathlib import Path
@@ -287,9 +288,8 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
     out.mkdir(parents=True, exist_ok=True)
     todo = len(pending(study.runs, out, retry_failed=retry_failed))
     click.echo(f"{study.name}: {len(study.runs)} runs, {len(study.runs) - todo} already recorded in {out}")
-    executor, where = _executor(workers, scheduler)
-    click.echo(f"running {todo} on {where}")
-    with executor, tqdm(total=todo, desc="runs", unit=" run") as bar:
+    with _executor(workers, scheduler) as (executor, where), tqdm(total=todo, desc="runs", unit=" run") as bar:
+        bar.write(f"running {todo} on {where}")
         failures = []
 
         def done(record):
@@ -308,18 +308,22 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
     click.echo(f"{outcome.finished} runs done ({outcome.failed} failed), {outcome.skipped} skipped; records in {out / 'runs'}")
 
 
+@contextmanager
 def _executor(workers: int | None, scheduler: str | None):
     """Where runs go: ``workers`` local processes (default: all cores), or a Dask scheduler's
-    cluster; returns a concurrent.futures executor and its description."""
+    cluster; yields a concurrent.futures executor and its description, and closes both."""
     if scheduler:
         from distributed import Client
 
-        return Client(scheduler).get_executor(), f"Dask scheduler {scheduler}"
+        with Client(scheduler) as client, client.get_executor() as executor:
+            yield executor, f"Dask scheduler {scheduler}"
+        return
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     workers = workers or os.cpu_count() or 1
-    return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")), f"{workers} local processes"
+    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as executor:
+        yield executor, f"{workers} local processes"
 
 
 @main.command()
@@ -358,8 +362,7 @@ def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, workers
     if unknown:
         raise click.ClickException(f"no experimental collapse angle for {unknown}; known: {sorted(experiment)}")
     results_dir.mkdir(parents=True, exist_ok=True)
-    executor, where = _executor(workers, scheduler)
-    click.echo(f"calibrating kn over [{kn_min:.3g}, {kn_max:.3g}] Pa/m on {', '.join(names)} ({where}; runs kept in {results_dir})")
+    click.echo(f"calibrating kn over [{kn_min:.3g}, {kn_max:.3g}] Pa/m on {', '.join(names)} (runs kept in {results_dir})")
 
     def error(kn: float) -> float:
         specs = [RunSpec(analysis="tilt", target=d, protocol="adaptive", kn=kn, ks=ks_ratio * kn, increment_deg=increment) for d in names]
@@ -375,7 +378,8 @@ def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, workers
         click.echo(f"  kn {kn:10.4g} Pa/m   mean absolute error {value:.2%}")
         return value
 
-    with executor:
+    with _executor(workers, scheduler) as (executor, where):
+        click.echo(f"running on {where}")
         result = search(error, kn_min, kn_max)
     click.echo(f"best kn         {result.best_kn:.4g} Pa/m (ks = {ks_ratio:g} kn): mean absolute error {result.best_error:.2%}")
 
