@@ -311,19 +311,31 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
 @contextmanager
 def _executor(workers: int | None, scheduler: str | None):
     """Where runs go: ``workers`` local processes (default: all cores), or a Dask scheduler's
-    cluster; yields a concurrent.futures executor and its description, and closes both."""
+    cluster; yields a concurrent.futures executor and its description. On an interrupt the
+    queued runs are cancelled rather than waited for (a Ctrl-C also stops the local workers)."""
     if scheduler:
         from distributed import Client
 
-        with Client(scheduler) as client, client.get_executor() as executor:
-            yield executor, f"Dask scheduler {scheduler}"
-        return
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
+        client = Client(scheduler)
+        executor, where = client.get_executor(), f"Dask scheduler {scheduler}"
+    else:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
 
-    workers = workers or os.cpu_count() or 1
-    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as executor:
-        yield executor, f"{workers} local processes"
+        workers = workers or os.cpu_count() or 1
+        executor = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+        client, where = None, f"{workers} local processes"
+    try:
+        yield executor, where
+    except BaseException:
+        if client is None:
+            executor.shutdown(wait=False, cancel_futures=True)
+        raise
+    else:
+        executor.shutdown()
+    finally:
+        if client is not None:
+            client.close()
 
 
 @main.command()
