@@ -100,6 +100,11 @@ class Model:
         """(nb, 3, 3) inverse inertia tensors, 1/(kg m2)."""
         return np.linalg.inv(self.block_inertia)
 
+    @cached_property
+    def block_inertia_whitening(self) -> np.ndarray:
+        """(nb, 3, 3) W = L^-1 with I = L L^T (Cholesky): W K W^T has the eigenvalues of I^-1 K."""
+        return np.linalg.inv(np.linalg.cholesky(self.block_inertia))
+
     @property
     def contact_density(self) -> contacts.Density:
         """Sub-contact density resolved from ``contacts`` and ``supports`` (see ContactSettings)."""

@@ -68,10 +68,11 @@ def contact_stiffness(sub: SubContacts, kn: float, ks: float, n_blocks: int) -> 
     return k_t, k_r
 
 
-def critical_timestep(mass: np.ndarray, inertia_body: np.ndarray, movable: np.ndarray, k_t: np.ndarray, k_r: np.ndarray) -> float:
-    """2 / omega_max with omega_i^2 = 2 (K_t / m + lambda_max(I^-1 K_r)), s (inf if nothing is sprung)."""
-    inv_chol = np.linalg.inv(np.linalg.cholesky(inertia_body))
-    rotational = np.linalg.eigvalsh(inv_chol @ k_r @ inv_chol.transpose(0, 2, 1))[:, -1]
+def critical_timestep(mass: np.ndarray, whitening: np.ndarray, movable: np.ndarray, k_t: np.ndarray, k_r: np.ndarray) -> float:
+    """2 / omega_max with omega_i^2 = 2 (K_t / m + lambda_max(I^-1 K_r)), s (inf if nothing is
+    sprung); ``whitening`` is L^-1 for the inertias I = L L^T (Model.block_inertia_whitening), so
+    that lambda(I^-1 K_r) = lambda(L^-1 K_r L^-T), a symmetric eigenproblem."""
+    rotational = np.linalg.eigvalsh(whitening @ k_r @ whitening.transpose(0, 2, 1))[:, -1]
     omega_sq = (2.0 * (k_t / mass + rotational))[movable]
     if omega_sq.size == 0 or omega_sq.max() <= 0:
         return np.inf

@@ -166,7 +166,7 @@ class Simulation:
     def _update_inertia(self) -> None:
         m, solver = self.model, self.model.solver
         k_t, k_r = contact_stiffness(self.contacts, m.joint.kn, m.joint.ks, m.n_blocks)
-        critical = critical_timestep(m.block_mass, m.block_inertia, m.block_movable & self.active, k_t, k_r)
+        critical = critical_timestep(m.block_mass, m.block_inertia_whitening, m.block_movable & self.active, k_t, k_r)
         if self._fixed_timestep is not None:
             if self._fixed_timestep > critical:
                 raise ModelError(
