@@ -180,9 +180,9 @@ def _stiffness(ax, runs: Runs, paper: dict) -> bool:
     drew = False
     for d in DESIGNS:
         kns = runs.stiffnesses(d)
-        ratio = [runs.angle(d, kn) / experiment[d] for kn in kns]
-        drew |= bool(kns)
-        ax.plot(kns, ratio, "o-", label=d, markersize=3)
+        if kns:
+            drew = True
+            ax.plot(kns, [(runs.angle(d, kn) or 0.0) / experiment[d] for kn in kns], "o-", label=d, markersize=3)
     ax.axhline(1.0, color="k", linewidth=0.8)
     ax.set(xscale="log" if drew else "linear", xlabel="kn = ks (Pa/m)", ylabel="collapse angle / experiment")
     _legend(ax)
@@ -210,8 +210,9 @@ def _dls(ax, runs: Runs) -> bool:
     drew = False
     for d in DESIGNS:
         kns = [kn for kn in runs.stiffnesses(d) if runs.dls(d, kn) is not None]
-        drew |= bool(kns)
-        ax.plot(kns, [runs.dls(d, kn) for kn in kns], "o-", label=d, markersize=3)
+        if kns:
+            drew = True
+            ax.plot(kns, [runs.dls(d, kn) for kn in kns], "o-", label=d, markersize=3)
     ax.set(xscale="log" if drew else "linear", xlabel="kn = ks (Pa/m)", ylabel="DLS tilt angle (deg)")
     _legend(ax)
     return drew
