@@ -169,3 +169,26 @@ def test_two_points_across_an_in_plane_wall_give_the_same_collapse():
     # equal to the equilibrium tolerance (the timestep bound differs, so the damped paths do):
     # measured 5e-4
     np.testing.assert_allclose([r.ux_m for r in two.records], [r.ux_m for r in both.records], rtol=2e-3, atol=1e-9)
+
+
+def test_a_coarse_adaptive_trial_is_given_up_once_its_motion_is_not_elastic():
+    # the last two equilibria moved 1 mm per degree: a 1.6 deg trial expects 1.6 mm, and is
+    # abandoned past 4 x 1.6 mm (TiltSettings.trial_growth), or at once if a block falls out
+    from drydem.analysis.tilt import Record, _trial_limit
+
+    class Run:
+        lost: list = []
+        ux = 0.010
+
+        def displacement(self):
+            return self.ux, 0.0
+
+    run = Run()
+    records = [Record(8.0, 0.008, 0.0, 0.0, 100), Record(10.0, 0.010, 0.0, 0.0, 100)]
+    give_up = _trial_limit(run, records, 1.6, TiltSettings(adaptive=True))
+    run.ux = 0.010 + 6.3e-3
+    assert not give_up()
+    run.ux = 0.010 + 6.5e-3
+    assert give_up()
+    run.ux, run.lost = 0.011, [("c3b1", 11.6)]
+    assert give_up()

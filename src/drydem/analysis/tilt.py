@@ -16,6 +16,8 @@ The collapse angle is the largest tilt at which the model was in equilibrium.
 Adaptive protocol: steps of ``increment_deg * 2**refinements``; a step that fails is undone
 (the last equilibrium is restored, shear history included) and halved, down to
 ``increment_deg``; so the collapse angle is found to within one increment, as with fixed steps.
+A coarse step is judged failed early, once its motion is clearly not elastic (``_trial_limit``):
+only steps of one increment are followed to the stop criteria.
 
 Blocks that fall out of the model (centroid more than ``lost_drop_heights`` of their own
 heights below where it was drawn, e.g. a brick sliding out of a course) are taken out of the
@@ -56,6 +58,9 @@ class TiltSettings:
     highest, nearest the middle of the wall). max_angle_deg : the analysis ends there, deg.
     lost_drop_heights : a block whose centroid dropped more than this many times its own
     height is taken out. chunk_cycles : cycles between checks of the monitored point.
+    trial_growth, trial_floor_m : a coarse adaptive trial is abandoned as failed once the
+    monitored point has moved more than trial_growth times the displacement the last two
+    equilibria predict for it, and at least trial_floor_m (m), or once a block has fallen out.
     """
 
     increment_deg: float = 0.1
@@ -67,6 +72,8 @@ class TiltSettings:
     max_angle_deg: float = 80.0
     lost_drop_heights: float = 2.0
     chunk_cycles: int = 2000
+    trial_growth: float = 4.0
+    trial_floor_m: float = 5e-4
 
     def __post_init__(self):
         checks = {
@@ -77,6 +84,8 @@ class TiltSettings:
             "max_angle_deg": 0 < self.max_angle_deg < 90,
             "lost_drop_heights": self.lost_drop_heights > 0,
             "chunk_cycles": isinstance(self.chunk_cycles, int) and self.chunk_cycles > 0,
+            "trial_growth": self.trial_growth > 1,
+            "trial_floor_m": self.trial_floor_m > 0,
         }
         for name, ok in checks.items():
             if not ok:
@@ -198,10 +207,10 @@ class _Run:
         return float(moved[0]), float(moved[2])
 
     def equilibrate(self, theta_deg: float, *, vertical: bool = False, chunk_cycles: int | None = None,
-                    trace: _Trace | None = None) -> tuple[bool, int]:
+                    trace: _Trace | None = None, give_up: Callable[[], bool] | None = None) -> tuple[bool, int]:
         """Cycle at ``theta_deg`` until equilibrium (True), the stop displacement, the fall of
-        the monitored block or max cycles (False), checking every ``chunk_cycles`` (default the
-        settings'), and adding a frame to ``trace`` at every check.
+        the monitored block, ``give_up()`` or max cycles (False), checking every ``chunk_cycles``
+        (default the settings'), and adding a frame to ``trace`` at every check.
 
         Blocks that fall out are taken out and the cycling goes on, except under vertical
         gravity (stage 1): a model that loses a block under its own weight cannot stand.
@@ -224,7 +233,7 @@ class _Run:
                 self.on_progress(theta_deg, self.sim.cycles, ux)
             if trace is not None:
                 trace.add(lambda: self.frame("past collapse", theta_deg))
-            if self.monitor_fell():
+            if self.monitor_fell() or (give_up is not None and not result.converged and give_up()):
                 return False, done
             if result.converged:
                 return True, done
@@ -312,7 +321,8 @@ def tilt_analysis(
         last_good, lost_at_good = run.sim.snapshot(), list(run.lost)
         ended_by = "maximum angle"
         while theta + step <= settings.max_angle_deg + 1e-9:
-            held, cycles = run.equilibrate(theta + step)
+            coarse = settings.adaptive and step > settings.increment_deg * (1 + 1e-9)
+            held, cycles = run.equilibrate(theta + step, give_up=_trial_limit(run, records, step, settings) if coarse else None)
             if held:
                 theta = round(theta + step, 9)
                 accept(theta, step, cycles)
@@ -356,6 +366,23 @@ def tilt_analysis(
         for frame in trace.frames:
             on_frame(frame)
     return result
+
+
+def _trial_limit(run: _Run, records: list[Record], step: float, settings: TiltSettings) -> Callable[[], bool]:
+    """When to abandon a coarse adaptive trial as failed (it is then halved, as any failure):
+    a block fell out during it, or the monitored point has moved more than ``trial_growth``
+    times what the last two equilibria predict for this step (at least ``trial_floor_m``).
+    A collapse needs only to be recognised here, not followed to the stop displacement; an
+    equilibrium wrongly abandoned costs a bisection, not a wrong answer, since the steps of one
+    increment are judged by the full criteria."""
+    lost_before = len(run.lost)
+    ux0 = run.displacement()[0]
+    if len(records) >= 2 and records[-1].tilt_deg > records[-2].tilt_deg:
+        slope = abs(records[-1].ux_m - records[-2].ux_m) / (records[-1].tilt_deg - records[-2].tilt_deg)
+    else:
+        slope = 0.0
+    limit = max(settings.trial_growth * slope * step, settings.trial_floor_m)
+    return lambda: len(run.lost) > lost_before or abs(run.displacement()[0] - ux0) > limit
 
 
 def _fingerprint(model: Model, settings: TiltSettings) -> str:
