@@ -91,3 +91,30 @@ def test_many_cycles_with_redetection_stay_together():
     assert totals[0].keys() == totals[1].keys()
     for key, load in totals[0].items():
         assert load == pytest.approx(totals[1][key], rel=0, abs=1e-7 * max(totals[0].values()))
+
+
+def test_compiled_contact_stiffness_and_timestep_match_their_numpy_oracles(benchmark_wall):
+    from drydem import motion
+
+    sim = dd.Simulation(benchmark_wall)
+    m = benchmark_wall
+    fast = motion.contact_stiffness(sim.contacts, 3e7, 1e7, m.n_blocks)
+    slow = motion.contact_stiffness_reference(sim.contacts, 3e7, 1e7, m.n_blocks)
+    np.testing.assert_allclose(fast[0], slow[0], rtol=1e-12)
+    np.testing.assert_allclose(fast[1], slow[1], rtol=0, atol=1e-12 * np.abs(slow[1]).max())
+    args = (m.block_mass, m.block_inertia_whitening, m.block_movable, *fast)
+    assert motion.critical_timestep(*args) == pytest.approx(motion.critical_timestep_reference(*args), rel=1e-10)
+
+
+def test_closed_form_largest_eigenvalue_of_symmetric_3x3():
+    # Smith (1961) against LAPACK, including repeated and zero eigenvalues
+    from drydem.motion import _largest_eigenvalue
+
+    rng = np.random.default_rng(7)
+    cases = [np.diag([2.0, 2.0, 2.0]), np.diag([0.0, 0.0, 5.0]), np.diag([3.0, 1.0, 1.0])]
+    for _ in range(200):
+        q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        cases.append(q @ np.diag(rng.uniform(0, 10, 3) ** rng.integers(1, 4)) @ q.T)
+    for a in cases:
+        a = 0.5 * (a + a.T)
+        assert _largest_eigenvalue(a) == pytest.approx(np.linalg.eigvalsh(a)[-1], rel=1e-9, abs=1e-12)

@@ -50,10 +50,36 @@ class BlockArrays(NamedTuple):
 
 
 def contact_stiffness(sub: SubContacts, kn: float, ks: float, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:
-    """Per-block K_t (nb,) N/m and K_r (nb, 3, 3) N m of its sub-contact springs (body frame).
+    """Per-block K_t (nb,) N/m and K_r (nb, 3, 3) N m of its sub-contact springs (body frame):
+    K_t = sum_s k_s, K_r = trace(S) 1 - S with S = sum_s k_s r_s r_s^T, k_s = max(kn, ks) A_s.
+    Compiled (it runs at every re-detection); :func:`contact_stiffness_reference` is the oracle."""
+    return _contact_stiffness(sub.pairs, sub.start, sub.point_ref_body, sub.point_inc_body, sub.area, max(kn, ks), n_blocks)
 
-    K_r = trace(S) 1 - S with S = sum_s k_s r_s r_s^T, summed per block with weighted bincounts.
-    """
+
+@numba.njit(cache=True)
+def _contact_stiffness(pairs, start, point_ref_body, point_inc_body, area, k_per_area, n_blocks):
+    k_t = np.zeros(n_blocks)
+    second = np.zeros((n_blocks, 3, 3))
+    for c in range(pairs.shape[0]):
+        for s in range(start[c], start[c + 1]):
+            k = k_per_area * area[s]
+            for side in range(2):
+                b = pairs[c, side]
+                arm = point_ref_body[s] if side == 0 else point_inc_body[s]
+                k_t[b] += k
+                for i in range(3):
+                    for j in range(3):
+                        second[b, i, j] += k * arm[i] * arm[j]
+    k_r = -second
+    for b in range(n_blocks):
+        trace = second[b, 0, 0] + second[b, 1, 1] + second[b, 2, 2]
+        for i in range(3):
+            k_r[b, i, i] += trace
+    return k_t, k_r
+
+
+def contact_stiffness_reference(sub: SubContacts, kn: float, ks: float, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:
+    """The same as :func:`contact_stiffness`, with NumPy weighted bincounts."""
     k = max(kn, ks) * sub.area
     k_t = np.bincount(sub.block_ref, k, n_blocks) + np.bincount(sub.block_inc, k, n_blocks)
     second = np.zeros((n_blocks, 3, 3))
@@ -71,7 +97,42 @@ def contact_stiffness(sub: SubContacts, kn: float, ks: float, n_blocks: int) -> 
 def critical_timestep(mass: np.ndarray, whitening: np.ndarray, movable: np.ndarray, k_t: np.ndarray, k_r: np.ndarray) -> float:
     """2 / omega_max with omega_i^2 = 2 (K_t / m + lambda_max(I^-1 K_r)), s (inf if nothing is
     sprung); ``whitening`` is L^-1 for the inertias I = L L^T (Model.block_inertia_whitening), so
-    that lambda(I^-1 K_r) = lambda(L^-1 K_r L^-T), a symmetric eigenproblem."""
+    that lambda(I^-1 K_r) = lambda(L^-1 K_r L^-T), a symmetric 3 x 3 eigenproblem, solved in
+    closed form (compiled; :func:`critical_timestep_reference` uses LAPACK)."""
+    omega_sq = _largest_omega_sq(mass, whitening, movable, k_t, k_r)
+    return np.inf if omega_sq <= 0 else float(2.0 / np.sqrt(omega_sq))
+
+
+@numba.njit(cache=True)
+def _largest_omega_sq(mass, whitening, movable, k_t, k_r):
+    largest = 0.0
+    for b in range(mass.shape[0]):
+        if not movable[b]:
+            continue
+        a = whitening[b] @ k_r[b] @ whitening[b].T
+        largest = max(largest, 2.0 * (k_t[b] / mass[b] + _largest_eigenvalue(a)))
+    return largest
+
+
+@numba.njit(cache=True, inline="always")
+def _largest_eigenvalue(a):
+    """Largest eigenvalue of a symmetric 3 x 3 matrix, trigonometric closed form (Smith 1961,
+    "Eigenvalues of a symmetric 3 x 3 matrix", Comm. ACM 4(4), 168)."""
+    off = a[0, 1] ** 2 + a[0, 2] ** 2 + a[1, 2] ** 2
+    q = (a[0, 0] + a[1, 1] + a[2, 2]) / 3.0
+    p2 = (a[0, 0] - q) ** 2 + (a[1, 1] - q) ** 2 + (a[2, 2] - q) ** 2 + 2.0 * off
+    if p2 <= 1e-30 * max(q * q, 1e-300):
+        return q
+    p = np.sqrt(p2 / 6.0)
+    b = (a - q * np.eye(3)) / p
+    det = (b[0, 0] * (b[1, 1] * b[2, 2] - b[1, 2] * b[2, 1]) - b[0, 1] * (b[1, 0] * b[2, 2] - b[1, 2] * b[2, 0])
+           + b[0, 2] * (b[1, 0] * b[2, 1] - b[1, 1] * b[2, 0]))
+    r = min(max(det / 2.0, -1.0), 1.0)
+    return q + 2.0 * p * np.cos(np.arccos(r) / 3.0)
+
+
+def critical_timestep_reference(mass, whitening, movable, k_t, k_r) -> float:
+    """The same as :func:`critical_timestep`, with numpy.linalg.eigvalsh."""
     rotational = np.linalg.eigvalsh(whitening @ k_r @ whitening.transpose(0, 2, 1))[:, -1]
     omega_sq = (2.0 * (k_t / mass + rotational))[movable]
     if omega_sq.size == 0 or omega_sq.max() <= 0:
