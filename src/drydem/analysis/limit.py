@@ -121,9 +121,8 @@ class _Problem:
 def limit_analysis(model: Model, settings: LimitSettings = LimitSettings()) -> LimitResult:
     """LA-A (and LA-NA with ``settings.non_associative``) of ``model`` (see module docstring)."""
     problem = _assemble(model)
-    friction = model.joint.friction
-    joint = model.joint
-    weight = problem.weight
+    joint, weight = model.joint, problem.weight
+    friction = joint.friction
     cohesion = joint.cohesion * problem.area / weight
     tension = joint.tension * problem.area / weight
     lam, forces, duals, status = _solve(problem, friction=friction, cohesion=cohesion, tension=tension, capacity=None)
