@@ -37,6 +37,10 @@ def results(tmp_path):
         records += [limit_record(d, m) for m in ("associative", "non-associative")]
     records += [tilt_record("WD6", kn, ks=ks, protocol="fixed") for kn in (1e7, 4e7, 7e7, 1e8) for ks in (1e7, 2e7, 1e8)]
     records += [tilt_record("WD3", 3e7, points=p) for p in (1, 2, 8)]
+    unstable = tilt_record("WD6", 1e7, ks=1e7, protocol="fixed")  # the paper: WD6 cannot stand at kn = 1e7
+    unstable["summary"] |= {"collapse_angle_deg": None, "drift_limit_angles_deg": {"0.005": None, "0.0075": None, "0.01": None}}
+    unstable["pushover"] = []
+    records = [r for r in records if r["id"] != unstable["id"]] + [unstable]
     failed = {"id": "tilt-broken", "spec": RunSpec(analysis="tilt", target="WD1", protocol="fixed", kn=5e7).__dict__,
               "status": "failed", "error": "ModelError: made up"}
     for record in records + [failed]:

@@ -195,6 +195,8 @@ def _pushover(axes, runs: Runs, designs: list[str]) -> bool:
         height = None
         for kn in runs.stiffnesses(d, protocol="fixed"):
             run = runs.tilt(d, kn, protocol="fixed")
+            if not run["pushover"]:  # unstable under its own weight: no curve
+                continue
             curve = np.array(run["pushover"])
             ax.plot(curve[:, 1] * 1e3, curve[:, 0], label=f"kn {kn:.0e}")
             height = run["summary"]["wall_height_m"]
@@ -222,7 +224,7 @@ def _ks(axes, runs: Runs) -> bool:
     drew = False
     wd6 = [r for r in runs.ok if _design(r) == "WD6" and r["spec"]["analysis"] == "tilt" and r["spec"]["protocol"] == "fixed"]
     for ax, kn in zip(axes, (1e7, 4e7, 7e7, 1e8)):
-        for run in sorted((r for r in wd6 if _close(r["spec"]["kn"], kn)), key=lambda r: r["spec"]["ks"]):
+        for run in sorted((r for r in wd6 if _close(r["spec"]["kn"], kn) and r["pushover"]), key=lambda r: r["spec"]["ks"]):
             curve = np.array(run["pushover"])
             ax.plot(curve[:, 1] * 1e3, curve[:, 0], label=f"ks {run['spec']['ks']:.0e}")
             drew = True
