@@ -23,7 +23,7 @@ plus the model file's optional tables ``[material]``, ``[joint]``, ``[contacts]`
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from drydem.errors import ModelError
@@ -69,7 +69,8 @@ def is_wall_file(data: dict) -> bool:
 def load_wall(path: str | Path) -> Wall:
     """Read a wall file; ModelError naming the file, the table or the layout's line."""
     path = Path(path)
-    return wall_from_dict(read_toml(path), source=str(path), text=path.read_text(), default_name=path.stem)
+    data, text = read_toml(path)
+    return wall_from_dict(data, source=str(path), text=text, default_name=path.stem)
 
 
 def wall_from_dict(data: dict, *, source: str, text: str = "", default_name: str = "wall") -> Wall:
@@ -104,7 +105,7 @@ def benchmark_wall(*, kn: float = 3e7, points_per_length: int = 4, points_across
     from drydem import designs
 
     wall = load_wall(designs.find("perforated_wall"))
-    return wall.model().replace(
-        joint=JointMaterial(kn=kn, ks=kn, friction=wall.joint.friction),
+    return replace(
+        wall, joint=JointMaterial(kn=kn, ks=kn, friction=wall.joint.friction),
         contacts=ContactSettings(points_per_length=points_per_length, points_across=points_across),
-    )
+    ).model()

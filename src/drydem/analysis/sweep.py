@@ -79,7 +79,7 @@ class Study:
 def load_study(path: str | Path) -> Study:
     """Read a study file; ModelError naming the file, the grid and the key."""
     path = Path(path)
-    data = read_toml(path)
+    data, _ = read_toml(path)
     source = str(path)
     _no_unknown(data, {"study", "defaults", "grid"}, source, "top level")
     meta, defaults = data.get("study", {}), data.get("defaults", {})

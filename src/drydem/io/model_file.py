@@ -53,17 +53,19 @@ BLOCK_KEYS = {"name", "fixed", "density", "box", "vertices"}
 def load_model(path: str | Path) -> Model:
     """Read and validate a model file; raises ModelError naming the file and the culprit."""
     path = Path(path)
-    return model_from_dict(read_toml(path), source=str(path))
+    data, _ = read_toml(path)
+    return model_from_dict(data, source=str(path))
 
 
-def read_toml(path: Path) -> dict:
-    """A TOML file's tables; ModelError naming the file if it cannot be read or parsed."""
+def read_toml(path: Path) -> tuple[dict, str]:
+    """A TOML file's tables and its text (for line numbers); ModelError naming the file if it
+    cannot be read or parsed."""
     try:
         text = path.read_text()
     except OSError as exc:
         raise ModelError(f"{path}: cannot read the file ({exc.strerror})") from None
     try:
-        return tomllib.loads(text)
+        return tomllib.loads(text), text
     except tomllib.TOMLDecodeError as exc:
         raise ModelError(f"{path}: not valid TOML: {exc}") from None
 

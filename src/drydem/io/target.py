@@ -42,9 +42,9 @@ def load_target(target: str, *, unit_m: float = 1.0) -> Target:
     if suffix != ".toml":
         known = ", ".join([".toml", *MESH_SUFFIXES])
         raise ModelError(f"{path}: unknown file type {path.suffix!r}; drydem reads {known}")
-    data = read_toml(path)
+    data, text = read_toml(path)
     if is_wall_file(data):
-        wall = wall_from_dict(data, source=str(path), text=path.read_text(), default_name=path.stem)
+        wall = wall_from_dict(data, source=str(path), text=text, default_name=path.stem)
         return Target(wall.name, path, wall.model(), wall)
     return Target(path.stem, path, model_from_dict(data, source=str(path)))
 
