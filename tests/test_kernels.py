@@ -1,10 +1,11 @@
-"""The numba cycle against the plain NumPy reference (drydem.reference) on a brick wall."""
+"""The compiled cycles against their oracles on brick walls: the 3D numba kernel against the plain
+NumPy reference (drydem.reference), the planar kernel (drydem.planar) against the 3D one."""
 
 import numpy as np
 import pytest
 
 import drydem as dd
-from drydem import kernels, reference
+from drydem import kernels, planar, reference
 from drydem.joints import JointArrays
 from conftest import layout_blocks, tilted_gravity
 
@@ -23,43 +24,69 @@ def run_step(step, sim, state, sub, gravity, joint):
 
 @pytest.fixture(scope="module")
 def loaded_wall(benchmark_wall):
-    """The benchmark wall settled under gravity and then tilted 12 deg for a while: shear in
-    every joint, some slipping, some open, some rocking."""
+    """The benchmark wall (in-plane) settled under gravity and then tilted 12 deg for a while:
+    shear in every joint, some slipping, some open, some rocking."""
     sim = dd.Simulation(benchmark_wall)
     sim.cycle_to_equilibrium()
     sim.cycle(300, gravity=tilted_gravity(12.0))
     return sim
 
 
-@pytest.mark.parametrize("cohesion, tension", [(0.0, 0.0), (50.0, 20.0)])
-def test_one_step_gives_the_same_forces_and_motion(loaded_wall, cohesion, tension):
-    sim = loaded_wall
-    joint = JointArrays.of(dd.JointMaterial(kn=3e7, ks=3e7, friction=0.5, cohesion=cohesion, tension=tension))
-    gravity = tilted_gravity(12.0)
-    state_nb, sub_nb = copies(sim)
-    state_ref, sub_ref = copies(sim)
-    force_nb, stats_nb = run_step(kernels.step, sim, state_nb, sub_nb, gravity, joint)
-    force_ref, stats_ref = run_step(reference.step, sim, state_ref, sub_ref, gravity, joint)
-    scale = np.abs(force_ref).max()
-    np.testing.assert_allclose(force_nb, force_ref, rtol=0, atol=1e-12 * scale)
-    np.testing.assert_allclose(sub_nb.normal_force, sub_ref.normal_force, rtol=0, atol=1e-12 * scale)
-    np.testing.assert_allclose(sub_nb.shear_force, sub_ref.shear_force, rtol=0, atol=1e-12 * scale)
-    np.testing.assert_array_equal(sub_nb.intact, sub_ref.intact)
-    np.testing.assert_allclose(stats_nb, stats_ref, rtol=1e-10)
-    # velocities come from nearly cancelling contact forces (and angular ones are divided by
-    # inertias of ~1e-8 kg m2): compare each array to round-off of its own scale
-    for a, b in zip(state_nb, state_ref):
+@pytest.fixture(scope="module")
+def loaded_wall_3d(benchmark_wall):
+    """The benchmark wall free in y (so in 3D, 4 x 4 points a face), settled, then tilted 12 deg
+    along a direction 30 deg out of its plane for a while: all six degrees of freedom move."""
+    sim = dd.Simulation(benchmark_wall.replace(supports=dd.Supports()))
+    sim.cycle_to_equilibrium()
+    sim.cycle(300, gravity=tilted_gravity(12.0, turn_deg=30.0))
+    return sim
+
+
+def assert_same_cycle(step, oracle, sim, joint, gravity, components=(0, 1, 2)):
+    """One cycle of ``step`` and of its ``oracle`` from copies of the same state: block forces
+    (``components`` of them), sub-contact forces and slip and the cycle's measures to round-off;
+    the motion to round-off of each array's own scale (velocities come from nearly cancelling
+    contact forces, and angular ones are divided by inertias of ~1e-8 kg m2). Returns the
+    oracle's sub-contacts."""
+    (state, sub), (state_oracle, sub_oracle) = copies(sim), copies(sim)
+    force, stats = run_step(step, sim, state, sub, gravity, joint)
+    force_oracle, stats_oracle = run_step(oracle, sim, state_oracle, sub_oracle, gravity, joint)
+    scale = np.abs(force_oracle).max()
+    np.testing.assert_allclose(force[:, components], force_oracle[:, components], rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(sub.normal_force, sub_oracle.normal_force, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(sub.shear_force, sub_oracle.shear_force, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_array_equal(sub.intact, sub_oracle.intact)
+    np.testing.assert_allclose(stats, stats_oracle, rtol=1e-10)
+    for a, b in zip(state, state_oracle):
         np.testing.assert_allclose(a, b, rtol=0, atol=1e-10 * np.abs(b).max())
-    assert (sub_ref.normal_force == 0).any() and (sub_ref.normal_force > 0).any()  # open and closed joints
+    return sub_oracle
+
+
+@pytest.mark.parametrize("cohesion, tension", [(0.0, 0.0), (50.0, 20.0)])
+def test_one_step_gives_the_same_forces_and_motion(loaded_wall_3d, cohesion, tension):
+    joint = JointArrays.of(dd.JointMaterial(kn=3e7, ks=3e7, friction=0.5, cohesion=cohesion, tension=tension))
+    assert not loaded_wall_3d.model.in_plane and np.abs(loaded_wall_3d.state.angular_velocity[:, [0, 2]]).max() > 0
+    sub = assert_same_cycle(kernels.step, reference.step, loaded_wall_3d, joint, tilted_gravity(12.0, turn_deg=30.0))
+    assert (sub.normal_force == 0).any() and (sub.normal_force > 0).any()  # open and closed joints
+
+
+def test_planar_step_gives_the_3d_kernels_forces_and_motion(loaded_wall):
+    """An in-plane wall (the benchmark wall): one planar cycle against one 3D cycle from the same
+    state, to round-off; the 3D kernel leaves y, rx and rz untouched there (they are held)."""
+    assert loaded_wall.model.in_plane
+    joint = JointArrays.of(loaded_wall.model.joint)
+    sub = assert_same_cycle(planar.step, kernels.step, loaded_wall, joint, tilted_gravity(12.0), components=[0, 2])
+    assert (sub.shear_force != 0).any() and (sub.normal_force == 0).any()
 
 
 def test_many_cycles_with_redetection_stay_together():
-    """Both engines through the whole Simulation on a small perforated wall (4 bricks x 8 courses,
+    """The three engines (numba: planar here; numba-3d; reference) through the whole Simulation on a small perforated wall (4 bricks x 8 courses,
     a lintel over one opening): 400 cycles at 30 deg (the wall is collapsing,
     so contacts are re-detected). Undamped: local damping's sign(v) is discontinuous at v = 0,
     so with it a block at rest may be pushed either way by round-off (the one-step test above
-    covers damping). A collapsing wall amplifies round-off (measured 2e-8 of the largest
-    displacement after 500 cycles): stated tolerance 1e-7."""
+    covers damping). A collapsing wall amplifies round-off (measured 3e-9 of the largest
+    displacement after 500 cycles): stated tolerance 1e-7; on contact loads 1e-6 of the largest,
+    what kn A (2e3 N/m a point) makes of 1e-7 of the displacement (1e-10 m) against a 0.16 N load."""
     blocks = layout_blocks("""
         bBBBb
         BBBB
@@ -71,26 +98,28 @@ def test_many_cycles_with_redetection_stay_together():
         BBBB
     """)
     model = dd.build_model(blocks, density=1800.0, supports=dd.Supports(fix_y=True), solver=dd.SolverSettings(damping=0.0))
+    assert model.in_plane
     runs = {}
-    for engine in ("numba", "reference"):
+    for engine in ("numba", "numba-3d", "reference"):
         sim = dd.Simulation(model, engine=engine)
         sim.cycle(100)
         result = sim.cycle(400, gravity=tilted_gravity(30.0))
         runs[engine] = (sim, result)
-    (fast, r_fast), (slow, r_slow) = runs["numba"], runs["reference"]
-    assert r_fast.detections == r_slow.detections > 0
-    moved = np.abs(fast.state.position - model.block_centroid).max()
-    np.testing.assert_allclose(fast.state.position, slow.state.position, rtol=0, atol=1e-7 * moved)
-    # the same contacts carry the same load (sub-contact order may differ: a polygon's first
-    # corner depends on round-off)
-    totals = []
-    for sim in (fast, slow):
+    slow, r_slow = runs["reference"]
+    moved = np.abs(slow.state.position - model.block_centroid).max()
+    totals = {}
+    for engine, (sim, result) in runs.items():
+        assert result.detections == r_slow.detections > 0
+        np.testing.assert_allclose(sim.state.position, slow.state.position, rtol=0, atol=1e-7 * moved)
+        # the same contacts carry the same load (sub-contact order may differ: a polygon's
+        # first corner depends on round-off)
         c = sim.contacts
         per_contact = np.bincount(c.contact, c.normal_force, len(c.pairs))
-        totals.append(dict(zip(c.pair_keys(model.n_blocks).tolist(), per_contact)))
-    assert totals[0].keys() == totals[1].keys()
-    for key, load in totals[0].items():
-        assert load == pytest.approx(totals[1][key], rel=0, abs=1e-7 * max(totals[0].values()))
+        totals[engine] = dict(zip(c.pair_keys(model.n_blocks).tolist(), per_contact))
+    for engine in ("numba", "numba-3d"):
+        assert totals[engine].keys() == totals["reference"].keys()
+        for key, load in totals[engine].items():
+            assert load == pytest.approx(totals["reference"][key], rel=0, abs=1e-6 * max(totals["reference"].values()))
 
 
 def test_compiled_contact_stiffness_and_timestep_match_their_numpy_oracles(benchmark_wall):
@@ -118,3 +147,28 @@ def test_closed_form_largest_eigenvalue_of_symmetric_3x3():
     for a in cases:
         a = 0.5 * (a + a.T)
         assert _largest_eigenvalue(a) == pytest.approx(np.linalg.eigvalsh(a)[-1], rel=1e-9, abs=1e-12)
+
+
+def test_walls_held_in_y_are_in_plane_and_other_models_are_not():
+    """Model.in_plane: held in y, prisms across y, one mid-plane. In-plane walls also hold rx and rz
+    and get one sub-contact across the width; the others keep what their supports say."""
+    from conftest import stack_model
+
+    from drydem.io.target import load_target
+
+    wall = load_target("WD3").model
+    assert wall.in_plane and wall.contact_density.across == 1
+    movable = wall.block_movable
+    assert wall.block_fixed[movable][:, [1, 3, 5]].all() and not wall.block_fixed[movable][:, [0, 2, 4]].any()
+    held = dd.Supports(fix_y=True)
+    assert stack_model([0.0055], supports=held).in_plane
+    assert not stack_model([0.0055]).in_plane  # free in y
+    turned = stack_model([0.0055], supports=held, turn_deg=30.0)  # faces oblique to y
+    assert not turned.in_plane and not turned.block_fixed[1, [3, 5]].any() and turned.contact_density.across == 2
+    blocks = [
+        dd.Block(name="base", shape=dd.box([-0.01, 0.0, -0.01], [0.035, 0.012, 0.0]), fixed=True),
+        dd.Block(name="brick", shape=dd.box([0.0, 0.0, 0.0], [0.025, 0.012, 0.0055])),
+        dd.Block(name="narrow", shape=dd.box([0.0, 0.0, 0.0055], [0.025, 0.006, 0.011])),  # off the mid-plane
+    ]
+    assert dd.build_model(blocks[:2], density=1800.0, supports=held).in_plane
+    assert not dd.build_model(blocks, density=1800.0, supports=held).in_plane

@@ -40,7 +40,8 @@ def test_the_issue_example_loads(tmp_path):
     model = load_model(write(tmp_path, GOOD))
     assert model.block_name == ("base", "brick")
     assert model.block_mass[1] == pytest.approx(1800 * 0.025 * 0.012 * 0.0055)
-    assert model.block_fixed[0].all() and model.block_fixed[1].tolist() == [False, True, False, False, False, False]
+    # held in y, and in-plane (a y-prism on the base's mid-plane): rx and rz are held too
+    assert model.in_plane and model.block_fixed[0].all() and model.block_fixed[1].tolist() == [False, True, False, True, False, True]
     assert model.joint == dd.JointMaterial(kn=3e7, ks=3e7, friction=0.5)
 
 

@@ -23,3 +23,19 @@ def test_finite_rotation_update_is_exact_for_large_angles():
         expected = (Rotation.from_rotvec(phi) * start).as_matrix()
         np.testing.assert_allclose(matrices(q[None])[0], expected, atol=1e-13)
         assert abs(np.linalg.norm(q) - 1.0) < 1e-15
+
+
+def test_small_rotations_by_series_are_exact_to_round_off():
+    """Below SERIES_ANGLE the update uses Taylor series of cos and sin (to x^4, error < x^6/720):
+    against scipy at angles from 1e-12 rad to just over the switch, to 1e-15."""
+    from drydem.rotation import SERIES_ANGLE
+
+    rng = np.random.default_rng(3)
+    for angle in np.concatenate([np.geomspace(1e-12, SERIES_ANGLE, 25), [SERIES_ANGLE * 1.01]]):
+        axis = rng.normal(size=3)
+        phi = angle * axis / np.linalg.norm(axis)
+        start = Rotation.random(random_state=rng)
+        q = start.as_quat()[[3, 0, 1, 2]].copy()
+        rotate_by_vector(q, *phi)
+        expected = (Rotation.from_rotvec(phi) * start).as_quat()[[3, 0, 1, 2]]
+        np.testing.assert_allclose(q * np.sign(q[0] * expected[0]), expected, rtol=0, atol=1e-15)

@@ -58,8 +58,8 @@ def shear_law(fn, dus_x, dus_y, dus_z, fs_x, fs_y, fs_z, area, intact, joint):
     fs_y -= shear_scale * dus_y
     fs_z -= shear_scale * dus_z
     limit = max((joint.cohesion * area if intact else 0.0) + joint.friction * fn, 0.0)
-    magnitude = np.sqrt(fs_x * fs_x + fs_y * fs_y + fs_z * fs_z)
-    if magnitude > limit:
-        scale = limit / magnitude
+    magnitude_sq = fs_x * fs_x + fs_y * fs_y + fs_z * fs_z
+    if magnitude_sq > limit * limit:
+        scale = limit / np.sqrt(magnitude_sq)
         return fs_x * scale, fs_y * scale, fs_z * scale, False
     return fs_x, fs_y, fs_z, intact

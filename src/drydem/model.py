@@ -22,6 +22,9 @@ from drydem.rotation import matrices
 TOLERANCE_FRACTION = 0.05
 #: initial overlaps deeper than this fraction of the contact tolerance are errors
 OVERLAP_FRACTION = 0.01
+#: an in-plane model's faces are parallel or normal to y, and its blocks' mid-planes coincide,
+#: to this fraction of the block size (|n_y|; mid-plane offsets)
+IN_PLANE_TOLERANCE = 1e-6
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -58,6 +61,11 @@ class Model:
     degrees of freedom (x, y, z, rx, ry, rz). block_radius : (nb,) m, centroid-to-vertex
     maximum. contact_tolerance : m, resolved from ``contacts.tolerance``. source : where the
     model came from (file name), for messages.
+    in_plane : the paper's walls: every movable block is held in y and every block is a prism
+    across y (faces parallel or normal to y) symmetric about one plane y = y0. Forces then stay
+    in the x-z plane and the blocks only move in it (x, z, rotation about y): rx and rz are held
+    too (symmetry keeps them at zero anyway), and :mod:`drydem.planar` cycles such a model with
+    3 degrees of freedom per block.
     """
 
     block_name: tuple[str, ...]
@@ -72,6 +80,7 @@ class Model:
     supports: Supports
     solver: SolverSettings
     contact_tolerance: float
+    in_plane: bool
     source: str = "<python>"
 
     @property
@@ -111,7 +120,7 @@ class Model:
         along = self.contacts.points_per_length
         across = self.contacts.points_across
         if across is None:
-            across = min(2, along) if self.supports.fix_y else along
+            across = 1 if self.in_plane else min(2, along) if self.supports.fix_y else along
         return contacts.Density(along=along, across=across)
 
     @property
@@ -182,6 +191,9 @@ def build_model(
 def _assemble(blocks, density, *, joint, contacts, supports, solver, source) -> Model:
     shapes = tuple(b.shape for b in blocks)
     fixed = np.array([[True] * 6 if b.fixed else list(supports.mask) for b in blocks], dtype=bool)
+    in_plane = _in_plane(shapes, fixed)
+    if in_plane:
+        fixed[:, [3, 5]] = True
     tolerance = contacts.tolerance
     if tolerance is None:
         movable = [s for s, f in zip(shapes, fixed) if not f.all()]
@@ -199,10 +211,24 @@ def _assemble(blocks, density, *, joint, contacts, supports, solver, source) -> 
         supports=supports,
         solver=solver,
         contact_tolerance=float(tolerance),
+        in_plane=in_plane,
         source=source,
     )
     _check_overlaps(model)
     return model
+
+
+def _in_plane(shapes: tuple[ConvexPolyhedron, ...], fixed: np.ndarray) -> bool:
+    """Whether the model is in-plane (see :class:`Model`): movable blocks held in y, every block
+    a y-prism, all with one mid-plane (to IN_PLANE_TOLERANCE of the smallest block)."""
+    if not fixed[~fixed.all(axis=1), 1].all():
+        return False
+    for s in shapes:
+        ny = np.abs(s.face_normals[:, 1])
+        if not np.all((ny < IN_PLANE_TOLERANCE) | (ny > 1.0 - IN_PLANE_TOLERANCE)):
+            return False
+    mid = [0.5 * (s.vertices[:, 1].min() + s.vertices[:, 1].max()) for s in shapes]
+    return bool(np.ptp(mid) <= IN_PLANE_TOLERANCE * min(s.size for s in shapes))
 
 
 def _thickness(shape: ConvexPolyhedron) -> float:

@@ -56,9 +56,10 @@ class ContactSettings:
     points_per_length : sub-contacts along each in-plane direction of a full face,
         ends included (2 = corners only, 3DEC's vertex sub-contacts; 1 = one point at
         the centroid of the contact polygon).
-    points_across : sub-contacts across the wall, along y; ``None`` = 2 when every block is
-        fixed in y (in-plane walls: the contact forces are uniform across the width, so the
-        trapezoid rule on its two edges is exact and half the cost), else points_per_length.
+    points_across : sub-contacts across the wall, along y; ``None`` = 1 for in-plane models
+        (:attr:`drydem.model.Model.in_plane`: the contact forces are uniform across the width,
+        so one point on the mid-plane with the whole width's area is exact), 2 for other
+        models with every block fixed in y, else points_per_length.
     tolerance : m, gap below which faces are in contact; ``None`` = 5 % of the
         thinnest free block. Contacts are re-detected whenever neighbouring blocks have
         moved half of it relative to each other.

@@ -26,7 +26,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from drydem import contacts, kernels, narrow, reference
+from drydem import contacts, kernels, narrow, planar, reference
 from drydem.errors import DivergenceError, ModelError
 from drydem.joints import JointArrays
 from drydem.model import Model
@@ -35,7 +35,9 @@ from drydem.parameters import SolverSettings
 from drydem.rotation import matrices, rotate_by_vector
 from drydem.state import State
 
-ENGINES = {"numba": kernels.run_cycles, "reference": reference.run_cycles}
+#: "numba": compiled, the planar kernel for in-plane models (drydem.planar), else the 3D one;
+#: "numba-3d": the compiled 3D kernel for every model; "reference": the NumPy 3D oracle
+ENGINES = ("numba", "numba-3d", "reference")
 #: standard gravity, m/s2
 G = 9.81
 #: neighbour-list margin in contact tolerances: blocks whose bounding boxes are this close are
@@ -84,7 +86,7 @@ class Snapshot:
 
 
 class Simulation:
-    """A model being cycled. ``engine`` is "numba" (fast) or "reference" (NumPy oracle).
+    """A model being cycled. ``engine`` is one of ENGINES ("numba", the default, is the fastest).
 
     ``timestep`` (s) overrides the automatic one; it must not exceed the critical timestep.
     """
@@ -95,6 +97,10 @@ class Simulation:
         self.model = model
         self.state = state.copy() if state is not None else State.at_rest(model.block_centroid)
         self.engine = engine
+        if engine == "reference":
+            self._run_cycles = reference.run_cycles
+        else:
+            self._run_cycles = planar.run_cycles if engine == "numba" and model.in_plane else kernels.run_cycles
         self.contacts = contacts.SubContacts.empty()
         self.neighbours = contacts.NeighbourList.empty()
         self.active = np.ones(model.n_blocks, dtype=bool)
@@ -271,13 +277,12 @@ class Simulation:
         weight = float(np.linalg.norm(g)) * float(m.block_mass[moving].sum()) / max(int(moving.sum()), 1)
         if criterion_name == "ratio" and weight == 0.0:
             raise ModelError("the 'ratio' criterion needs gravity (it divides by the mean weight); use 'velocity'")
-        run_cycles = ENGINES[self.engine]
         joint = JointArrays.of(m.joint)
         travel_slack = m.total_mass * m.contact_tolerance
         done, detections = 0, 0
         code, stats = kernels.RUNNING, StepStats(np.inf, np.inf)
         while done < max_cycles:
-            n, code, ratio, speed = run_cycles(
+            n, code, ratio, speed = self._run_cycles(
                 self.state, self._blocks, self.contacts, joint, g, self.timestep,
                 m.solver.damping, min(CHUNK, max_cycles - done), criterion, limit, max(weight, 1e-300), travel_slack,
                 self._broad_state, self.neighbours, self._absolute_limit,
