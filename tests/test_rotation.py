@@ -39,3 +39,15 @@ def test_small_rotations_by_series_are_exact_to_round_off():
         rotate_by_vector(q, *phi)
         expected = (Rotation.from_rotvec(phi) * start).as_quat()[[3, 0, 1, 2]]
         np.testing.assert_allclose(q * np.sign(q[0] * expected[0]), expected, rtol=0, atol=1e-15)
+
+
+def test_rotation_vectors_undo_the_update():
+    from drydem.rotation import rotation_vectors
+
+    rng = np.random.default_rng(4)
+    start = Rotation.random(10, random_state=rng).as_quat()[:, [3, 0, 1, 2]]
+    phi = rng.normal(size=(10, 3)) * 0.5
+    end = start.copy()
+    for q, p in zip(end, phi):
+        rotate_by_vector(q, *p)
+    np.testing.assert_allclose(rotation_vectors(start, end), phi, atol=1e-13)

@@ -103,3 +103,21 @@ def test_removed_blocks_stop_moving_and_let_go_of_the_others():
     assert top - sim.state.position[3, 2] == pytest.approx(0.0055, abs=1e-5)  # fell one block height
     # the bottom block is in equilibrium: the contacts on it (base below, top block above) balance its weight
     assert sim.reactions(1)[2] == pytest.approx(sim.model.block_mass[1] * dd.G, rel=1e-4)
+
+
+def test_a_move_loads_the_shear_springs_by_ks_area_displacement():
+    """Simulation.move: a brick (25 x 12 mm footprint) at rest on the base moved 1e-7 m along x in
+    one cycle: it is there, at rest, and the base pushes it back with ks A dx (3e-3 N with
+    ks = 1e8 Pa/m, A = 3e-4 m2; below mu W = 0.0146 N, so stuck); the normal springs are unchanged."""
+    sim = dd.Simulation(stack_model([0.0055], supports=dd.Supports(fix_y=True)))
+    sim.cycle_to_equilibrium(solver=dd.SolverSettings(ratio=1e-9))
+    before = sim.state.position.copy()
+    displacement = np.zeros((2, 3))
+    displacement[:, 0] = 1e-7  # the base is fixed: it does not move
+    sim.move(displacement, np.zeros((2, 3)))
+    np.testing.assert_allclose(sim.state.position - before, [[0.0, 0.0, 0.0], [1e-7, 0.0, 0.0]], rtol=0, atol=1e-15)
+    assert not sim.state.velocity.any() and not sim.state.angular_velocity.any()
+    reaction = sim.reactions(1)
+    weight = sim.model.block_mass[1] * dd.G
+    assert reaction[0] == pytest.approx(-1e8 * 0.025 * 0.012 * 1e-7, rel=1e-6)
+    assert reaction[2] == pytest.approx(weight, rel=1e-6)

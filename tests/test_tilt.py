@@ -84,6 +84,17 @@ def test_fixed_and_adaptive_protocols_agree_within_one_increment(model):
     assert len(adaptive.records) < len(fixed.records)
 
 
+def test_the_predictor_saves_cycles_and_keeps_the_pushover_curve():
+    # each step starts from the last two equilibria extrapolated; the same equilibria are found
+    # (to the equilibrium tolerance: measured 5e-4 of the top displacement) with fewer cycles
+    # (measured 31.9k against 44.3k in the equilibrium steps of the soft pier at 0.5 deg)
+    predicted = tilt_analysis(pier(3e7), TiltSettings(increment_deg=STEP))
+    plain = tilt_analysis(pier(3e7), TiltSettings(increment_deg=STEP, predictor=False))
+    assert predicted.collapse_angle_deg == plain.collapse_angle_deg
+    np.testing.assert_allclose([r.ux_m for r in predicted.records], [r.ux_m for r in plain.records], rtol=2e-3, atol=1e-9)
+    assert sum(r.cycles for r in predicted.records) < 0.8 * sum(r.cycles for r in plain.records)
+
+
 def test_a_model_that_cannot_stand_is_reported_with_its_state():
     # a block with its centroid beyond the edge of the base falls under its own weight
     base = dd.Block(name="base", shape=dd.box([-0.1, 0.0, -0.01], [0.0, 0.012, 0.0]), fixed=True)

@@ -120,6 +120,8 @@ def _settle(sim: Simulation) -> None:
 @click.option("--density", type=float, help="Density of every block, kg/m3.")
 @click.option("--increment", type=float, default=0.1, show_default=True, help="Tilt step, deg.")
 @click.option("--adaptive", is_flag=True, help="Coarse steps, then bisection down to the increment.")
+@click.option("--predictor/--no-predictor", default=True, show_default=True,
+              help="Start each step from the last two equilibria extrapolated (fewer cycles).")
 @click.option("--stop-displacement", type=float, default=0.10, show_default=True, help="Monitored horizontal displacement that ends the run, m.")
 @click.option("--criterion", type=click.Choice(CRITERIA), help="Equilibrium criterion (default: the model file's).")
 @click.option("--loading", type=click.Choice(["tilt", "multiplier"]), default="tilt", show_default=True, help="Tilt the gravity or add lambda g horizontally.")
@@ -132,8 +134,8 @@ def _settle(sim: Simulation) -> None:
               help="With --vtk: keep every N-th equilibrium state (the states past collapse are all kept).")
 @click.option("--video", is_flag=True, help="Also render OUT/collapse.mp4 (GIF if ffmpeg is missing); implies --vtk.")
 @unit_option
-def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_displacement, criterion, loading, monitor, max_angle, out,
-         resume, vtk, save_every, video, unit) -> None:
+def tilt(target, kn, ks, friction, points, density, increment, adaptive, predictor, stop_displacement, criterion, loading, monitor, max_angle,
+         out, resume, vtk, save_every, video, unit) -> None:
     """Tilting-table analysis of TARGET (a built-in wall, a wall or model file, or a
     .wrl/.obj/.stl): collapse angle, pushover curve, Eurocode 8 drift-limit angles, plots."""
     from tqdm import tqdm
@@ -147,7 +149,7 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, stop_di
     try:
         model = _with_overrides(found.model, kn=kn, ks=ks, friction=friction, points=points, density=density, criterion=criterion)
         settings = TiltSettings(
-            increment_deg=increment, adaptive=adaptive, stop_displacement_m=stop_displacement, loading=loading,
+            increment_deg=increment, adaptive=adaptive, predictor=predictor, stop_displacement_m=stop_displacement, loading=loading,
             monitor=monitor, max_angle_deg=max_angle,
         )
         if monitor is not None:

@@ -66,3 +66,12 @@ def matrices(quaternion: np.ndarray) -> np.ndarray:
     for i in range(quaternion.shape[0]):
         quaternion_to_matrix(quaternion[i], out[i])
     return out
+
+
+def rotation_vectors(q_from: np.ndarray, q_to: np.ndarray) -> np.ndarray:
+    """(n, 3) world-frame rotation vectors phi (rad) with q_to = exp(phi / 2) (x) q_from (the
+    convention of :func:`rotate_by_vector`), for (n, 4) unit quaternions (scipy's Rotation)."""
+    from scipy.spatial.transform import Rotation
+
+    scalar_last = [1, 2, 3, 0]
+    return (Rotation.from_quat(q_to[:, scalar_last]) * Rotation.from_quat(q_from[:, scalar_last]).inv()).as_rotvec()

@@ -45,6 +45,8 @@ G = 9.81
 NEIGHBOUR_MARGIN = 10.0
 #: cycles run in one call of the kernel loop between progress reports
 CHUNK = 5_000
+#: 1/kg: blocks this heavy keep their velocities through a cycle's forces (Simulation.move)
+IMMOVABLE_INVERSE_MASS = 1e-300
 
 
 class StepStats(NamedTuple):
@@ -249,6 +251,28 @@ class Simulation:
         self._update_inertia()
 
     # -- cycling --------------------------------------------------------------------------
+    def move(self, displacement: np.ndarray, rotation: np.ndarray, *, gravity=(0.0, 0.0, -G)) -> None:
+        """Move every free block by ``displacement`` (nb, 3) m and the rotation vector ``rotation``
+        (nb, 3) rad (world frame) within one cycle, and leave it at rest there.
+
+        The joints follow as in any cycle: the shear springs take the tangential relative
+        displacement (Mohr-Coulomb capping them), the normal ones the gaps. The move is a cycle
+        with the velocities displacement / dt and rotation / dt in which the blocks are too
+        heavy (IMMOVABLE_INVERSE_MASS) for the joint forces to change them. A predictor for the
+        next load step (:mod:`drydem.analysis.tilt`): dynamic relaxation then starts near the new
+        equilibrium. Fixed degrees of freedom do not move, whatever is asked of them.
+        """
+        blocks = self._blocks
+        self.state.velocity[:] = np.asarray(displacement, dtype=float) * blocks.free[:, :3] / self.timestep
+        self.state.angular_velocity[:] = np.asarray(rotation, dtype=float) * blocks.free[:, 3:] / self.timestep
+        heavy = blocks._replace(
+            inv_mass=np.where(blocks.inv_mass > 0, IMMOVABLE_INVERSE_MASS, 0.0), inv_inertia_body=np.zeros_like(blocks.inv_inertia_body)
+        )
+        # its kinetic energy is not the dynamics', so not a divergence (a NaN still is)
+        self._run(gravity, 1, criterion=kernels.RATIO, limit=-1.0, criterion_name="none", travel_slack=np.inf, blocks=heavy)
+        self.state.velocity[:] = 0.0
+        self.state.angular_velocity[:] = 0.0
+
     def cycle(self, n: int, *, gravity=(0.0, 0.0, -G)) -> EquilibriumResult:
         """Run exactly ``n`` cycles (re-detecting contacts as needed), no equilibrium test."""
         return self._run(gravity, n, criterion=kernels.RATIO, limit=-1.0, criterion_name="none")
@@ -268,7 +292,10 @@ class Simulation:
             gravity, solver.max_cycles, criterion=kernels.VELOCITY, limit=solver.max_velocity, criterion_name="velocity", progress=progress
         )
 
-    def _run(self, gravity, max_cycles: int, *, criterion: int, limit: float, criterion_name: str, progress=None) -> EquilibriumResult:
+    def _run(
+        self, gravity, max_cycles: int, *, criterion: int, limit: float, criterion_name: str, progress=None,
+        travel_slack: float | None = None, blocks: BlockArrays | None = None,
+    ) -> EquilibriumResult:
         m = self.model
         g = np.asarray(gravity, dtype=float)
         if g.shape != (3,) or not np.all(np.isfinite(g)):
@@ -278,12 +305,13 @@ class Simulation:
         if criterion_name == "ratio" and weight == 0.0:
             raise ModelError("the 'ratio' criterion needs gravity (it divides by the mean weight); use 'velocity'")
         joint = JointArrays.of(m.joint)
-        travel_slack = m.total_mass * m.contact_tolerance
+        if travel_slack is None:
+            travel_slack = m.total_mass * m.contact_tolerance
         done, detections = 0, 0
         code, stats = kernels.RUNNING, StepStats(np.inf, np.inf)
         while done < max_cycles:
             n, code, ratio, speed = self._run_cycles(
-                self.state, self._blocks, self.contacts, joint, g, self.timestep,
+                self.state, blocks or self._blocks, self.contacts, joint, g, self.timestep,
                 m.solver.damping, min(CHUNK, max_cycles - done), criterion, limit, max(weight, 1e-300), travel_slack,
                 self._broad_state, self.neighbours, self._absolute_limit,
             )
