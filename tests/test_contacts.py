@@ -156,6 +156,59 @@ def test_redetection_keeps_shear_stress_of_the_same_pair():
     assert (~sim.contacts.intact).sum() == 1
 
 
+def test_compiled_merge_carries_shear_over_as_the_numpy_oracle(benchmark_wall):
+    """drydem.refresh.merge against subset + carry_over (scipy cKDTree) + concatenate: the
+    benchmark wall tilted 15 deg for 300 cycles (shear everywhere, blocks moved since their
+    contacts were made), half of the contacts re-made by the narrow phase."""
+    from conftest import tilted_gravity
+    from drydem import refresh
+    from drydem.rotation import matrices
+
+    sim = dd.Simulation(benchmark_wall)
+    sim.cycle_to_equilibrium()
+    sim.cycle(300, gravity=tilted_gravity(15.0))
+    old, state, m = sim.contacts, sim.state, benchmark_wall
+    rotation = matrices(state.quaternion)
+    keep = np.random.default_rng(0).random(len(old.pairs)) < 0.5
+    stale = old.pairs[~keep]
+    fresh, _ = contacts.narrow_phase_compiled(m.geometry, stale, state.position, rotation, tolerance=m.contact_tolerance, density=m.contact_density)
+    fast = refresh.merge(old, keep, fresh, state.position, rotation)
+    oracle_fresh = fresh.copy()
+    contacts.carry_over(contacts.subset(old, ~keep), oracle_fresh, state.position, rotation)
+    slow = contacts.concatenate(contacts.subset(old, keep), oracle_fresh)
+    for name in contacts.SubContacts._fields:
+        np.testing.assert_allclose(getattr(fast, name), getattr(slow, name), rtol=0, atol=1e-12 * np.abs(getattr(slow, name)).max(), err_msg=name)
+    assert np.abs(fast.shear_force[fast.start[keep.sum()]:]).max() > 0 and (~fast.intact).any()  # carried, some slipped
+
+
+@pytest.mark.parametrize("everything", [False, True])
+def test_compiled_pair_matching_agrees_with_set_operations(everything):
+    """drydem.refresh.match_pairs against NumPy set operations on random neighbour lists."""
+    from drydem import refresh
+
+    rng = np.random.default_rng(5)
+    nb = 40
+
+    def sorted_pairs(n):
+        i, j = np.triu_indices(nb, 1)
+        chosen = np.sort(rng.choice(len(i), n, replace=False))
+        return np.stack([i[chosen], j[chosen]], axis=1).astype(np.int64)
+
+    old_pairs, pairs = sorted_pairs(200), sorted_pairs(200)
+    limit, motion = rng.random(200), rng.random(200)
+    contact_pairs = np.concatenate([old_pairs[::3], pairs[1::4]])
+    contact_pairs[::2] = contact_pairs[::2, ::-1]  # contacts list (ref, inc) in either order
+    where, kept, keep_contact = refresh.match_pairs(old_pairs, limit, motion, pairs, contact_pairs, nb, everything=everything)
+    old_keys, keys = contacts.pair_keys(old_pairs, nb), contacts.pair_keys(pairs, nb)
+    known = np.isin(keys, old_keys)
+    np.testing.assert_array_equal(where[known], np.searchsorted(old_keys, keys[known]))
+    assert (where[~known] == -1).all() and known.sum() > 10
+    expected = known & (not everything)
+    expected[known] &= motion[where[known]] <= 0.5 * limit[where[known]]
+    np.testing.assert_array_equal(kept, expected)
+    np.testing.assert_array_equal(keep_contact, np.isin(contacts.pair_keys(contact_pairs, nb), keys[expected]))
+
+
 def compare_narrow_phases(shapes, candidates, tolerance, density):
     """The compiled narrow phase against the plain-Python one, field by field."""
     n = len(shapes)

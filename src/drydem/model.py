@@ -87,14 +87,14 @@ class Model:
     def n_blocks(self) -> int:
         return len(self.block_name)
 
-    @property
+    @cached_property
     def block_centroid(self) -> np.ndarray:
-        """(nb, 3) centroids in the model file, m."""
+        """(nb, 3) centroids in the model file, m (computed once: do not modify it)."""
         return np.array([s.centroid for s in self.block_shape])
 
-    @property
+    @cached_property
     def block_movable(self) -> np.ndarray:
-        """(nb,) bool: the block has at least one free degree of freedom."""
+        """(nb,) bool: the block has at least one free degree of freedom (computed once)."""
         return ~self.block_fixed.all(axis=1)
 
     @cached_property

@@ -106,10 +106,18 @@ def critical_timestep(mass: np.ndarray, whitening: np.ndarray, movable: np.ndarr
 @numba.njit(cache=True)
 def _largest_omega_sq(mass, whitening, movable, k_t, k_r):
     largest = 0.0
+    wk = np.empty((3, 3))
+    a = np.empty((3, 3))
     for b in range(mass.shape[0]):
         if not movable[b]:
             continue
-        a = whitening[b] @ k_r[b] @ whitening[b].T
+        w, k = whitening[b], k_r[b]
+        for i in range(3):  # a = W K W^T, without temporaries (this runs at every re-detection)
+            for j in range(3):
+                wk[i, j] = w[i, 0] * k[0, j] + w[i, 1] * k[1, j] + w[i, 2] * k[2, j]
+        for i in range(3):
+            for j in range(3):
+                a[i, j] = wk[i, 0] * w[j, 0] + wk[i, 1] * w[j, 1] + wk[i, 2] * w[j, 2]
         largest = max(largest, 2.0 * (k_t[b] / mass[b] + _largest_eigenvalue(a)))
     return largest
 
@@ -124,9 +132,10 @@ def _largest_eigenvalue(a):
     if p2 <= 1e-30 * max(q * q, 1e-300):
         return q
     p = np.sqrt(p2 / 6.0)
-    b = (a - q * np.eye(3)) / p
-    det = (b[0, 0] * (b[1, 1] * b[2, 2] - b[1, 2] * b[2, 1]) - b[0, 1] * (b[1, 0] * b[2, 2] - b[1, 2] * b[2, 0])
-           + b[0, 2] * (b[1, 0] * b[2, 1] - b[1, 1] * b[2, 0]))
+    # det of B = (A - q 1) / p, A symmetric
+    b00, b11, b22 = (a[0, 0] - q) / p, (a[1, 1] - q) / p, (a[2, 2] - q) / p
+    b01, b02, b12 = a[0, 1] / p, a[0, 2] / p, a[1, 2] / p
+    det = b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) + b02 * (b01 * b12 - b11 * b02)
     r = min(max(det / 2.0, -1.0), 1.0)
     return q + 2.0 * p * np.cos(np.arccos(r) / 3.0)
 

@@ -26,7 +26,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from drydem import contacts, kernels, narrow, planar, reference
+from drydem import contacts, kernels, narrow, planar, reference, refresh
 from drydem.errors import DivergenceError, ModelError
 from drydem.joints import JointArrays
 from drydem.model import Model
@@ -124,7 +124,7 @@ class Simulation:
         Neighbour pairs that moved less than half their limit relative to each other since their
         snapshot keep their sub-contacts and shear history untouched; the others go
         through the narrow phase again, inheriting shear stress from their old sub-contacts
-        (:func:`drydem.contacts.carry_over`). The broad phase runs again only when some block
+        (:func:`drydem.refresh.merge`). The broad phase runs again only when some block
         has moved far from where the last one saw it.
         """
         m, s = self.model, self.state
@@ -140,17 +140,10 @@ class Simulation:
             self._broad_state = s.copy()
         else:
             pairs = old_list.pairs
-        old_keys = contacts.pair_keys(old_list.pairs, nb)
-        keys = contacts.pair_keys(pairs, nb)
-        where = np.searchsorted(old_keys, keys).clip(0, max(len(old_keys) - 1, 0))
-        known = (where < len(old_keys)) & (old_keys[where] == keys) if len(old_keys) else np.zeros(len(keys), bool)
-        kept = known & (not everything)
-        kept[known] &= motion[where[known]] <= 0.5 * old_list.limit[where[known]]
-        keep_contact = np.isin(old.pair_keys(nb), keys[kept])
+        where, kept, keep_contact = refresh.match_pairs(old_list.pairs, old_list.limit, motion, pairs, old.pairs, nb, everything=everything)
         stale = pairs[~kept]
         fresh, separation = contacts.narrow_phase_compiled(m.geometry, stale, s.position, rot, tolerance=tol, density=m.contact_density)
-        contacts.carry_over(contacts.subset(old, ~keep_contact), fresh, s.position, rot)
-        self.contacts = contacts.concatenate(contacts.subset(old, keep_contact), fresh)
+        self.contacts = refresh.merge(old, keep_contact, fresh, s.position, rot)
         snapshot_position, snapshot_quaternion = s.position[pairs], s.quaternion[pairs]
         snapshot_position[kept] = old_list.position[where[kept]]
         snapshot_quaternion[kept] = old_list.quaternion[where[kept]]
