@@ -18,7 +18,7 @@ def copies(sim):
 def run_step(step, sim, state, sub, gravity, joint):
     nb = sim.model.n_blocks
     force, moment, rot = np.empty((nb, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3))
-    stats = step(state, sim._blocks, sub, joint, gravity, sim.timestep, 0.8, rot, force, moment)
+    stats = step(state, sim._blocks, sub, joint, gravity, sim.timestep, 0.8, rot, force, moment, True)
     return force, stats
 
 

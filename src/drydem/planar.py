@@ -67,14 +67,12 @@ def contact_forces(state, sub, joint, dt, force, moment):
             vz = v0z - dw * rx
             vn = vx * nx + vz * nz
             dux, duz = (vx - vn * nx) * dt, (vz - vn * nz) * dt
-            # previous shear force turned into the current tangent, magnitude kept
+            # previous shear force turned into the current tangent t = (n_z, -n_x), magnitude kept
             sx, sz = fs[0], fs[2]
-            fsn = sx * nx + sz * nz
-            if fsn != 0.0:
-                old_sq = sx * sx + sz * sz
-                new_sq = old_sq - fsn * fsn
-                scale = np.sqrt(old_sq / new_sq) if new_sq > 0.0 else 0.0
-                sx, sz = (sx - fsn * nx) * scale, (sz - fsn * nz) * scale
+            if sx * nx + sz * nz != 0.0:
+                along = sx * nz - sz * nx
+                magnitude = np.sqrt(sx * sx + sz * sz) if along > 0.0 else -np.sqrt(sx * sx + sz * sz) if along < 0.0 else 0.0
+                sx, sz = magnitude * nz, -magnitude * nx
             sx, _, sz, intact = shear_law(fn, dux, 0.0, duz, sx, 0.0, sz, sub.area[s], sub.intact[s], joint)
             sub.normal_force[s] = fn
             fs[0], fs[2] = sx, sz
@@ -92,10 +90,10 @@ def contact_forces(state, sub, joint, dt, force, moment):
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
-def integrate(state, blocks, force, moment, damping, dt):
+def integrate(state, blocks, force, moment, damping, dt, measure):
     """Damped velocities, positions and rotations of x, z and the rotation about y (as
     :func:`drydem.kernels.integrate`, which returns the same four measures)."""
-    max_unbalanced = 0.0
+    max_unbalanced_sq = 0.0
     max_speed = 0.0
     kinetic = 0.0
     travel = 0.0
@@ -117,16 +115,18 @@ def integrate(state, blocks, force, moment, damping, dt):
         if not speed < np.inf:  # NaN counts as infinitely fast
             speed = np.inf
         max_speed = max(max_speed, speed)
-        max_unbalanced = max(max_unbalanced, np.sqrt(fx * fx + fz * fz), abs(my) / blocks.radius[i])
-        # rotational part at the previous half step, as in the 3D kernel (which reuses I omega there)
-        kinetic += 0.5 * ((v[0] * v[0] + v[2] * v[2]) / blocks.inv_mass[i] + blocks.inertia_body[i, 1, 1] * w_old * w_old)
-        o = blocks.origin[i]
-        travel += blocks.mass[i] * np.sqrt((p[0] - o[0]) ** 2 + (p[1] - o[1]) ** 2 + (p[2] - o[2]) ** 2)
-    return max_unbalanced, max_speed, kinetic, travel
+        arm_moment = my / blocks.radius[i]
+        max_unbalanced_sq = max(max_unbalanced_sq, fx * fx + fz * fz, arm_moment * arm_moment)
+        if measure:
+            # rotational part at the previous half step, as in the 3D kernel (which reuses I omega there)
+            kinetic += 0.5 * ((v[0] * v[0] + v[2] * v[2]) / blocks.inv_mass[i] + blocks.inertia_body[i, 1, 1] * w_old * w_old)
+            o = blocks.origin[i]
+            travel += blocks.mass[i] * np.sqrt((p[0] - o[0]) ** 2 + (p[1] - o[1]) ** 2 + (p[2] - o[2]) ** 2)
+    return np.sqrt(max_unbalanced_sq), max_speed, kinetic, travel
 
 
 @numba.njit(cache=True)
-def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment):
+def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, measure):
     """One cycle of an in-plane model (``rot`` unused: the signature is
     :func:`drydem.kernels.step`'s, so that both share the cycling loop)."""
     for i in range(state.position.shape[0]):
@@ -134,7 +134,7 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment):
         force[i, 2] = blocks.mass[i] * gravity[2]
         moment[i, 1] = 0.0
     contact_forces(state, sub, joint, dt, force, moment)
-    return integrate(state, blocks, force, moment, damping, dt)
+    return integrate(state, blocks, force, moment, damping, dt, measure)
 
 
 run_cycles = make_run_cycles(step, jit=True)

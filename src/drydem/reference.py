@@ -27,8 +27,8 @@ def _damped(force: np.ndarray, velocity: np.ndarray, alpha: float) -> np.ndarray
     return force - alpha * np.abs(force) * np.sign(velocity)
 
 
-def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment):
-    """One cycle; see :func:`drydem.kernels.step`."""
+def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, measure):
+    """One cycle; see :func:`drydem.kernels.step` (it always measures the energies)."""
     pos, vel, omega = state.position, state.velocity, state.angular_velocity
     rot[:] = Rotation.from_quat(state.quaternion[:, [1, 2, 3, 0]]).as_matrix()
     force[:] = blocks.mass[:, None] * np.asarray(gravity)

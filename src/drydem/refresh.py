@@ -87,14 +87,17 @@ def _copy_contact(source, c, out, c_out, s_out):
     """Contact ``c`` of ``source``, its sub-contacts and their state into row ``c_out`` (and
     sub-contact rows from ``s_out``) of ``out`` (SubContacts' arrays); returns the next sub-contact row."""
     pairs, normal_body, offset, start, point_ref_body, point_inc_body, area, shear_force, normal_force, intact = out
-    pairs[c_out] = source.pairs[c]
-    normal_body[c_out] = source.normal_body[c]
+    # element by element: numba's row assignment goes through broadcasting, ten times slower
+    pairs[c_out, 0], pairs[c_out, 1] = source.pairs[c, 0], source.pairs[c, 1]
+    for k in range(3):
+        normal_body[c_out, k] = source.normal_body[c, k]
     offset[c_out] = source.offset[c]
     for s in range(source.start[c], source.start[c + 1]):
-        point_ref_body[s_out] = source.point_ref_body[s]
-        point_inc_body[s_out] = source.point_inc_body[s]
+        for k in range(3):
+            point_ref_body[s_out, k] = source.point_ref_body[s, k]
+            point_inc_body[s_out, k] = source.point_inc_body[s, k]
+            shear_force[s_out, k] = source.shear_force[s, k]
         area[s_out] = source.area[s]
-        shear_force[s_out] = source.shear_force[s]
         normal_force[s_out] = source.normal_force[s]
         intact[s_out] = source.intact[s]
         s_out += 1
