@@ -79,37 +79,39 @@ def max_points(along: int, across: int) -> int:
 
 
 @numba.njit(cache=True)
-def _world(geom, block, position, rotation):
-    """World vertices and face normals of one block."""
+def _world(geom, block, position, rotation, verts, normals):
+    """World vertices and face normals of one block into the first rows of ``verts`` and
+    ``normals`` (buffers as large as the largest block's); returns their numbers."""
     v0, v1 = geom.vertex_start[block], geom.vertex_start[block + 1]
     f0, f1 = geom.block_face_start[block], geom.block_face_start[block + 1]
     r, x = rotation[block], position[block]
-    verts = np.empty((v1 - v0, 3))
     for i in range(v1 - v0):
         p = geom.vertex[v0 + i]
         for k in range(3):
             verts[i, k] = x[k] + r[k, 0] * p[0] + r[k, 1] * p[1] + r[k, 2] * p[2]
-    normals = np.empty((f1 - f0, 3))
     for f in range(f1 - f0):
         p = geom.face_normal[f0 + f]
         for k in range(3):
             normals[f, k] = r[k, 0] * p[0] + r[k, 1] * p[1] + r[k, 2] * p[2]
-    return verts, normals
+    return v1 - v0, f1 - f0
 
 
 @numba.njit(cache=True)
-def _separations(geom, block, verts, normals, other):
-    """Signed distance of ``other``'s deepest vertex from each face plane of ``block``."""
+def _separations(geom, block, verts, normals, n_faces, other, n_other):
+    """Signed distance of ``other``'s deepest vertex (of its first ``n_other``) from each face
+    plane of ``block`` (``n_faces`` of them); returns the face of the largest and that distance."""
     f0 = geom.block_face_start[block]
-    out = np.empty(normals.shape[0])
-    for f in range(normals.shape[0]):
+    best, best_face = -np.inf, 0
+    for f in range(n_faces):
         first = verts[geom.face_vertex[geom.face_start[f0 + f]]]
         n = normals[f]
         lowest = np.inf
-        for j in range(other.shape[0]):
+        for j in range(n_other):
             lowest = min(lowest, n[0] * other[j, 0] + n[1] * other[j, 1] + n[2] * other[j, 2])
-        out[f] = lowest - (n[0] * first[0] + n[1] * first[1] + n[2] * first[2])
-    return out
+        separation = lowest - (n[0] * first[0] + n[1] * first[1] + n[2] * first[2])
+        if separation > best:
+            best, best_face = separation, f
+    return best_face, best
 
 
 @numba.njit(cache=True)
@@ -334,26 +336,39 @@ def narrow_phase(geom, position, rotation, candidates, tolerance, along, across,
     face_a = np.empty((MAX_POLYGON, 2))
     face_b = np.empty((MAX_POLYGON, 2))
     overlap = np.empty((MAX_POLYGON, 2))
+    corners = np.empty((MAX_POLYGON, 2))
     m = found.gaps.shape[1]
     uv = np.empty((m, 2))
     area = np.empty(m)
+    # the two blocks' world geometry, in buffers for the largest block (no allocation per pair)
+    largest_v = largest_f = 0
+    for b in range(geom.size.shape[0]):
+        largest_v = max(largest_v, geom.vertex_start[b + 1] - geom.vertex_start[b])
+        largest_f = max(largest_f, geom.block_face_start[b + 1] - geom.block_face_start[b])
+    va, vb = np.empty((largest_v, 3)), np.empty((largest_v, 3))
+    na, nb = np.empty((largest_f, 3)), np.empty((largest_f, 3))
+    u, v = np.empty(3), np.empty(3)
     for k in range(candidates.shape[0]):
         found.count[k] = 0
         ia, ib = candidates[k, 0], candidates[k, 1]
-        va, na = _world(geom, ia, position, rotation)
-        vb, nb = _world(geom, ib, position, rotation)
-        sa, sb = _separations(geom, ia, va, na, vb), _separations(geom, ib, vb, nb, va)
-        fa, fb = np.argmax(sa), np.argmax(sb)
+        nva, nfa = _world(geom, ia, position, rotation, va, na)
+        nvb, nfb = _world(geom, ib, position, rotation, vb, nb)
+        fa, sa = _separations(geom, ia, va, na, nfa, vb, nvb)
+        fb, sb = _separations(geom, ib, vb, nb, nfb, va, nva)
         small = min(geom.size[ia], geom.size[ib])
-        if sa[fa] >= sb[fb] - 1e-9 * small:
-            ref, inc, vr, nr, vi, ni, f_ref, separation = ia, ib, va, na, vb, nb, fa, sa[fa]
+        if sa >= sb - 1e-9 * small:
+            ref, inc, vr, nr, vi, ni, nfi, f_ref, separation = ia, ib, va, na, vb, nb, nfb, fa, sa
         else:
-            ref, inc, vr, nr, vi, ni, f_ref, separation = ib, ia, vb, nb, va, na, fb, sb[fb]
+            ref, inc, vr, nr, vi, ni, nfi, f_ref, separation = ib, ia, vb, nb, va, na, nfa, fb, sb
         found.separation[k] = separation
         if separation > tolerance:
             continue
         n = nr[f_ref]
-        f_inc = np.argmin(ni @ n)
+        f_inc, most_opposed = 0, np.inf
+        for f in range(nfi):
+            along_n = ni[f, 0] * n[0] + ni[f, 1] * n[1] + ni[f, 2] * n[2]
+            if along_n < most_opposed:
+                f_inc, most_opposed = f, along_n
         n_inc = ni[f_inc]
         cos_ni = n_inc[0] * n[0] + n_inc[1] * n[1] + n_inc[2] * n[2]
         if cos_ni >= -1e-6:
@@ -362,13 +377,15 @@ def narrow_phase(geom, position, rotation, candidates, tolerance, along, across,
         g0 = geom.block_face_start[ref] + f_ref
         first, count_ref = geom.face_start[g0], geom.face_start[g0 + 1] - geom.face_start[g0]
         origin = vr[geom.face_vertex[first]]
-        best, u = -1.0, np.zeros(3)
+        best = -1.0
         for i in range(count_ref):
-            e = vr[geom.face_vertex[first + (i + 1) % count_ref]] - vr[geom.face_vertex[first + i]]
-            length = e[0] * e[0] + e[1] * e[1] + e[2] * e[2]
+            p0, p1 = vr[geom.face_vertex[first + i]], vr[geom.face_vertex[first + (i + 1) % count_ref]]
+            e0, e1, e2 = p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]
+            length = e0 * e0 + e1 * e1 + e2 * e2
             if length > best:
-                best, u = length, e / math.sqrt(length)
-        v = np.array([n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0]])
+                best, scale = length, 1.0 / math.sqrt(length)
+                u[0], u[1], u[2] = e0 * scale, e1 * scale, e2 * scale
+        v[0], v[1], v[2] = n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0]
         n_ref_2d = _face_2d(geom, ref, f_ref, vr, origin, u, v, face_a)
         n_inc_2d = _face_2d(geom, inc, f_inc, vi, origin, u, v, face_b)
         n_overlap = _clip(face_b, n_inc_2d, face_a, n_ref_2d, overlap)
@@ -382,7 +399,7 @@ def narrow_phase(geom, position, rotation, candidates, tolerance, along, across,
             area[0] = _area(overlap, n_overlap)
             nodes = 1
         else:
-            corners = overlap.copy()
+            corners[:n_overlap] = overlap[:n_overlap]
             n_corners = _without_collinear(corners, n_overlap, tol)
             if n_corners == 4:
                 nodes = _bilinear(corners, face_a, n_ref_2d, face_b, n_inc_2d, along, across, au, av, uv, area)
@@ -392,10 +409,12 @@ def narrow_phase(geom, position, rotation, candidates, tolerance, along, across,
         plane = n_inc[0] * inc_first[0] + n_inc[1] * inc_first[1] + n_inc[2] * inc_first[2]
         kept = 0
         for i in range(nodes):
-            p = origin + uv[i, 0] * u + uv[i, 1] * v
-            gap = (plane - (n_inc[0] * p[0] + n_inc[1] * p[1] + n_inc[2] * p[2])) / cos_ni
+            p0 = origin[0] + uv[i, 0] * u[0] + uv[i, 1] * v[0]
+            p1 = origin[1] + uv[i, 0] * u[1] + uv[i, 1] * v[1]
+            p2 = origin[2] + uv[i, 0] * u[2] + uv[i, 1] * v[2]
+            gap = (plane - (n_inc[0] * p0 + n_inc[1] * p1 + n_inc[2] * p2)) / cos_ni
             if gap <= tolerance:
-                found.points[k, kept] = p
+                found.points[k, kept, 0], found.points[k, kept, 1], found.points[k, kept, 2] = p0, p1, p2
                 found.gaps[k, kept] = gap
                 found.areas[k, kept] = area[i]
                 kept += 1
