@@ -95,6 +95,30 @@ def test_the_predictor_saves_cycles_and_keeps_the_pushover_curve():
     assert sum(r.cycles for r in predicted.records) < 0.8 * sum(r.cycles for r in plain.records)
 
 
+def test_the_predictor_extrapolates_an_elastic_trend_and_not_a_jump():
+    # equilibria at 1.0, 1.1 and 1.2 deg (made up): the block moved 1 um per step, so the
+    # step to 1.3 deg starts 1 um further; after a 10 um jump (a slip, 10x the trend per degree)
+    # the next step starts where the jump left it: friction would keep what it is given
+    from drydem.analysis.tilt import _Run
+
+    model = stack_model([0.0055], supports=dd.Supports(fix_y=True))
+    run = _Run(model, TiltSettings(), on_progress=None)
+    run.sim.cycle_to_equilibrium()
+    start = run.sim.state.copy()
+
+    def at(theta, dx):
+        state = start.copy()
+        state.position[1, 0] += dx
+        return theta, state
+
+    for jump, expected in [(1e-6, 1e-6), (1e-5, 0.0)]:
+        run.sim.state = at(1.2, 1e-6 + jump)[1]
+        run.equilibria = [at(1.0, 0.0), at(1.1, 1e-6), at(1.2, 1e-6 + jump)]
+        run.predict(1.3)
+        moved = run.sim.state.position[1, 0] - start.position[1, 0] - 1e-6 - jump
+        assert moved == pytest.approx(expected, rel=1e-6, abs=1e-12)
+
+
 def test_a_model_that_cannot_stand_is_reported_with_its_state():
     # a block with its centroid beyond the edge of the base falls under its own weight
     base = dd.Block(name="base", shape=dd.box([-0.1, 0.0, -0.01], [0.0, 0.012, 0.0]), fixed=True)

@@ -339,20 +339,20 @@ def narrow_phase(
 
     Plain Python, one pair at a time: the reference for :func:`narrow_phase_compiled`.
     """
-    found = []
+    from drydem import narrow
+
+    faces = []
     separations = np.empty(len(candidates))
     for k, (ia, ib) in enumerate(candidates):
         fc, separations[k] = face_contact(shapes[ia], shapes[ib], int(ia), int(ib), tolerance=tolerance, density=density)
         if fc is not None:
-            found.append(fc)
-    if not found:
-        return SubContacts.empty(), separations
-    pairs = np.array([(fc.ref, fc.inc) for fc in found], dtype=np.int64)
-    counts = np.array([len(fc.areas) for fc in found], dtype=np.int64)
-    return _assemble(
-        pairs, counts, np.concatenate([fc.points for fc in found]), np.concatenate([fc.gaps for fc in found]),
-        np.concatenate([fc.areas for fc in found]), np.array([fc.normal for fc in found]), position, rotation,
-    ), separations
+            faces.append(fc)
+    found = narrow.Found.empty(len(faces), max([len(fc.areas) for fc in faces], default=0))
+    for k, fc in enumerate(faces):
+        n = len(fc.areas)
+        found.count[k], found.ref[k], found.inc[k], found.normal[k] = n, fc.ref, fc.inc, fc.normal
+        found.points[k, :n], found.gaps[k, :n], found.areas[k, :n] = fc.points, fc.gaps, fc.areas
+    return SubContacts(*narrow.assemble(found, position, rotation)), separations
 
 
 def narrow_phase_compiled(
@@ -362,46 +362,12 @@ def narrow_phase_compiled(
     model's flattened body geometry (:class:`drydem.narrow.Geometry`)."""
     from drydem import narrow
 
-    k, m = len(candidates), narrow.max_points(density.along, density.across)
-    found = narrow.Found(
-        count=np.zeros(k, np.int64), ref=np.zeros(k, np.int64), inc=np.zeros(k, np.int64), normal=np.zeros((k, 3)),
-        separation=np.zeros(k), points=np.zeros((k, m, 3)), gaps=np.zeros((k, m)), areas=np.zeros((k, m)),
-    )
+    found = narrow.Found.empty(len(candidates), narrow.max_points(density.along, density.across))
     narrow.narrow_phase(
         geometry, position, rotation, np.ascontiguousarray(candidates, dtype=np.int64), tolerance, density.along, density.across,
         np.asarray(density.across_axis, dtype=float), found,
     )
-    hit = found.count > 0
-    if not hit.any():
-        return SubContacts.empty(), found.separation
-    rows = np.arange(m)[None, :] < found.count[hit][:, None]
-    pairs = np.stack([found.ref[hit], found.inc[hit]], axis=1)
-    return _assemble(
-        pairs, found.count[hit], found.points[hit][rows], found.gaps[hit][rows], found.areas[hit][rows], found.normal[hit], position, rotation
-    ), found.separation
-
-
-def _assemble(pairs, counts, points, gaps, areas, normals, position, rotation) -> SubContacts:
-    """SubContacts from each contact's (ref, inc) pair, point count and normal, and the points
-    (world, on the reference face), gaps and areas of all of them in order."""
-    contact = np.repeat(np.arange(len(pairs)), counts)
-    r_ref, r_inc = rotation[pairs[:, 0]], rotation[pairs[:, 1]]
-    normal_body = np.einsum("nji,nj->ni", r_ref, normals)  # R^T n
-    point_ref_body = np.einsum("nji,nj->ni", r_ref[contact], points - position[pairs[contact, 0]])
-    incident = points + gaps[:, None] * normals[contact]
-    ns = len(areas)
-    return SubContacts(
-        pairs=pairs,
-        normal_body=normal_body,
-        offset=np.einsum("ni,ni->n", normal_body, point_ref_body[np.cumsum(counts) - counts]),
-        start=np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
-        point_ref_body=point_ref_body,
-        point_inc_body=np.einsum("nji,nj->ni", r_inc[contact], incident - position[pairs[contact, 1]]),
-        area=areas,
-        shear_force=np.zeros((ns, 3)),
-        normal_force=np.zeros(ns),
-        intact=np.ones(ns, dtype=bool),
-    )
+    return SubContacts(*narrow.assemble(found, position, rotation)), found.separation
 
 
 def world_points(sub: SubContacts, position: np.ndarray, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -70,6 +70,14 @@ class Found(NamedTuple):
     gaps: np.ndarray
     areas: np.ndarray
 
+    @classmethod
+    def empty(cls, k: int, m: int) -> Found:
+        """Room for ``k`` pairs of at most ``m`` points each, none found yet."""
+        return cls(
+            count=np.zeros(k, np.int64), ref=np.zeros(k, np.int64), inc=np.zeros(k, np.int64), normal=np.zeros((k, 3)),
+            separation=np.zeros(k), points=np.zeros((k, m, 3)), gaps=np.zeros((k, m)), areas=np.zeros((k, m)),
+        )
+
 
 def max_points(along: int, across: int) -> int:
     """Upper bound on the points of one contact: the overlap is no longer than the smaller face,
@@ -421,6 +429,51 @@ def narrow_phase(geom, position, rotation, candidates, tolerance, along, across,
         found.count[k] = kept
         found.ref[k], found.inc[k] = ref, inc
         found.normal[k] = n
+
+
+@numba.njit(cache=True)
+def assemble(found, position, rotation):
+    """The arrays of :class:`drydem.contacts.SubContacts` (in its field order) from the pairs of
+    ``found`` with points, in order: each contact's normal and plane offset, and its material
+    points, in the two blocks' body frames (the incident point lies on the incident face, ``gap``
+    along the normal from the reference one); shear and normal forces zero, intact."""
+    nc = 0
+    ns = 0
+    for k in range(found.count.shape[0]):
+        if found.count[k] > 0:
+            nc += 1
+            ns += found.count[k]
+    pairs = np.empty((nc, 2), np.int64)
+    normal_body = np.empty((nc, 3))
+    offset = np.empty(nc)
+    start = np.zeros(nc + 1, np.int64)
+    point_ref_body = np.empty((ns, 3))
+    point_inc_body = np.empty((ns, 3))
+    area = np.empty(ns)
+    c = 0
+    s = 0
+    for k in range(found.count.shape[0]):
+        if found.count[k] == 0:
+            continue
+        ref, inc = found.ref[k], found.inc[k]
+        pairs[c, 0], pairs[c, 1] = ref, inc
+        r_ref, r_inc, n = rotation[ref], rotation[inc], found.normal[k]
+        for i in range(3):  # R^T n
+            normal_body[c, i] = r_ref[0, i] * n[0] + r_ref[1, i] * n[1] + r_ref[2, i] * n[2]
+        for j in range(found.count[k]):
+            p, gap = found.points[k, j], found.gaps[k, j]
+            for i in range(3):
+                point_ref_body[s, i] = (r_ref[0, i] * (p[0] - position[ref, 0]) + r_ref[1, i] * (p[1] - position[ref, 1])
+                                        + r_ref[2, i] * (p[2] - position[ref, 2]))
+                point_inc_body[s, i] = (r_inc[0, i] * (p[0] + gap * n[0] - position[inc, 0]) + r_inc[1, i] * (p[1] + gap * n[1] - position[inc, 1])
+                                        + r_inc[2, i] * (p[2] + gap * n[2] - position[inc, 2]))
+            area[s] = found.areas[k, j]
+            s += 1
+        first = start[c]
+        offset[c] = normal_body[c, 0] * point_ref_body[first, 0] + normal_body[c, 1] * point_ref_body[first, 1] + normal_body[c, 2] * point_ref_body[first, 2]
+        c += 1
+        start[c] = s
+    return (pairs, normal_body, offset, start, point_ref_body, point_inc_body, area, np.zeros((ns, 3)), np.zeros(ns), np.ones(ns, np.bool_))
 
 
 @numba.njit(cache=True)

@@ -16,9 +16,11 @@ The collapse angle is the largest tilt at which the model was in equilibrium.
 Predictor: each step starts from the trend of the last two equilibria, extrapolated to the new
 tilt and applied as one cycle's rigid motion (:meth:`~drydem.solve.Simulation.move`; the joints
 follow it as in any cycle), so that dynamic relaxation only has the step's non-linearity left to
-remove: 2-3x fewer cycles on the competition walls. The move is capped at
-``predictor_cap_tolerances`` contact tolerances of any block point, so a local failure in the
-last step is not extrapolated into a blow-up.
+remove: about half the cycles on the competition walls. Only an elastic trend is extrapolated:
+a slip or a local failure is not recovered when the load grows (friction keeps what it is
+given), so extrapolating one would ratchet it on. The step after one whose motion per degree
+grew more than ``predictor_growth`` times over the step before starts without a prediction,
+and every move is capped at ``predictor_cap_tolerances`` contact tolerances of any block point.
 
 Adaptive protocol: steps of ``increment_deg * 2**refinements``; a step that fails is undone
 (the last equilibrium is restored, shear history included) and halved, down to
@@ -70,7 +72,8 @@ class TiltSettings:
     monitored point has moved more than trial_growth times the displacement the last two
     equilibria predict for it, and at least trial_floor_m (m), or once a block has fallen out.
     predictor : start each step from the last two equilibria extrapolated (module docstring),
-    its motion capped at predictor_cap_tolerances contact tolerances.
+    unless the last step moved predictor_growth times more per degree than the one before; the
+    move capped at predictor_cap_tolerances contact tolerances.
     """
 
     increment_deg: float = 0.1
@@ -85,6 +88,7 @@ class TiltSettings:
     trial_growth: float = 4.0
     trial_floor_m: float = 5e-4
     predictor: bool = True
+    predictor_growth: float = 2.0
     predictor_cap_tolerances: float = 0.25
 
     def __post_init__(self):
@@ -98,6 +102,7 @@ class TiltSettings:
             "chunk_cycles": isinstance(self.chunk_cycles, int) and self.chunk_cycles > 0,
             "trial_growth": self.trial_growth > 1,
             "trial_floor_m": self.trial_floor_m > 0,
+            "predictor_growth": self.predictor_growth >= 1,
             "predictor_cap_tolerances": 0 < self.predictor_cap_tolerances <= 0.5,
         }
         for name, ok in checks.items():
@@ -214,27 +219,35 @@ class _Run:
         self.lost: list[tuple[str, float]] = []
         heights = np.array([np.ptp(shape.vertices[:, 2]) for shape in model.block_shape])
         self.lost_drop = settings.lost_drop_heights * heights
-        #: the last two equilibria, (tilt in deg, State), oldest first
+        #: the last three equilibria, (tilt in deg, State), oldest first
         self.equilibria: list[tuple[float, State]] = []
 
     def remember(self, theta_deg: float) -> None:
         """The current state is an equilibrium at ``theta_deg``."""
-        self.equilibria = [*self.equilibria[-1:], (theta_deg, self.sim.state.copy())]
+        self.equilibria = [*self.equilibria[-2:], (theta_deg, self.sim.state.copy())]
 
     def predict(self, theta_deg: float) -> None:
         """Move the blocks (at the last equilibrium) along the trend of the last two equilibria,
-        extrapolated linearly in the tilt to ``theta_deg`` and capped (module docstring)."""
+        extrapolated linearly in the tilt to ``theta_deg``, if that trend is elastic; capped
+        (module docstring)."""
         if not self.settings.predictor or len(self.equilibria) < 2:
             return
-        (theta_0, before), (theta_1, last) = self.equilibria
-        scale = (theta_deg - theta_1) / (theta_1 - theta_0)
-        displacement = scale * (last.position - before.position)
-        rotation = scale * rotation_vectors(before.quaternion, last.quaternion)
-        motion = float((np.linalg.norm(displacement, axis=1) + np.linalg.norm(rotation, axis=1) * self.model.block_radius).max())
+        displacement, rotation, motion = self._trend(-2)
+        if len(self.equilibria) == 3 and motion > self.settings.predictor_growth * self._trend(-3)[2]:
+            return
+        scale = theta_deg - self.equilibria[-1][0]
         cap = self.settings.predictor_cap_tolerances * self.model.contact_tolerance
-        if motion > cap:
-            displacement, rotation = displacement * (cap / motion), rotation * (cap / motion)
-        self.sim.move(displacement, rotation, gravity=self.settings.gravity(theta_deg))
+        scale = min(scale, cap / motion) if motion * scale > cap else scale
+        self.sim.move(scale * displacement, scale * rotation, gravity=self.settings.gravity(theta_deg))
+
+    def _trend(self, first: int) -> tuple[np.ndarray, np.ndarray, float]:
+        """Displacements (nb, 3) m/deg and rotation vectors (nb, 3) rad/deg from equilibrium
+        ``first`` to the next, and the largest motion of a block point, m/deg."""
+        (theta_0, before), (theta_1, after) = self.equilibria[first], self.equilibria[first + 1]
+        displacement = (after.position - before.position) / (theta_1 - theta_0)
+        rotation = rotation_vectors(before.quaternion, after.quaternion) / (theta_1 - theta_0)
+        motion = float((np.linalg.norm(displacement, axis=1) + np.linalg.norm(rotation, axis=1) * self.model.block_radius).max())
+        return displacement, rotation, motion
 
     def displacement(self) -> tuple[float, float]:
         moved = self.sim.state.position[self.monitor] - self.model.block_centroid[self.monitor]
@@ -343,9 +356,11 @@ def tilt_analysis(
         records += [Record(*row[:4], int(row[4])) for row in saved["records"].tolist()]
         run.lost = list(zip(saved["lost_blocks"].tolist(), saved["lost_tilt_deg"].tolist()))
         theta, step, stable = float(saved["theta_deg"]), float(saved["step_deg"]), True
-        if "previous_theta_deg" in saved:
-            previous = State(saved["previous_position"], saved["previous_quaternion"], *np.zeros((2, model.n_blocks, 3)))
-            run.equilibria = [(float(saved["previous_theta_deg"]), previous)]
+        rest = np.zeros((model.n_blocks, 3))
+        run.equilibria = [
+            (float(th), State(x, q, rest.copy(), rest.copy()))
+            for th, x, q in zip(saved["previous_theta_deg"], saved["previous_position"], saved["previous_quaternion"])
+        ]
         run.remember(theta)
     else:
         initial = run.sim.snapshot() if on_frame is not None else None
@@ -430,13 +445,14 @@ def _fingerprint(model: Model, settings: TiltSettings) -> str:
 
 
 def _progress(records: list[Record], run: _Run, theta: float, step: float) -> dict:
-    """The protocol's position, for a checkpoint (with the equilibrium before the last one, for
+    """The protocol's position, for a checkpoint (with the equilibria before the last one, for
     the predictor)."""
-    previous = {}
-    if len(run.equilibria) == 2:
-        theta_0, before = run.equilibria[0]
-        previous = {"previous_theta_deg": theta_0, "previous_position": before.position, "previous_quaternion": before.quaternion}
-    return previous | {
+    nb = len(run.model.block_name)
+    previous = run.equilibria[:-1]
+    return {
+        "previous_theta_deg": np.array([th for th, _ in previous], dtype=float),
+        "previous_position": np.array([s.position for _, s in previous]).reshape(-1, nb, 3),
+        "previous_quaternion": np.array([s.quaternion for _, s in previous]).reshape(-1, nb, 4),
         "records": np.array([[r.tilt_deg, r.ux_m, r.uz_m, r.drift, r.cycles] for r in records]),
         "lost_blocks": np.array([name for name, _ in run.lost], dtype=str),
         "lost_tilt_deg": np.array([t for _, t in run.lost], dtype=float),
