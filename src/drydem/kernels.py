@@ -235,36 +235,46 @@ def pair_motions(state, neighbours, radius, out):
 
 
 @numba.njit(cache=True)
-def detection_slack(state, broad_state, neighbours, radius, absolute_limit):
-    """How far (m) the blocks are from needing re-detection; <= 0: re-detect now (a Verlet-list test).
+def detection_slack(state, broad_state, neighbours, radius, absolute_limit, slack):
+    """How far (m) each block's points may still move before a re-detection may be needed, into
+    ``slack`` (nb,); returns the smallest: <= 0, re-detect now (a Verlet-list test).
 
     Absolute: a block point moved more than ``absolute_limit`` (|dx| + theta r) since the
     State ``broad_state`` of the last broad phase, so a block outside the neighbour list may
     have come close. Relative: a neighbour pair moved more than its ``neighbours.limit``
     relative to each other since its snapshot (:func:`_pair_motion`), so its contact may have
-    changed. Angles are bounded by 2 tan(theta / 2).
+    changed; half of what is left goes to each of its blocks. Angles are bounded by
+    2 tan(theta / 2).
     """
-    slack = np.inf
     for i in range(state.position.shape[0]):
         w, _, _, _ = _relative_quaternion(state.quaternion[i], broad_state.quaternion[i])
         d = state.position[i] - broad_state.position[i]
-        slack = min(slack, absolute_limit - np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) - _angle_bound(abs(w)) * radius[i])
+        slack[i] = absolute_limit - np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) - _angle_bound(abs(w)) * radius[i]
     for k in range(neighbours.pairs.shape[0]):
-        slack = min(slack, neighbours.limit[k] - _pair_motion(state, neighbours, k, radius))
-    return slack
+        left = 0.5 * (neighbours.limit[k] - _pair_motion(state, neighbours, k, radius))
+        i, j = neighbours.pairs[k, 0], neighbours.pairs[k, 1]
+        slack[i] = min(slack[i], left)
+        slack[j] = min(slack[j], left)
+    return slack.min() if slack.shape[0] else np.inf
 
 
 @numba.njit(cache=True)
-def _motion_bound(state, largest_radius, dt):
-    """Bound on how far any block point moved this cycle relative to any other block, m:
-    twice (max |v| + max |omega| r_max) dt, with a margin for the angle bound (x 1.25)."""
-    v_max = 0.0
-    w_max = 0.0
-    for i in range(state.velocity.shape[0]):
+def accumulate_motion(state, lever, dt, moved, slack):
+    """Add to ``moved`` (nb,) a bound on how far each block's points moved this cycle, m, and
+    say whether one has used up its ``slack`` (:func:`detection_slack`).
+
+    The bound, 1.25 (|v|_1 + |omega|_1 lever) dt with lever = 4 r_max, covers what one cycle adds
+    to :func:`_pair_motion` from either of the pair's blocks: the translation, the turn of the
+    centroid offset (at most 2 r_max plus the neighbour margin) and the relative angle times
+    max(r_i, r_j); the 1.25 covers the angle bound 2 tan(theta / 2), and L1 norms bound the
+    Euclidean ones without square roots. A block far from the others uses up only its own slack.
+    """
+    used_up = False
+    for i in range(moved.shape[0]):
         v, w = state.velocity[i], state.angular_velocity[i]
-        v_max = max(v_max, v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
-        w_max = max(w_max, w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
-    return 2.5 * (np.sqrt(v_max) + np.sqrt(w_max) * largest_radius) * dt
+        moved[i] += 1.25 * (abs(v[0]) + abs(v[1]) + abs(v[2]) + (abs(w[0]) + abs(w[1]) + abs(w[2])) * lever) * dt
+        used_up |= moved[i] >= slack[i]
+    return used_up
 
 
 @numba.njit(cache=True)
@@ -291,7 +301,7 @@ def make_run_cycles(step_function, *, jit: bool):
     boxing a NamedTuple on return calls Python, and a pending Ctrl-C raised there crashes numba.
     ``force_scale`` (N) is the ratio's denominator
     (mean weight of the free blocks); the last three arguments go to :func:`detection_slack`,
-    which runs only once the blocks may have used up the slack it last found.
+    which runs only once a block may have used up its slack (:func:`accumulate_motion`).
 
     Divergence: a NaN, or more kinetic energy than gravity can have supplied. Damping only
     removes energy, so the kinetic energy stays below the work of gravity, at most
@@ -311,8 +321,9 @@ def make_run_cycles(step_function, *, jit: bool):
         moment = np.empty((nb, 3))
         ratio, speed = np.inf, np.inf
         g = np.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
-        largest_radius = blocks.radius.max()
-        slack, moved = -1.0, 0.0
+        lever = 4.0 * blocks.radius.max()
+        slack = np.full(nb, -1.0)  # unknown: look at the first cycle
+        moved = np.zeros(nb)
         for cycle in range(max_cycles):
             measure = cycle % ENERGY_CHECK_EVERY == 0
             unbalanced, speed, kinetic, travel = step_function(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, measure)
@@ -321,10 +332,9 @@ def make_run_cycles(step_function, *, jit: bool):
                 return cycle + 1, DIVERGED, ratio, speed
             if (criterion == RATIO and ratio < limit) or (criterion == VELOCITY and speed < limit):
                 return cycle + 1, CONVERGED, ratio, speed
-            moved += _motion_bound(state, largest_radius, dt)
-            if moved >= slack:
-                slack, moved = detection_slack(state, broad_state, neighbours, blocks.radius, absolute_limit), 0.0
-                if slack <= 0.0:
+            if accumulate_motion(state, lever, dt, moved, slack):
+                moved[:] = 0.0
+                if detection_slack(state, broad_state, neighbours, blocks.radius, absolute_limit, slack) <= 0.0:
                     return cycle + 1, REDETECT, ratio, speed
         return max_cycles, RUNNING, ratio, speed
 

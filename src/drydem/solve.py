@@ -157,7 +157,8 @@ class Simulation:
     def _moved_far(self) -> bool:
         """Some block point moved (margin - tolerance) / 2 since the last broad phase."""
         return kernels.detection_slack(
-            self.state, self._broad_state, contacts.NeighbourList.empty(), self.model.block_radius, self._absolute_limit
+            self.state, self._broad_state, contacts.NeighbourList.empty(), self.model.block_radius, self._absolute_limit,
+            np.empty(self.model.n_blocks),
         ) <= 0.0
 
     @property

@@ -169,7 +169,8 @@ class _Trace:
 
 @dataclass
 class TiltResult:
-    """Outcome of :func:`tilt_analysis`. States are block positions/orientations (State)."""
+    """Outcome of :func:`tilt_analysis`. States are block positions/orientations (State);
+    ``cycles`` counts every cycle run, those of abandoned adaptive trials included."""
 
     settings: TiltSettings
     monitored_block: str
@@ -384,7 +385,9 @@ def tilt_analysis(
                     last_good, lost_at_good = run.sim.snapshot(), list(run.lost)
                 continue
             if settings.adaptive and step > settings.increment_deg * (1 + 1e-9):
+                cycles_run = run.sim.cycles
                 run.sim.restore(last_good)
+                run.sim.cycles = cycles_run  # the abandoned trial's cycles count: they were run
                 run.lost = list(lost_at_good)
                 step /= 2
                 continue
