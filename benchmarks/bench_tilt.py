@@ -2,7 +2,8 @@
 
 Issue 3's goals (one core): kn = 3e7 Pa/m <= 3 s fixed and <= 0.5 s adaptive; kn = 1e9 Pa/m
 <= 20 s fixed and <= 4 s adaptive, for a 30 %-void competition wall with 4 points per length:
-here the built-in WD3 (a reconstruction, 30.1 % voids), kn = ks.
+here the built-in WD3 (a reconstruction, 30.1 % voids), kn = ks. Cycles count every cycle run,
+those of abandoned adaptive trials included.
 
 Run: python benchmarks/bench_tilt.py [--wall WD3] [--kn 3e7 1e9] [--increment 0.1] [--protocol fixed adaptive]
 """
