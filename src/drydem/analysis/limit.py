@@ -161,10 +161,9 @@ def _assemble(model: Model) -> _Problem:
         raise LimitAnalysisError(f"{model.source}: no contacts: the blocks do not touch")
     rotation = np.repeat(np.eye(3)[None], model.n_blocks, axis=0)
     point, _, normal = contacts.world_points(sub, sim.state.position, rotation)
-    # in-plane (the paper's walls): every block held in y and every contact normal in the x-z
-    # plane; then only x, z and the rotation about y are in equilibrium (blocks symmetric across
-    # the width take the out-of-plane equations with symmetric forces)
-    in_plane = bool(model.block_fixed[movable, 1].all() and np.abs(normal[:, 1]).max() < 1e-9)
+    # in-plane models (the paper's walls, Model.in_plane): every contact normal lies in the x-z
+    # plane and only x, z and the rotation about y are in equilibrium (the others are held)
+    in_plane = model.in_plane
     tangents = _tangents(normal, in_plane)
     weight = float(model.block_mass[movable].mean() * G)
     length = float(np.mean([np.ptp(s.vertices, axis=0).max() for s in model.block_shape]))
@@ -172,8 +171,6 @@ def _assemble(model: Model) -> _Problem:
     point = point / length
 
     free = ~model.block_fixed & movable[:, None]
-    if in_plane:
-        free[:, [1, 3, 5]] = False
     row_of = -np.ones((model.n_blocks, 6), dtype=np.int64)
     row_of[free] = np.arange(free.sum())
     rows = np.argwhere(free)
