@@ -90,13 +90,11 @@ def contact_forces(state, sub, joint, dt, force, moment):
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
-def integrate(state, blocks, force, moment, damping, dt, measure):
+def integrate(state, blocks, force, moment, damping, dt):
     """Damped velocities, positions and rotations of x, z and the rotation about y (as
-    :func:`drydem.kernels.integrate`, which returns the same four measures)."""
+    :func:`drydem.kernels.integrate`, which returns the same two measures)."""
     max_unbalanced_sq = 0.0
     max_speed = 0.0
-    kinetic = 0.0
-    travel = 0.0
     for i in range(state.position.shape[0]):
         if blocks.inv_mass[i] == 0.0:
             continue
@@ -105,8 +103,8 @@ def integrate(state, blocks, force, moment, damping, dt, measure):
         fx, fz, my = force[i, 0] * free_x, force[i, 2] * free_z, moment[i, 1] * free_ry
         v[0] = (v[0] + local_damping(fx, v[0], damping) * blocks.inv_mass[i] * dt) * free_x
         v[2] = (v[2] + local_damping(fz, v[2], damping) * blocks.inv_mass[i] * dt) * free_z
-        w_old = state.angular_velocity[i, 1]
-        w = w_old + local_damping(my, w_old, damping) * blocks.inv_inertia_body[i, 1, 1] * dt * free_ry
+        w = state.angular_velocity[i, 1]
+        w += local_damping(my, w, damping) * blocks.inv_inertia_body[i, 1, 1] * dt * free_ry
         state.angular_velocity[i, 1] = w
         p[0] += v[0] * dt
         p[2] += v[2] * dt
@@ -117,12 +115,21 @@ def integrate(state, blocks, force, moment, damping, dt, measure):
         max_speed = max(max_speed, speed)
         arm_moment = my / blocks.radius[i]
         max_unbalanced_sq = max(max_unbalanced_sq, fx * fx + fz * fz, arm_moment * arm_moment)
-        if measure:
-            # rotational part at the previous half step, as in the 3D kernel (which reuses I omega there)
-            kinetic += 0.5 * ((v[0] * v[0] + v[2] * v[2]) / blocks.inv_mass[i] + blocks.inertia_body[i, 1, 1] * w_old * w_old)
-            o = blocks.origin[i]
-            travel += blocks.mass[i] * np.sqrt((p[0] - o[0]) ** 2 + (p[1] - o[1]) ** 2 + (p[2] - o[2]) ** 2)
-    return np.sqrt(max_unbalanced_sq), max_speed, kinetic, travel
+    return np.sqrt(max_unbalanced_sq), max_speed
+
+
+@numba.njit(cache=True)
+def energies(state, blocks):
+    """:func:`drydem.kernels.energies` in the plane: 1/2 (m v^2 + I_yy w^2) and sum m |x - x_origin|."""
+    kinetic = 0.0
+    travel = 0.0
+    for i in range(state.position.shape[0]):
+        if blocks.inv_mass[i] == 0.0:
+            continue
+        v, p, o, w = state.velocity[i], state.position[i], blocks.origin[i], state.angular_velocity[i, 1]
+        kinetic += 0.5 * ((v[0] * v[0] + v[2] * v[2]) / blocks.inv_mass[i] + blocks.inertia_body[i, 1, 1] * w * w)
+        travel += blocks.mass[i] * np.sqrt((p[0] - o[0]) ** 2 + (p[1] - o[1]) ** 2 + (p[2] - o[2]) ** 2)
+    return kinetic, travel
 
 
 @numba.njit(cache=True)
@@ -134,7 +141,9 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
         force[i, 2] = blocks.mass[i] * gravity[2]
         moment[i, 1] = 0.0
     contact_forces(state, sub, joint, dt, force, moment)
-    return integrate(state, blocks, force, moment, damping, dt, measure)
+    unbalanced, speed = integrate(state, blocks, force, moment, damping, dt)
+    kinetic, travel = energies(state, blocks) if measure else (0.0, 0.0)
+    return unbalanced, speed, kinetic, travel
 
 
 run_cycles = make_run_cycles(step, jit=True)

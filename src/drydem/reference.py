@@ -80,7 +80,6 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
     torque = _damped(m_free, omega, damping)
     rot_t = rot.transpose(0, 2, 1)
     spin = _apply(rot, _apply(blocks.inertia_body, _apply(rot_t, omega)))
-    rotational = np.einsum("ni,ni->n", omega, spin)  # omega . I_w omega before the update
     accel = _apply(rot, _apply(blocks.inv_inertia_body, _apply(rot_t, torque - np.cross(omega, spin))))
     omega += accel * dt * free_r * moving[:, None]
     vel *= free_t
@@ -90,6 +89,8 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
 
     speed = _norm(vel) + _norm(omega) * blocks.radius
     speed = np.where(speed < np.inf, speed, np.inf)  # NaN counts as infinitely fast
+    # omega . I_w omega after the update, I_w with the rotation at the start of the cycle
+    rotational = np.einsum("ni,ni->n", omega, _apply(rot, _apply(blocks.inertia_body, _apply(rot_t, omega))))
     kinetic = 0.5 * (np.einsum("ni,ni->n", vel, vel) / np.where(moving, blocks.inv_mass, 1.0) + rotational)[moving].sum()
     travel = (blocks.mass * _norm(pos - blocks.origin))[moving].sum()
     if not moving.any():
