@@ -11,8 +11,8 @@ The polygon is discretised into sub-contacts as 3DEC's contact points: a
 tensor grid whose spacing puts ``points_per_length`` points along the full
 length of the smaller face, ends included, each point carrying its trapezoid
 share of the area (the areas sum to the polygon's area); see :func:`_grid`.
-In-plane models need only 2 points across the width (:class:`Density`). Each sub-contact is a pair of
-material points (one on each block, the incident one on the incident face
+In-plane models need only 1 point across the width, on the mid-plane (:class:`Density`).
+Each sub-contact is a pair of material points (one on each block, the incident one on the incident face
 straight above the reference one) and the reference normal, all stored in the
 blocks' body frames, so rocking opens or closes them as the blocks turn.
 """
@@ -134,7 +134,7 @@ def concatenate(first: SubContacts, second: SubContacts) -> SubContacts:
 class Density:
     """Sub-contact density: ``along`` points over a full face length in each in-plane direction
     (ends included), except ``across`` points in the direction of the world unit vector
-    ``across_axis`` when it lies in the face (in-plane walls: 2 across the width is exact)."""
+    ``across_axis`` when it lies in the face (in-plane walls: 1 across the width is exact)."""
 
     along: int
     across: int
