@@ -124,7 +124,8 @@ def subset(sub: SubContacts, keep: np.ndarray) -> SubContacts:
 
 
 def concatenate(first: SubContacts, second: SubContacts) -> SubContacts:
-    """Both sets of contacts in one SubContacts (``first``'s contacts first)."""
+    """Both sets of contacts in one SubContacts (``first``'s contacts first); with :func:`subset`
+    and :func:`carry_over`, the NumPy oracle of :func:`drydem.refresh.merge`."""
     start = np.concatenate([first.start, second.start[1:] + first.start[-1]])
     joined = {name: np.concatenate([getattr(first, name), getattr(second, name)]) for name in SubContacts._fields if name != "start"}
     return SubContacts(start=start, **joined)
@@ -382,7 +383,9 @@ def world_points(sub: SubContacts, position: np.ndarray, rotation: np.ndarray) -
 
 def carry_over(old: SubContacts, new: SubContacts, position: np.ndarray, rotation: np.ndarray) -> None:
     """Copy shear stress (N/m2) and intact flags from ``old`` to the nearest ``new`` sub-contact
-    of the same block pair, projected on the new tangent plane.
+    of the same block pair, projected on the new tangent plane (the oracle of
+    :func:`drydem.refresh.merge`, which the simulation uses; this one looks among the 8 nearest
+    old points only).
 
     Shear force is stored as the force on the incident block, so it changes sign where the two
     blocks swapped roles. Sub-contacts with no old neighbour of their pair start with zero shear.

@@ -24,7 +24,7 @@ import numpy as np
 
 from drydem.joints import normal_law, shear_law
 from drydem.motion import local_damping
-from drydem.rotation import quaternion_to_matrix, rotate_by_vector
+from drydem.rotation import mat_t_vec, mat_vec, quaternion_to_matrix, rotate_by_vector
 
 #: kinetic energy above this many times the work gravity can have done means a blow-up
 DIVERGENCE_FACTOR = 10.0
@@ -39,13 +39,12 @@ RATIO, VELOCITY = 0, 1
 FASTMATH = {"contract", "reassoc", "arcp", "nsz"}
 
 
-@numba.njit(cache=True)
-def _mat_vec(r, v0, v1, v2):
-    return (
-        r[0, 0] * v0 + r[0, 1] * v1 + r[0, 2] * v2,
-        r[1, 0] * v0 + r[1, 1] * v1 + r[1, 2] * v2,
-        r[2, 0] * v0 + r[2, 1] * v1 + r[2, 2] * v2,
-    )
+@numba.njit(cache=True, inline="always")
+def _world_tensor_apply(r, tensor, v0, v1, v2):
+    """R T R^T v: a body-frame tensor ``tensor`` (inertia or its inverse) applied in the world frame."""
+    b0, b1, b2 = mat_t_vec(r, v0, v1, v2)
+    t0, t1, t2 = mat_vec(tensor, b0, b1, b2)
+    return mat_vec(r, t0, t1, t2)
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
@@ -62,7 +61,7 @@ def contact_forces(state, rot, sub, joint, dt, force, moment):
     pos, vel, omega = state.position, state.velocity, state.angular_velocity
     for c in range(sub.pairs.shape[0]):
         a, b = sub.pairs[c, 0], sub.pairs[c, 1]
-        nx, ny, nz = _mat_vec(rot[a], sub.normal_body[c, 0], sub.normal_body[c, 1], sub.normal_body[c, 2])
+        nx, ny, nz = mat_vec(rot[a], sub.normal_body[c, 0], sub.normal_body[c, 1], sub.normal_body[c, 2])
         dx, dy, dz = pos[b, 0] - pos[a, 0], pos[b, 1] - pos[a, 1], pos[b, 2] - pos[a, 2]
         base_gap = dx * nx + dy * ny + dz * nz - sub.offset[c]
         wa, wb = omega[a], omega[b]
@@ -75,7 +74,7 @@ def contact_forces(state, rot, sub, joint, dt, force, moment):
         mx_sum = my_sum = mz_sum = 0.0
         for s in range(sub.start[c], sub.start[c + 1]):
             p = sub.point_inc_body[s]
-            rx, ry, rz = _mat_vec(rb, p[0], p[1], p[2])
+            rx, ry, rz = mat_vec(rb, p[0], p[1], p[2])
             fn, carries = normal_law(-(base_gap + rx * nx + ry * ny + rz * nz), sub.area[s], sub.intact[s], joint)
             fs = sub.shear_force[s]
             if not carries:
@@ -144,14 +143,11 @@ def integrate(state, rot, blocks, force, moment, damping, dt):
             moment[i, k] = local_damping(m, state.angular_velocity[i, k], damping)
         # world inertia I_w = R I_body R^T applied to omega, and the gyroscopic moment omega x I_w omega
         w = state.angular_velocity[i]
-        bx, by, bz = w[0] * r[0, 0] + w[1] * r[1, 0] + w[2] * r[2, 0], w[0] * r[0, 1] + w[1] * r[1, 1] + w[2] * r[2, 1], w[0] * r[0, 2] + w[1] * r[1, 2] + w[2] * r[2, 2]
-        ib = blocks.inertia_body[i]
-        lx, ly, lz = _mat_vec(r, *_mat_vec(ib, bx, by, bz))
+        lx, ly, lz = _world_tensor_apply(r, blocks.inertia_body[i], w[0], w[1], w[2])
         tx = moment[i, 0] - (w[1] * lz - w[2] * ly)
         ty = moment[i, 1] - (w[2] * lx - w[0] * lz)
         tz = moment[i, 2] - (w[0] * ly - w[1] * lx)
-        cx, cy, cz = tx * r[0, 0] + ty * r[1, 0] + tz * r[2, 0], tx * r[0, 1] + ty * r[1, 1] + tz * r[2, 1], tx * r[0, 2] + ty * r[1, 2] + tz * r[2, 2]
-        ax, ay, az = _mat_vec(r, *_mat_vec(blocks.inv_inertia_body[i], cx, cy, cz))
+        ax, ay, az = _world_tensor_apply(r, blocks.inv_inertia_body[i], tx, ty, tz)
         w[0] += ax * dt * free[3]
         w[1] += ay * dt * free[4]
         w[2] += az * dt * free[5]
@@ -181,8 +177,7 @@ def energies(state, rot, blocks):
         if blocks.free[i].max() == 0.0:
             continue
         v, w, r = state.velocity[i], state.angular_velocity[i], rot[i]
-        bx, by, bz = w[0] * r[0, 0] + w[1] * r[1, 0] + w[2] * r[2, 0], w[0] * r[0, 1] + w[1] * r[1, 1] + w[2] * r[2, 1], w[0] * r[0, 2] + w[1] * r[1, 2] + w[2] * r[2, 2]
-        lx, ly, lz = _mat_vec(r, *_mat_vec(blocks.inertia_body[i], bx, by, bz))
+        lx, ly, lz = _world_tensor_apply(r, blocks.inertia_body[i], w[0], w[1], w[2])
         kinetic += 0.5 * (w[0] * lx + w[1] * ly + w[2] * lz + (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) / blocks.inv_mass[i])
         o, p = blocks.origin[i], state.position[i]
         travel += blocks.mass[i] * np.sqrt((p[0] - o[0]) ** 2 + (p[1] - o[1]) ** 2 + (p[2] - o[2]) ** 2)

@@ -18,6 +18,7 @@ import numba
 import numpy as np
 
 from drydem.polygon import SLIVER_FRACTION
+from drydem.rotation import mat_t_vec
 
 #: largest number of vertices of a face or a clipped polygon
 MAX_POLYGON = 64
@@ -457,16 +458,14 @@ def assemble(found, position, rotation):
             continue
         ref, inc = found.ref[k], found.inc[k]
         pairs[c, 0], pairs[c, 1] = ref, inc
-        r_ref, r_inc, n = rotation[ref], rotation[inc], found.normal[k]
-        for i in range(3):  # R^T n
-            normal_body[c, i] = r_ref[0, i] * n[0] + r_ref[1, i] * n[1] + r_ref[2, i] * n[2]
+        r_ref, r_inc, n, x_ref, x_inc = rotation[ref], rotation[inc], found.normal[k], position[ref], position[inc]
+        normal_body[c, 0], normal_body[c, 1], normal_body[c, 2] = mat_t_vec(r_ref, n[0], n[1], n[2])
         for j in range(found.count[k]):
             p, gap = found.points[k, j], found.gaps[k, j]
-            for i in range(3):
-                point_ref_body[s, i] = (r_ref[0, i] * (p[0] - position[ref, 0]) + r_ref[1, i] * (p[1] - position[ref, 1])
-                                        + r_ref[2, i] * (p[2] - position[ref, 2]))
-                point_inc_body[s, i] = (r_inc[0, i] * (p[0] + gap * n[0] - position[inc, 0]) + r_inc[1, i] * (p[1] + gap * n[1] - position[inc, 1])
-                                        + r_inc[2, i] * (p[2] + gap * n[2] - position[inc, 2]))
+            point_ref_body[s, 0], point_ref_body[s, 1], point_ref_body[s, 2] = mat_t_vec(r_ref, p[0] - x_ref[0], p[1] - x_ref[1], p[2] - x_ref[2])
+            point_inc_body[s, 0], point_inc_body[s, 1], point_inc_body[s, 2] = mat_t_vec(
+                r_inc, p[0] + gap * n[0] - x_inc[0], p[1] + gap * n[1] - x_inc[1], p[2] + gap * n[2] - x_inc[2]
+            )
             area[s] = found.areas[k, j]
             s += 1
         first = start[c]

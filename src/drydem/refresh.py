@@ -19,6 +19,7 @@ import numba
 import numpy as np
 
 from drydem.contacts import SubContacts
+from drydem.rotation import mat_vec
 
 
 def match_pairs(
@@ -74,12 +75,8 @@ def merge(old: SubContacts, keep: np.ndarray, fresh: SubContacts, position: np.n
 @numba.njit(cache=True, inline="always")
 def _world_point(position, rotation, block, p):
     """x = position[block] + R[block] p, m."""
-    r = rotation[block]
-    return (
-        position[block, 0] + r[0, 0] * p[0] + r[0, 1] * p[1] + r[0, 2] * p[2],
-        position[block, 1] + r[1, 0] * p[0] + r[1, 1] * p[1] + r[1, 2] * p[2],
-        position[block, 2] + r[2, 0] * p[0] + r[2, 1] * p[1] + r[2, 2] * p[2],
-    )
+    x, y, z = mat_vec(rotation[block], p[0], p[1], p[2])
+    return position[block, 0] + x, position[block, 1] + y, position[block, 2] + z
 
 
 @numba.njit(cache=True, inline="always")
@@ -139,11 +136,7 @@ def _merge(old, keep, fresh, position, rotation):
         key = min(a, b) * nb + max(a, b)
         first = np.searchsorted(sorted_keys, key)
         last = np.searchsorted(sorted_keys, key, side="right")
-        n_body = fresh.normal_body[c]
-        ra = rotation[a]
-        nx = ra[0, 0] * n_body[0] + ra[0, 1] * n_body[1] + ra[0, 2] * n_body[2]
-        ny = ra[1, 0] * n_body[0] + ra[1, 1] * n_body[1] + ra[1, 2] * n_body[2]
-        nz = ra[2, 0] * n_body[0] + ra[2, 1] * n_body[1] + ra[2, 2] * n_body[2]
+        nx, ny, nz = mat_vec(rotation[a], fresh.normal_body[c, 0], fresh.normal_body[c, 1], fresh.normal_body[c, 2])
         row = s_out
         s_out = _copy_contact(fresh, c, out, c_out, s_out)
         c_out += 1

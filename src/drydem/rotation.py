@@ -37,6 +37,26 @@ def quaternion_to_matrix(q: np.ndarray, out: np.ndarray) -> None:
 
 
 @numba.njit(cache=True, inline="always")
+def mat_vec(r, v0, v1, v2):
+    """R v for a 3 x 3 ``r`` and a vector given by its components (a tuple back, no array)."""
+    return (
+        r[0, 0] * v0 + r[0, 1] * v1 + r[0, 2] * v2,
+        r[1, 0] * v0 + r[1, 1] * v1 + r[1, 2] * v2,
+        r[2, 0] * v0 + r[2, 1] * v1 + r[2, 2] * v2,
+    )
+
+
+@numba.njit(cache=True, inline="always")
+def mat_t_vec(r, v0, v1, v2):
+    """R^T v, as :func:`mat_vec` (for a rotation, from the world frame to the body frame)."""
+    return (
+        r[0, 0] * v0 + r[1, 0] * v1 + r[2, 0] * v2,
+        r[0, 1] * v0 + r[1, 1] * v1 + r[2, 1] * v2,
+        r[0, 2] * v0 + r[1, 2] * v1 + r[2, 2] * v2,
+    )
+
+
+@numba.njit(cache=True, inline="always")
 def rotate_by_vector(q: np.ndarray, phi_x: float, phi_y: float, phi_z: float) -> None:
     """q <- exp(phi / 2) (x) q in place, then renormalised (phi a rotation vector, rad; q a unit
     quaternion to round-off)."""

@@ -163,9 +163,6 @@ class _Trace:
         if len(self.frames) > self.limit:
             self.frames, self.stride = self.frames[1::2], 2 * self.stride
 
-    def clear(self) -> None:
-        self.frames, self.stride, self.seen = [], 1, 0
-
 
 @dataclass
 class TiltResult:
@@ -384,7 +381,7 @@ def tilt_analysis(
                 if keep_snapshots:
                     last_good, lost_at_good = run.sim.snapshot(), list(run.lost)
                 continue
-            if settings.adaptive and step > settings.increment_deg * (1 + 1e-9):
+            if coarse:
                 cycles_run = run.sim.cycles
                 run.sim.restore(last_good)
                 run.sim.cycles = cycles_run  # the abandoned trial's cycles count: they were run
