@@ -73,6 +73,23 @@ def test_a_long_free_fall_is_not_mistaken_for_divergence():
     assert sim.state.velocity[1, 2] == pytest.approx(-dd.G * sim.cycles * sim.timestep, rel=1e-9)
 
 
+def test_a_stop_request_ends_cycling_within_a_few_cycles_of_a_fast_motion():
+    # a brick falls freely (undamped): it needs new contacts every few cycles, and stop() is
+    # asked at each, so cycling ends within those few cycles of the brick passing 5 cm down
+    base = dd.Block(name="base", shape=dd.box([-0.1, 0.0, -0.01], [-0.05, 0.012, 0.0]), fixed=True)
+    brick = dd.Block(name="brick", shape=dd.box([0.0, 0.0, 0.0], [0.025, 0.012, 0.0055]))
+    model = dd.build_model([base, brick], density=1800.0, solver=dd.SolverSettings(damping=0.0, max_cycles=1_000_000))
+    sim = dd.Simulation(model)
+    start = sim.state.position[1, 2]
+    result = sim.cycle_to_equilibrium(stop=lambda: start - sim.state.position[1, 2] > 0.05)
+    drop = start - sim.state.position[1, 2]
+    # free fall: 5 cm takes sqrt(2 x 0.05 / g) = 0.101 s; far from other blocks, a block is
+    # re-detected every (NEIGHBOUR_MARGIN - 1) / 2 = 4.5 contact tolerances of travel
+    assert not result.converged and result.cycles < 1_000_000
+    assert 0.05 < drop < 0.05 + 4.5 * model.contact_tolerance
+    assert result.cycles * sim.timestep == pytest.approx(np.sqrt(2 * 0.05 / dd.G), rel=0.05)
+
+
 def test_restoring_a_snapshot_replays_the_same_path():
     # snapshot -> cycle -> restore -> cycle again: the same states, to the bit (shear history,
     # neighbour snapshots and the blocks in the analysis all come back)

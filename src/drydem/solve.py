@@ -272,23 +272,29 @@ class Simulation:
         return self._run(gravity, n, criterion=kernels.RATIO, limit=-1.0, criterion_name="none")
 
     def cycle_to_equilibrium(
-        self, *, gravity=(0.0, 0.0, -G), solver: SolverSettings | None = None, progress: Callable[[int, StepStats], None] | None = None
+        self, *, gravity=(0.0, 0.0, -G), solver: SolverSettings | None = None, progress: Callable[[int, StepStats], None] | None = None,
+        stop: Callable[[], bool] | None = None,
     ) -> EquilibriumResult:
         """Cycle until at rest (see module docstring); non-convergence is returned, not hidden.
 
-        ``progress(cycles, stats)`` is called every few thousand cycles. Raises DivergenceError
-        if the integration blows up.
+        ``progress(cycles, stats)`` is called every few thousand cycles. ``stop()`` is asked
+        whenever the compiled loop hands back (at every re-detection, so every few cycles
+        while blocks move fast, and at least every CHUNK cycles): True ends the call there,
+        unconverged. Raises DivergenceError if the integration blows up.
         """
         solver = solver or self.model.solver
         if solver.criterion == "ratio":
-            return self._run(gravity, solver.max_cycles, criterion=kernels.RATIO, limit=solver.ratio, criterion_name="ratio", progress=progress)
+            return self._run(
+                gravity, solver.max_cycles, criterion=kernels.RATIO, limit=solver.ratio, criterion_name="ratio", progress=progress, stop=stop
+            )
         return self._run(
-            gravity, solver.max_cycles, criterion=kernels.VELOCITY, limit=solver.max_velocity, criterion_name="velocity", progress=progress
+            gravity, solver.max_cycles, criterion=kernels.VELOCITY, limit=solver.max_velocity, criterion_name="velocity",
+            progress=progress, stop=stop,
         )
 
     def _run(
         self, gravity, max_cycles: int, *, criterion: int, limit: float, criterion_name: str, progress=None,
-        travel_slack: float | None = None, blocks: BlockArrays | None = None,
+        travel_slack: float | None = None, blocks: BlockArrays | None = None, stop: Callable[[], bool] | None = None,
     ) -> EquilibriumResult:
         m = self.model
         g = np.asarray(gravity, dtype=float)
@@ -325,6 +331,8 @@ class Simulation:
             if code == kernels.REDETECT:
                 self._detect(everything=False)
                 detections += 1
+            if stop is not None and stop():
+                break
         return EquilibriumResult(code == kernels.CONVERGED, done, criterion_name, float(stats.ratio), float(stats.max_speed), detections)
 
     # -- diagnostics ----------------------------------------------------------------------

@@ -254,11 +254,14 @@ class _Run:
     def equilibrate(self, theta_deg: float, *, vertical: bool = False, chunk_cycles: int | None = None,
                     trace: _Trace | None = None, give_up: Callable[[], bool] | None = None) -> tuple[bool, int]:
         """Cycle at ``theta_deg`` until equilibrium (True), the stop displacement, the fall of
-        the monitored block, ``give_up()`` or max cycles (False), checking every ``chunk_cycles``
-        (default the settings'), and adding a frame to ``trace`` at every check.
+        the monitored block, ``give_up()`` or max cycles (False), reporting progress and adding
+        a frame to ``trace`` every ``chunk_cycles`` (default the settings').
 
         Blocks that fall out are taken out and the cycling goes on, except under vertical
         gravity (stage 1): a model that loses a block under its own weight cannot stand.
+        Falls, the stop displacement and ``give_up()`` are also looked at whenever the
+        simulation re-detects contacts, so that a falling block (which needs new contacts every
+        few cycles) is taken out, and a collapse recognised, as soon as it happens.
         Stage 2 steps start with the predictor (:meth:`predict`), from the last equilibrium.
         """
         gravity = np.array([0.0, 0.0, -G]) if vertical else self.settings.gravity(theta_deg)
@@ -266,9 +269,17 @@ class _Run:
             self.predict(theta_deg)
         solver = self.model.solver
         done = 0
+
+        def stop() -> bool:
+            return (
+                bool((self._dropped() & self.sim.active & self.model.block_movable).any())
+                or abs(self.displacement()[0]) >= self.settings.stop_displacement_m
+                or (give_up is not None and give_up())
+            )
+
         while True:
             chunk = replace(solver, max_cycles=min(chunk_cycles or self.settings.chunk_cycles, solver.max_cycles - done))
-            result = self.sim.cycle_to_equilibrium(gravity=gravity, solver=chunk)
+            result = self.sim.cycle_to_equilibrium(gravity=gravity, solver=chunk, stop=stop)
             done += result.cycles
             lost = self._fallen()
             if lost.size and vertical:
