@@ -51,3 +51,19 @@ def test_rotation_vectors_undo_the_update():
     for q, p in zip(end, phi):
         rotate_by_vector(q, *p)
     np.testing.assert_allclose(rotation_vectors(start, end), phi, atol=1e-13)
+
+
+def test_rotation_about_y_of_in_plane_blocks_is_the_general_update():
+    """The planar kernel's update of q = (w, 0, y, 0) against rotate_by_vector with phi = (0, phi_y, 0),
+    across the series switch and up to several radians."""
+    from drydem.rotation import SERIES_ANGLE, rotate_about_y
+
+    rng = np.random.default_rng(5)
+    for angle in np.concatenate([[0.0], np.geomspace(1e-12, SERIES_ANGLE, 15), [SERIES_ANGLE * 1.01, 0.3, 2.5]]):
+        for sign in (1.0, -1.0):
+            half = rng.uniform(-np.pi, np.pi) / 2
+            general = np.array([np.cos(half), 0.0, np.sin(half), 0.0])
+            planar = general.copy()
+            rotate_by_vector(general, 0.0, sign * angle, 0.0)
+            rotate_about_y(planar, sign * angle)
+            np.testing.assert_allclose(planar, general, rtol=0, atol=1e-15)

@@ -24,7 +24,14 @@ import numpy as np
 from drydem.joints import normal_law, shear_law
 from drydem.kernels import FASTMATH, make_run_cycles
 from drydem.motion import local_damping
-from drydem.rotation import rotate_by_vector
+from drydem.rotation import rotate_about_y
+
+#: below this turn of a contact normal in one cycle (rad), 1 / cos t = 1 + t^2 / 2 + 5 t^4 / 24 and
+#: tan^2 t = t^2 + 2 t^4 / 3 (the next terms, 61 t^6 / 720 and 17 t^6 / 45, are below 1e-18)
+TURN_SERIES = 1e-3
+#: a shear force lay along the last tangent when its squared normal part is that of the turn to
+#: this fraction of its squared tangential part (the round-off of both is ~1e-16)
+ALIGNED = 1e-14
 
 
 @numba.njit(cache=True, inline="always")
@@ -39,8 +46,18 @@ def contact_forces(state, sub, joint, dt, force, moment):
     forces summed into ``force[:, 0]``, ``force[:, 2]`` (N) and moments about y into
     ``moment[:, 1]`` (N m). A point's arm r = R_b p and the centroid offset d give the gap
     (d + r) . n - offset and the relative velocity v_b - v_a - w_a x d + (w_b - w_a) x r, with
-    w x r = w (r_z, 0, -r_x); the moment about y of F at r is r_z F_x - r_x F_z."""
+    w x r = w (r_z, 0, -r_x); the moment about y of F at r is r_z F_x - r_x F_z.
+
+    The previous shear force F_s is turned into the current tangent t = (n_z, -n_x) with its
+    magnitude kept, as in the 3D kernel. The normal, fixed in the reference block a, has turned
+    since the last cycle by a's last rotation w_a dt; F_s lay along the tangent then, so
+    (F_s . t) / cos(w_a dt) is its signed magnitude: no square root per sub-contact (1 / cos
+    and tan^2 by their series below TURN_SERIES rad, exact to round-off there). Where F_s did
+    not lie along the last tangent (after a re-detection or a predictor move), which
+    (F_s . n)^2 = (F_s . t)^2 tan^2(w_a dt) tells to round-off, the magnitude is
+    sqrt((F_s . t)^2 + (F_s . n)^2)."""
     pos, vel, omega, quat = state.position, state.velocity, state.angular_velocity, state.quaternion
+    point, area, intact, shear, normal = sub.point_inc_body, sub.area, sub.intact, sub.shear_force, sub.normal_force
     for c in range(sub.pairs.shape[0]):
         a, b = sub.pairs[c, 0], sub.pairs[c, 1]
         ca, sa = _cos_sin(quat[a])
@@ -53,31 +70,33 @@ def contact_forces(state, sub, joint, dt, force, moment):
         dw = omega[b, 1] - wa
         v0x = vel[b, 0] - vel[a, 0] - wa * dz
         v0z = vel[b, 2] - vel[a, 2] + wa * dx
+        turn_sq = (wa * dt) ** 2
+        if turn_sq < TURN_SERIES * TURN_SERIES:
+            secant = 1.0 + turn_sq * (0.5 + turn_sq * (5.0 / 24.0))
+            tangent_sq = turn_sq * (1.0 + turn_sq * (2.0 / 3.0))
+        else:
+            secant = 1.0 / np.cos(wa * dt)
+            tangent_sq = secant * secant - 1.0
         fx_sum = fz_sum = my_sum = 0.0
         for s in range(sub.start[c], sub.start[c + 1]):
-            p = sub.point_inc_body[s]
-            rx, rz = cb * p[0] + sb * p[2], cb * p[2] - sb * p[0]
-            fn, carries = normal_law(-(base_gap + rx * nx + rz * nz), sub.area[s], sub.intact[s], joint)
-            fs = sub.shear_force[s]
+            rx, rz = cb * point[s, 0] + sb * point[s, 2], cb * point[s, 2] - sb * point[s, 0]
+            fn, carries = normal_law(-(base_gap + rx * nx + rz * nz), area[s], intact[s], joint)
             if not carries:
-                sub.normal_force[s] = 0.0
-                fs[0] = fs[2] = 0.0
-                sub.intact[s] = False
+                normal[s] = 0.0
+                shear[s, 0] = shear[s, 2] = 0.0
+                intact[s] = False
                 continue
-            vx = v0x + dw * rz
-            vz = v0z - dw * rx
-            vn = vx * nx + vz * nz
-            dux, duz = (vx - vn * nx) * dt, (vz - vn * nz) * dt
-            # previous shear force turned into the current tangent t = (n_z, -n_x), magnitude kept
-            sx, sz = fs[0], fs[2]
-            if sx * nx + sz * nz != 0.0:
-                along = sx * nz - sz * nx
-                magnitude = np.sqrt(sx * sx + sz * sz) if along > 0.0 else -np.sqrt(sx * sx + sz * sz) if along < 0.0 else 0.0
-                sx, sz = magnitude * nz, -magnitude * nx
-            sx, _, sz, intact = shear_law(fn, dux, 0.0, duz, sx, 0.0, sz, sub.area[s], sub.intact[s], joint)
-            sub.normal_force[s] = fn
-            fs[0], fs[2] = sx, sz
-            sub.intact[s] = intact
+            # tangential displacement and previous shear force along t = (n_z, -n_x)
+            du = ((v0x + dw * rz) * nz - (v0z - dw * rx) * nx) * dt
+            along, across = shear[s, 0] * nz - shear[s, 2] * nx, shear[s, 0] * nx + shear[s, 2] * nz
+            if abs(across * across - along * along * tangent_sq) <= ALIGNED * along * along:
+                along *= secant
+            else:
+                magnitude = np.sqrt(along * along + across * across)
+                along = magnitude if along > 0.0 else -magnitude if along < 0.0 else 0.0
+            sx, _, sz, intact[s] = shear_law(fn, du * nz, 0.0, -du * nx, along * nz, 0.0, -along * nx, area[s], intact[s], joint)
+            normal[s] = fn
+            shear[s, 0], shear[s, 2] = sx, sz
             fx, fz = fn * nx + sx, fn * nz + sz
             fx_sum += fx
             fz_sum += fz
@@ -109,7 +128,7 @@ def integrate(state, blocks, force, moment, damping, dt):
         state.angular_velocity[i, 1] = w
         p[0] += v[0] * dt
         p[2] += v[2] * dt
-        rotate_by_vector(state.quaternion[i], 0.0, w * dt, 0.0)
+        rotate_about_y(state.quaternion[i], w * dt)
         speed = np.sqrt(v[0] * v[0] + v[2] * v[2]) + abs(w) * blocks.radius[i]
         if not speed < np.inf:  # NaN counts as infinitely fast
             speed = np.inf

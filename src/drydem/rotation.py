@@ -63,13 +63,7 @@ def rotate_by_vector(q: np.ndarray, phi_x: float, phi_y: float, phi_z: float) ->
     angle_sq = phi_x * phi_x + phi_y * phi_y + phi_z * phi_z
     if angle_sq == 0.0:
         return
-    if angle_sq < SERIES_ANGLE * SERIES_ANGLE:
-        x2 = 0.25 * angle_sq  # (|phi| / 2)^2
-        cos_half = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0)
-        s = 0.5 * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0))  # sin(|phi| / 2) / |phi|
-    else:
-        angle = np.sqrt(angle_sq)
-        cos_half, s = np.cos(0.5 * angle), np.sin(0.5 * angle) / angle
+    cos_half, s = _half_angle(angle_sq)
     dw, dx, dy, dz = cos_half, s * phi_x, s * phi_y, s * phi_z
     w, x, y, z = q[0], q[1], q[2], q[3]
     nw = dw * w - dx * x - dy * y - dz * z
@@ -80,6 +74,28 @@ def rotate_by_vector(q: np.ndarray, phi_x: float, phi_y: float, phi_z: float) ->
     # order of round-off (q and exp(phi / 2) are unit to round-off), so the error is e^2
     inv_norm = 1.5 - 0.5 * (nw * nw + nx * nx + ny * ny + nz * nz)
     q[0], q[1], q[2], q[3] = nw * inv_norm, nx * inv_norm, ny * inv_norm, nz * inv_norm
+
+
+@numba.njit(cache=True, inline="always")
+def rotate_about_y(q: np.ndarray, phi_y: float) -> None:
+    """:func:`rotate_by_vector` for q = (w, 0, y, 0) and phi = (0, phi_y, 0) (in-plane blocks,
+    drydem.planar): q <- (c w - s y, 0, c y + s w, 0) with c, s = cos, sin(phi_y / 2)."""
+    cos_half, s = _half_angle(phi_y * phi_y)
+    sin_half = s * phi_y
+    w, y = q[0], q[2]
+    nw, ny = cos_half * w - sin_half * y, cos_half * y + sin_half * w
+    inv_norm = 1.5 - 0.5 * (nw * nw + ny * ny)  # as in rotate_by_vector
+    q[0], q[2] = nw * inv_norm, ny * inv_norm
+
+
+@numba.njit(cache=True, inline="always")
+def _half_angle(angle_sq: float) -> tuple[float, float]:
+    """cos(|phi| / 2) and sin(|phi| / 2) / |phi| from |phi|^2 (series below SERIES_ANGLE)."""
+    if angle_sq < SERIES_ANGLE * SERIES_ANGLE:
+        x2 = 0.25 * angle_sq  # (|phi| / 2)^2
+        return 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0), 0.5 * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0))
+    angle = np.sqrt(angle_sq)
+    return np.cos(0.5 * angle), np.sin(0.5 * angle) / angle
 
 
 @numba.njit(cache=True)
