@@ -15,7 +15,7 @@ import pytest
 import drydem as dd
 from drydem.analysis.drift import drift_limit_angles
 from drydem.analysis.tilt import TiltSettings, monitored_block, tilt_analysis, wall_height
-from conftest import stack_model
+from conftest import BRICK, stack_model
 
 STEP = 0.5
 
@@ -117,6 +117,28 @@ def test_the_predictor_extrapolates_an_elastic_trend_and_not_a_jump():
         run.predict(1.3)
         moved = run.sim.state.position[1, 0] - start.position[1, 0] - 1e-6 - jump
         assert moved == pytest.approx(expected, rel=1e-6, abs=1e-12)
+
+
+def test_the_predictor_moves_at_most_its_cap_in_elastic_closures():
+    # a brick on its base closes its joint by m g / (kn A) under its own weight (9.7e-7 m here);
+    # an elastic trend of 1 mm per step is extrapolated by predictor_cap_closures of those only
+    from drydem.analysis.tilt import _Run
+
+    model = stack_model([0.0055], supports=dd.Supports(fix_y=True))
+    closure = model.block_mass[1] * dd.G / (model.joint.kn * BRICK[0] * BRICK[1])
+    run = _Run(model, TiltSettings(), on_progress=None)
+    assert run.elastic_closure == pytest.approx(closure, rel=1e-9)
+    run.sim.cycle_to_equilibrium()
+    start = run.sim.state.copy()
+    run.equilibria = []
+    for k, theta in enumerate([1.0, 1.1, 1.2]):
+        state = start.copy()
+        state.position[1, 0] += k * 1e-3
+        run.equilibria.append((theta, state))
+    run.sim.state = run.equilibria[-1][1].copy()
+    run.predict(1.3)
+    moved = run.sim.state.position[1, 0] - start.position[1, 0] - 2e-3
+    assert moved == pytest.approx(TiltSettings().predictor_cap_closures * closure, rel=1e-6)
 
 
 def test_a_model_that_cannot_stand_is_reported_with_its_state():

@@ -20,7 +20,13 @@ remove: about half the cycles on the competition walls. Only an elastic trend is
 a slip or a local failure is not recovered when the load grows (friction keeps what it is
 given), so extrapolating one would ratchet it on. The step after one whose motion per degree
 grew more than ``predictor_growth`` times over the step before starts without a prediction,
-and every move is capped at ``predictor_cap_tolerances`` contact tolerances of any block point.
+and every move of a block point is capped at ``predictor_cap_closures`` elastic closures: the
+median over the blocks of m g / sum(k A), what a block's own weight closes its joints by (the
+contacts as drawn). The cap thus follows the joint stiffness: a soft wall moves far and elastically at
+every step, a stiff one little, but as much as a soft one once it slips. The default, 150, is
+about one contact tolerance at kn = 3e7 Pa/m on the competition walls and 1/30 of one at 1e9
+(a cap of one tolerance there extrapolated a slip of WD1 into a local failure at 22.4 deg,
+against 26.3 without the predictor).
 
 Adaptive protocol: steps of ``increment_deg * 2**refinements``; a step that fails is undone
 (the last equilibrium is restored, shear history included) and halved, down to
@@ -47,6 +53,7 @@ from drydem.analysis.drift import drift_limit_angles
 from drydem.errors import ModelError
 from drydem.io.checkpoint import load_checkpoint, save_checkpoint
 from drydem.model import Model
+from drydem.motion import contact_stiffness
 from drydem.contacts import SubContacts
 from drydem.rotation import rotation_vectors
 from drydem.solve import G, Simulation
@@ -73,7 +80,7 @@ class TiltSettings:
     equilibria predict for it, and at least trial_floor_m (m), or once a block has fallen out.
     predictor : start each step from the last two equilibria extrapolated (module docstring),
     unless the last step moved predictor_growth times more per degree than the one before; the
-    move capped at predictor_cap_tolerances contact tolerances.
+    move capped at predictor_cap_closures elastic closures of the joints (module docstring).
     """
 
     increment_deg: float = 0.1
@@ -89,7 +96,7 @@ class TiltSettings:
     trial_floor_m: float = 5e-4
     predictor: bool = True
     predictor_growth: float = 2.0
-    predictor_cap_tolerances: float = 0.25
+    predictor_cap_closures: float = 150.0
 
     def __post_init__(self):
         checks = {
@@ -103,7 +110,7 @@ class TiltSettings:
             "trial_growth": self.trial_growth > 1,
             "trial_floor_m": self.trial_floor_m > 0,
             "predictor_growth": self.predictor_growth >= 1,
-            "predictor_cap_tolerances": 0 < self.predictor_cap_tolerances <= 0.5,
+            "predictor_cap_closures": self.predictor_cap_closures > 0,
         }
         for name, ok in checks.items():
             if not ok:
@@ -219,6 +226,7 @@ class _Run:
         self.lost_drop = settings.lost_drop_heights * heights
         #: the last three equilibria, (tilt in deg, State), oldest first
         self.equilibria: list[tuple[float, State]] = []
+        self.elastic_closure = _elastic_closure(model, self.sim.contacts)
 
     def remember(self, theta_deg: float) -> None:
         """The current state is an equilibrium at ``theta_deg``."""
@@ -234,7 +242,7 @@ class _Run:
         if len(self.equilibria) == 3 and motion > self.settings.predictor_growth * self._trend(-3)[2]:
             return
         scale = theta_deg - self.equilibria[-1][0]
-        cap = self.settings.predictor_cap_tolerances * self.model.contact_tolerance
+        cap = self.settings.predictor_cap_closures * self.elastic_closure
         scale = min(scale, cap / motion) if motion * scale > cap else scale
         self.sim.move(scale * displacement, scale * rotation, gravity=self.settings.gravity(theta_deg))
 
@@ -431,6 +439,14 @@ def tilt_analysis(
         for frame in trace.frames:
             on_frame(frame)
     return result
+
+
+def _elastic_closure(model: Model, contacts: SubContacts) -> float:
+    """Median over the sprung free blocks of m g / sum(k A), m, with the contacts of the model as
+    drawn: how far a block's own weight closes its joints (the predictor's scale)."""
+    k_t, _ = contact_stiffness(contacts, model.joint.kn, model.joint.ks, model.n_blocks)
+    sprung = model.block_movable & (k_t > 0)
+    return float(np.median(model.block_mass[sprung] * G / k_t[sprung])) if sprung.any() else 0.0
 
 
 def _trial_limit(run: _Run, records: list[Record], step: float, settings: TiltSettings) -> Callable[[], bool]:
