@@ -112,8 +112,10 @@ def test_the_predictor_extrapolates_an_elastic_trend_and_not_a_jump():
         return theta, state
 
     for jump, expected in [(1e-6, 1e-6), (1e-5, 0.0)]:
+        run.equilibria, run.trends = [], []
+        for theta, dx in [(1.0, 0.0), (1.1, 1e-6), (1.2, 1e-6 + jump)]:
+            run.remember(*at(theta, dx))
         run.sim.state = at(1.2, 1e-6 + jump)[1]
-        run.equilibria = [at(1.0, 0.0), at(1.1, 1e-6), at(1.2, 1e-6 + jump)]
         run.predict(1.3)
         moved = run.sim.state.position[1, 0] - start.position[1, 0] - 1e-6 - jump
         assert moved == pytest.approx(expected, rel=1e-6, abs=1e-12)
@@ -130,11 +132,10 @@ def test_the_predictor_moves_at_most_its_cap_in_elastic_closures():
     assert run.elastic_closure == pytest.approx(closure, rel=1e-9)
     run.sim.cycle_to_equilibrium()
     start = run.sim.state.copy()
-    run.equilibria = []
     for k, theta in enumerate([1.0, 1.1, 1.2]):
         state = start.copy()
         state.position[1, 0] += k * 1e-3
-        run.equilibria.append((theta, state))
+        run.remember(theta, state)
     run.sim.state = run.equilibria[-1][1].copy()
     run.predict(1.3)
     moved = run.sim.state.position[1, 0] - start.position[1, 0] - 2e-3

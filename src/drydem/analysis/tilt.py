@@ -224,32 +224,36 @@ class _Run:
         self.lost: list[tuple[str, float]] = []
         heights = np.array([np.ptp(shape.vertices[:, 2]) for shape in model.block_shape])
         self.lost_drop = settings.lost_drop_heights * heights
-        #: the last three equilibria, (tilt in deg, State), oldest first
+        #: the last three equilibria, (tilt in deg, State), oldest first, and the trends
+        #: (displacement m/deg, rotation rad/deg, largest point motion m/deg) between them
         self.equilibria: list[tuple[float, State]] = []
+        self.trends: list[tuple[np.ndarray, np.ndarray, float]] = []
         self.elastic_closure = _elastic_closure(model, self.sim.contacts)
 
-    def remember(self, theta_deg: float) -> None:
-        """The current state is an equilibrium at ``theta_deg``."""
-        self.equilibria = [*self.equilibria[-2:], (theta_deg, self.sim.state.copy())]
+    def remember(self, theta_deg: float, state: State | None = None) -> None:
+        """``state`` (default: the current one) is an equilibrium at ``theta_deg``."""
+        state = self.sim.state.copy() if state is None else state
+        if self.equilibria:
+            self.trends = [*self.trends[-1:], self._trend(*self.equilibria[-1], theta_deg, state)]
+        self.equilibria = [*self.equilibria[-2:], (theta_deg, state)]
 
     def predict(self, theta_deg: float) -> None:
         """Move the blocks (at the last equilibrium) along the trend of the last two equilibria,
         extrapolated linearly in the tilt to ``theta_deg``, if that trend is elastic; capped
         (module docstring)."""
-        if not self.settings.predictor or len(self.equilibria) < 2:
+        if not self.settings.predictor or not self.trends:
             return
-        displacement, rotation, motion = self._trend(-2)
-        if len(self.equilibria) == 3 and motion > self.settings.predictor_growth * self._trend(-3)[2]:
+        displacement, rotation, motion = self.trends[-1]
+        if len(self.trends) == 2 and motion > self.settings.predictor_growth * self.trends[-2][2]:
             return
         scale = theta_deg - self.equilibria[-1][0]
         cap = self.settings.predictor_cap_closures * self.elastic_closure
         scale = min(scale, cap / motion) if motion * scale > cap else scale
         self.sim.move(scale * displacement, scale * rotation, gravity=self.settings.gravity(theta_deg))
 
-    def _trend(self, first: int) -> tuple[np.ndarray, np.ndarray, float]:
+    def _trend(self, theta_0: float, before: State, theta_1: float, after: State) -> tuple[np.ndarray, np.ndarray, float]:
         """Displacements (nb, 3) m/deg and rotation vectors (nb, 3) rad/deg from equilibrium
-        ``first`` to the next, and the largest motion of a block point, m/deg."""
-        (theta_0, before), (theta_1, after) = self.equilibria[first], self.equilibria[first + 1]
+        ``before`` to ``after``, and the largest motion of a block point, m/deg."""
         displacement = (after.position - before.position) / (theta_1 - theta_0)
         rotation = rotation_vectors(before.quaternion, after.quaternion) / (theta_1 - theta_0)
         motion = float((np.linalg.norm(displacement, axis=1) + np.linalg.norm(rotation, axis=1) * self.model.block_radius).max())
@@ -374,10 +378,8 @@ def tilt_analysis(
         run.lost = list(zip(saved["lost_blocks"].tolist(), saved["lost_tilt_deg"].tolist()))
         theta, step, stable = float(saved["theta_deg"]), float(saved["step_deg"]), True
         rest = np.zeros((model.n_blocks, 3))
-        run.equilibria = [
-            (float(th), State(x, q, rest.copy(), rest.copy()))
-            for th, x, q in zip(saved["previous_theta_deg"], saved["previous_position"], saved["previous_quaternion"])
-        ]
+        for th, x, q in zip(saved["previous_theta_deg"], saved["previous_position"], saved["previous_quaternion"]):
+            run.remember(float(th), State(x, q, rest.copy(), rest.copy()))
         run.remember(theta)
     else:
         initial = run.sim.snapshot() if on_frame is not None else None
