@@ -32,10 +32,9 @@ def time_engine(run_cycles, sim, cycles: int, gravity) -> float:
         state = sim.state.copy()
         contacts = sim.contacts.copy()
         start = time.perf_counter()
-        n, code, _, _ = run_cycles(
-            state, sim._blocks, contacts, JointArrays.of(sim.model.joint), gravity, sim.timestep, 0.8, cycles,
-            kernels.RATIO, -1.0, 1.0, 1.0, state.copy(), sim.neighbours._replace(limit=np.full(len(sim.neighbours.pairs), np.inf)), np.inf,
-        )
+        loop = kernels.LoopSettings(gravity, sim.timestep, 0.8, cycles, kernels.RATIO, -1.0, 1.0, 1.0, np.inf)
+        unlimited = sim.neighbours._replace(limit=np.full(len(sim.neighbours.pairs), np.inf))
+        n, code, _, _ = run_cycles(state, sim._blocks, contacts, JointArrays.of(sim.model.joint), loop, state.copy(), unlimited)
         best = min(best, (time.perf_counter() - start) / n)
         assert code == kernels.RUNNING and n == cycles
     return best

@@ -172,3 +172,25 @@ def test_walls_held_in_y_are_in_plane_and_other_models_are_not():
     ]
     assert dd.build_model(blocks[:2], density=1800.0, supports=held).in_plane
     assert not dd.build_model(blocks, density=1800.0, supports=held).in_plane
+
+
+def test_compiled_cycling_loops_are_loaded_from_the_cache_in_a_new_process():
+    """numba's on-disk cache must serve the cycling loops: a loop compiled in every process costs
+    seconds at every start (it did while the loop was a closure over the step function)."""
+    import os
+    import subprocess
+    import sys
+
+    script = (
+        "import drydem as dd, numpy as np\n"
+        "wall = dd.build_model([dd.Block(name='base', shape=dd.box([-0.1, 0, -0.01], [0.1, 0.012, 0]), fixed=True),\n"
+        "    dd.Block(name='brick', shape=dd.box([0, 0, 0], [0.025, 0.012, 0.0055]))], density=1800.0, supports=dd.Supports(fix_y=True))\n"
+        "assert wall.in_plane\n"
+        "for engine in ('numba', 'numba-3d'):\n"
+        "    dd.Simulation(wall, engine=engine).cycle(10)\n"
+    )
+    env = dict(os.environ, NUMBA_DEBUG_CACHE="1")
+    runs = [subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, check=True) for _ in range(2)]
+    saved = [line for line in runs[1].stdout.splitlines() if "data saved" in line and "run_cycles" in line]
+    loaded = [line for line in runs[1].stdout.splitlines() if "data loaded" in line and "run_cycles" in line]
+    assert not saved and len(loaded) == 2, runs[1].stdout[-2000:]

@@ -14,10 +14,12 @@ One cycle (paper Eq. 2 and 4; Itasca 3DEC's calculation cycle) reads like the ph
 ``run_cycles`` repeats it until the equilibrium criterion holds, the blocks have moved
 far enough to need new contacts, the integration diverges, or ``max_cycles`` is reached.
 :mod:`drydem.reference` implements the same ``step`` in vectorised NumPy, as the oracle
-the tests hold this one to, and shares the loop (``make_run_cycles``).
+the tests hold this one to, and shares the loop (:func:`cycle_loop`).
 """
 
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -298,17 +300,36 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
     return unbalanced, speed, kinetic, travel
 
 
-def make_run_cycles(step_function, *, jit: bool):
-    """The cycling loop around ``step_function`` (numba-compiled when ``jit``).
+class LoopSettings(NamedTuple):
+    """What one call of a kernel's ``run_cycles`` is to do (:func:`cycle_loop`).
 
-    ``run_cycles(state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit,
-    force_scale, travel_slack, broad_state, neighbours, absolute_limit)`` cycles
-    until converged, re-detection needed, diverged or ``max_cycles``, and returns (cycles run,
-    exit code, unbalanced-force ratio and max point speed of the last cycle) as plain numbers:
-    boxing a NamedTuple on return calls Python, and a pending Ctrl-C raised there crashes numba.
-    ``force_scale`` (N) is the ratio's denominator
-    (mean weight of the free blocks); the last three arguments go to :func:`detection_slack`,
-    which runs only once a block may have used up its slack (:func:`accumulate_motion`).
+    gravity : (3,) m/s2. dt : timestep, s. damping : local damping coefficient. max_cycles :
+    cycles at most. criterion, limit : RATIO (max unbalanced force / force_scale < limit) or
+    VELOCITY (max block point speed < limit, m/s). force_scale : N. travel_slack : kg m, of the
+    divergence test. absolute_limit : m, of :func:`detection_slack`.
+    """
+
+    gravity: np.ndarray
+    dt: float
+    damping: float
+    max_cycles: int
+    criterion: int
+    limit: float
+    force_scale: float
+    travel_slack: float
+    absolute_limit: float
+
+
+@numba.njit(cache=True, inline="always")
+def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neighbours):
+    """The cycling loop around ``step_function`` (a kernel's ``step``), shared by every engine,
+    with the :class:`LoopSettings` ``loop``.
+
+    It cycles until converged, re-detection needed, diverged or ``loop.max_cycles``, and returns
+    (cycles run, exit code, unbalanced-force ratio and max point speed of the last cycle) as
+    plain numbers: boxing a NamedTuple on return calls Python, and a pending Ctrl-C raised
+    there crashes numba. ``broad_state`` and ``neighbours`` go to :func:`detection_slack`, which
+    runs only once a block may have used up its slack (:func:`accumulate_motion`).
 
     Divergence: a NaN, or more kinetic energy than gravity can have supplied. Damping only
     removes energy, so the kinetic energy stays below the work of gravity, at most
@@ -316,36 +337,38 @@ def make_run_cycles(step_function, *, jit: bool):
     for the settling at the start) the integration has blown up. A block falling freely for
     any time does not trigger it. The energies are measured every ENERGY_CHECK_EVERY cycles
     (they cost a third of the motion update); a blow-up takes far longer to matter.
+
+    Each compiled kernel has a cached ``run_cycles`` of its own into which this loop is inlined
+    with its ``step``: a numba function passed as an argument is a new type in every process,
+    so a loop compiled for it (or a closure over it) would never be served from numba's cache
+    and would cost seconds at every start. :mod:`drydem.reference` runs its Python form.
     """
-
-    def run_cycles(
-        state, blocks, sub, joint, gravity, dt, damping, max_cycles, criterion, limit, force_scale, travel_slack,
-        broad_state, neighbours, absolute_limit,
-    ):
-        nb = state.position.shape[0]
-        rot = np.empty((nb, 3, 3))
-        force = np.empty((nb, 3))
-        moment = np.empty((nb, 3))
-        ratio, speed = np.inf, np.inf
-        g = np.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
-        lever = 4.0 * blocks.radius.max()
-        slack = np.full(nb, -1.0)  # unknown: look at the first cycle
-        moved = np.zeros(nb)
-        for cycle in range(max_cycles):
-            measure = cycle % ENERGY_CHECK_EVERY == 0
-            unbalanced, speed, kinetic, travel = step_function(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, measure)
-            ratio = unbalanced / force_scale
-            if not (speed < np.inf and (not measure or kinetic <= DIVERGENCE_FACTOR * g * (travel + travel_slack))):
-                return cycle + 1, DIVERGED, ratio, speed
-            if (criterion == RATIO and ratio < limit) or (criterion == VELOCITY and speed < limit):
-                return cycle + 1, CONVERGED, ratio, speed
-            if accumulate_motion(state, lever, dt, moved, slack):
-                moved[:] = 0.0
-                if detection_slack(state, broad_state, neighbours, blocks.radius, absolute_limit, slack) <= 0.0:
-                    return cycle + 1, REDETECT, ratio, speed
-        return max_cycles, RUNNING, ratio, speed
-
-    return numba.njit(cache=True)(run_cycles) if jit else run_cycles
+    gravity, dt, damping, criterion, limit = loop.gravity, loop.dt, loop.damping, loop.criterion, loop.limit
+    nb = state.position.shape[0]
+    rot = np.empty((nb, 3, 3))
+    force = np.empty((nb, 3))
+    moment = np.empty((nb, 3))
+    ratio, speed = np.inf, np.inf
+    g = np.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
+    lever = 4.0 * blocks.radius.max()
+    slack = np.full(nb, -1.0)  # unknown: look at the first cycle
+    moved = np.zeros(nb)
+    for cycle in range(loop.max_cycles):
+        measure = cycle % ENERGY_CHECK_EVERY == 0
+        unbalanced, speed, kinetic, travel = step_function(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, measure)
+        ratio = unbalanced / loop.force_scale
+        if not (speed < np.inf and (not measure or kinetic <= DIVERGENCE_FACTOR * g * (travel + loop.travel_slack))):
+            return cycle + 1, DIVERGED, ratio, speed
+        if (criterion == RATIO and ratio < limit) or (criterion == VELOCITY and speed < limit):
+            return cycle + 1, CONVERGED, ratio, speed
+        if accumulate_motion(state, lever, dt, moved, slack):
+            moved[:] = 0.0
+            if detection_slack(state, broad_state, neighbours, blocks.radius, loop.absolute_limit, slack) <= 0.0:
+                return cycle + 1, REDETECT, ratio, speed
+    return loop.max_cycles, RUNNING, ratio, speed
 
 
-run_cycles = make_run_cycles(step, jit=True)
+@numba.njit(cache=True)
+def run_cycles(state, blocks, sub, joint, loop, broad_state, neighbours):
+    """:func:`cycle_loop` around the 3D :func:`step`."""
+    return cycle_loop(step, state, blocks, sub, joint, loop, broad_state, neighbours)

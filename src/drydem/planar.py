@@ -22,7 +22,7 @@ import numba
 import numpy as np
 
 from drydem.joints import normal_law, shear_law
-from drydem.kernels import FASTMATH, make_run_cycles
+from drydem.kernels import FASTMATH, cycle_loop
 from drydem.motion import local_damping
 from drydem.rotation import rotate_about_y
 
@@ -166,4 +166,7 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
     return unbalanced, speed, kinetic, travel
 
 
-run_cycles = make_run_cycles(step, jit=True)
+@numba.njit(cache=True)
+def run_cycles(state, blocks, sub, joint, loop, broad_state, neighbours):
+    """:func:`drydem.kernels.cycle_loop` around the planar :func:`step`."""
+    return cycle_loop(step, state, blocks, sub, joint, loop, broad_state, neighbours)

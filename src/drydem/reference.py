@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from drydem.kernels import make_run_cycles
+from drydem.kernels import cycle_loop
 
 
 def _apply(rot: np.ndarray, vec: np.ndarray) -> np.ndarray:
@@ -98,4 +98,6 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
     return float(unbalanced[moving].max()), float(speed[moving].max()), float(kinetic), float(travel)
 
 
-run_cycles = make_run_cycles(step, jit=False)
+def run_cycles(state, blocks, sub, joint, loop, broad_state, neighbours):
+    """The shared cycling loop (:func:`drydem.kernels.cycle_loop`, in Python) around this :func:`step`."""
+    return cycle_loop.py_func(step, state, blocks, sub, joint, loop, broad_state, neighbours)

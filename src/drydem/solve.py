@@ -310,11 +310,11 @@ class Simulation:
         done, detections = 0, 0
         code, stats = kernels.RUNNING, StepStats(np.inf, np.inf)
         while done < max_cycles:
-            n, code, ratio, speed = self._run_cycles(
-                self.state, blocks or self._blocks, self.contacts, joint, g, self.timestep,
-                m.solver.damping, min(CHUNK, max_cycles - done), criterion, limit, max(weight, 1e-300), travel_slack,
-                self._broad_state, self.neighbours, self._absolute_limit,
+            loop = kernels.LoopSettings(
+                g, self.timestep, m.solver.damping, min(CHUNK, max_cycles - done), criterion, limit, max(weight, 1e-300),
+                travel_slack, self._absolute_limit,
             )
+            n, code, ratio, speed = self._run_cycles(self.state, blocks or self._blocks, self.contacts, joint, loop, self._broad_state, self.neighbours)
             stats = StepStats(ratio, speed)
             done += n
             self.cycles += n
