@@ -10,7 +10,7 @@ angular velocities are omega (0, w, 0), the world inertia about y is the body's 
 y-prism has no products of inertia with y), and the gyroscopic term omega x I omega vanishes.
 The cycle is :mod:`drydem.kernels`' one (same joint law, damping, exact rotation update,
 equilibrium and re-detection loop) with those simplifications: about half its cost per
-sub-contact, a quarter per cycle with one point across the width (benchmarks/bench_step.py).
+sub-contact, a fifth per cycle with one point across the width (benchmarks/bench_step.py).
 It reads and writes the same :class:`~drydem.state.State` and :class:`~drydem.contacts.SubContacts`
 (shear forces as vectors with y = 0), so everything else (detection, snapshots, output) is
 shared; the 3D kernel is its oracle in the tests.
