@@ -22,8 +22,8 @@ given), so extrapolating one would ratchet it on. The step after one whose motio
 grew more than ``predictor_growth`` times over the step before starts without a prediction,
 and every move of a block point is capped at ``predictor_cap_closures`` elastic closures: the
 median over the blocks of m g / sum(k A), what a block's own weight closes its joints by (the
-contacts as drawn). The cap thus follows the joint stiffness: a soft wall moves far and elastically at
-every step, a stiff one little, but as much as a soft one once it slips. The default, 150, is
+contacts as drawn). The cap thus follows the joint stiffness: a soft wall moves far and
+elastically at every step, a stiff one little, but as much as a soft one once it slips. The default, 150, is
 about one contact tolerance at kn = 3e7 Pa/m on the competition walls and 1/30 of one at 1e9
 (a cap of one tolerance there extrapolated a slip of WD1 into a local failure at 22.4 deg,
 against 26.3 without the predictor).
@@ -284,7 +284,8 @@ class _Run:
 
         def stop() -> bool:
             return (
-                bool((self._dropped() & self.sim.active & self.model.block_movable).any())
+                self._fallen().size > 0
+                or self.monitor_fell()
                 or abs(self.displacement()[0]) >= self.settings.stop_displacement_m
                 or (give_up is not None and give_up())
             )
