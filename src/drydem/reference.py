@@ -19,6 +19,11 @@ def _apply(rot: np.ndarray, vec: np.ndarray) -> np.ndarray:
     return np.einsum("nij,nj->ni", rot, vec)
 
 
+def _world_tensor_apply(rot: np.ndarray, tensor: np.ndarray, vec: np.ndarray) -> np.ndarray:
+    """R T R^T v for each block: a body-frame tensor (inertia or its inverse) in the world frame."""
+    return _apply(rot, _apply(tensor, _apply(rot.transpose(0, 2, 1), vec)))
+
+
 def _norm(vec: np.ndarray) -> np.ndarray:
     return np.sqrt(np.einsum("ni,ni->n", vec, vec))
 
@@ -78,9 +83,8 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
     unbalanced = np.maximum(_norm(f_free), _norm(m_free) / blocks.radius)
     vel += _damped(f_free, vel, damping) * (blocks.inv_mass[:, None] * dt) * moving[:, None]
     torque = _damped(m_free, omega, damping)
-    rot_t = rot.transpose(0, 2, 1)
-    spin = _apply(rot, _apply(blocks.inertia_body, _apply(rot_t, omega)))
-    accel = _apply(rot, _apply(blocks.inv_inertia_body, _apply(rot_t, torque - np.cross(omega, spin))))
+    spin = _world_tensor_apply(rot, blocks.inertia_body, omega)
+    accel = _world_tensor_apply(rot, blocks.inv_inertia_body, torque - np.cross(omega, spin))
     omega += accel * dt * free_r * moving[:, None]
     vel *= free_t
     pos += vel * dt * moving[:, None]
@@ -90,7 +94,7 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
     speed = _norm(vel) + _norm(omega) * blocks.radius
     speed = np.where(speed < np.inf, speed, np.inf)  # NaN counts as infinitely fast
     # omega . I_w omega after the update, I_w with the rotation at the start of the cycle
-    rotational = np.einsum("ni,ni->n", omega, _apply(rot, _apply(blocks.inertia_body, _apply(rot_t, omega))))
+    rotational = np.einsum("ni,ni->n", omega, _world_tensor_apply(rot, blocks.inertia_body, omega))
     kinetic = 0.5 * (np.einsum("ni,ni->n", vel, vel) / np.where(moving, blocks.inv_mass, 1.0) + rotational)[moving].sum()
     travel = (blocks.mass * _norm(pos - blocks.origin))[moving].sum()
     if not moving.any():

@@ -22,6 +22,12 @@ from drydem.contacts import SubContacts
 from drydem.rotation import mat_vec
 
 
+@numba.njit(cache=True, inline="always")
+def _pair_key(i, j, n_blocks):
+    """The unordered pair (i, j) of blocks as one integer, min * n_blocks + max."""
+    return min(i, j) * n_blocks + max(i, j)
+
+
 def match_pairs(
     old_pairs: np.ndarray, old_limit: np.ndarray, motion: np.ndarray, pairs: np.ndarray, contact_pairs: np.ndarray, n_blocks: int, *, everything: bool
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -44,22 +50,22 @@ def _match_pairs(old_pairs, old_limit, motion, pairs, contact_pairs, n_blocks, e
     kept = np.zeros(k, np.bool_)
     row = 0
     for p in range(k):  # both lists sorted: one merge walk
-        key = pairs[p, 0] * n_blocks + pairs[p, 1]
-        while row < old_pairs.shape[0] and old_pairs[row, 0] * n_blocks + old_pairs[row, 1] < key:
+        key = _pair_key(pairs[p, 0], pairs[p, 1], n_blocks)
+        while row < old_pairs.shape[0] and _pair_key(old_pairs[row, 0], old_pairs[row, 1], n_blocks) < key:
             row += 1
-        if row < old_pairs.shape[0] and old_pairs[row, 0] * n_blocks + old_pairs[row, 1] == key:
+        if row < old_pairs.shape[0] and _pair_key(old_pairs[row, 0], old_pairs[row, 1], n_blocks) == key:
             where[p] = row
             kept[p] = not everything and motion[row] <= 0.5 * old_limit[row]
     kept_keys = np.empty(k, np.int64)
     n_kept = 0
     for p in range(k):
         if kept[p]:
-            kept_keys[n_kept] = pairs[p, 0] * n_blocks + pairs[p, 1]
+            kept_keys[n_kept] = _pair_key(pairs[p, 0], pairs[p, 1], n_blocks)
             n_kept += 1
     kept_keys = kept_keys[:n_kept]
     keep_contact = np.zeros(contact_pairs.shape[0], np.bool_)
     for c in range(contact_pairs.shape[0]):
-        key = min(contact_pairs[c, 0], contact_pairs[c, 1]) * n_blocks + max(contact_pairs[c, 0], contact_pairs[c, 1])
+        key = _pair_key(contact_pairs[c, 0], contact_pairs[c, 1], n_blocks)
         i = np.searchsorted(kept_keys, key)
         keep_contact[c] = i < n_kept and kept_keys[i] == key
     return where, kept, keep_contact
@@ -127,13 +133,13 @@ def _merge(old, keep, fresh, position, rotation):
     # old contacts by unordered pair key, to find a fresh contact's predecessors
     keys = np.empty(old.pairs.shape[0], np.int64)
     for c in range(old.pairs.shape[0]):
-        keys[c] = min(old.pairs[c, 0], old.pairs[c, 1]) * nb + max(old.pairs[c, 0], old.pairs[c, 1])
+        keys[c] = _pair_key(old.pairs[c, 0], old.pairs[c, 1], nb)
     order = np.argsort(keys)
     sorted_keys = keys[order]
 
     for c in range(fresh.pairs.shape[0]):
         a, b = fresh.pairs[c, 0], fresh.pairs[c, 1]
-        key = min(a, b) * nb + max(a, b)
+        key = _pair_key(a, b, nb)
         first = np.searchsorted(sorted_keys, key)
         last = np.searchsorted(sorted_keys, key, side="right")
         nx, ny, nz = mat_vec(rotation[a], fresh.normal_body[c, 0], fresh.normal_body[c, 1], fresh.normal_body[c, 2])

@@ -283,13 +283,9 @@ class Simulation:
         unconverged. Raises DivergenceError if the integration blows up.
         """
         solver = solver or self.model.solver
-        if solver.criterion == "ratio":
-            return self._run(
-                gravity, solver.max_cycles, criterion=kernels.RATIO, limit=solver.ratio, criterion_name="ratio", progress=progress, stop=stop
-            )
+        criterion, limit = (kernels.RATIO, solver.ratio) if solver.criterion == "ratio" else (kernels.VELOCITY, solver.max_velocity)
         return self._run(
-            gravity, solver.max_cycles, criterion=kernels.VELOCITY, limit=solver.max_velocity, criterion_name="velocity",
-            progress=progress, stop=stop,
+            gravity, solver.max_cycles, criterion=criterion, limit=limit, criterion_name=solver.criterion, progress=progress, stop=stop
         )
 
     def _run(
