@@ -136,12 +136,17 @@ def _merge(old, keep, fresh, position, rotation):
         keys[c] = _pair_key(old.pairs[c, 0], old.pairs[c, 1], nb)
     order = np.argsort(keys)
     sorted_keys = keys[order]
+    old_world = np.empty((old.area.shape[0], 3))  # incident points of a fresh contact's predecessors
 
     for c in range(fresh.pairs.shape[0]):
         a, b = fresh.pairs[c, 0], fresh.pairs[c, 1]
         key = _pair_key(a, b, nb)
         first = np.searchsorted(sorted_keys, key)
         last = np.searchsorted(sorted_keys, key, side="right")
+        for k in range(first, last):
+            oc = order[k]
+            for so in range(old.start[oc], old.start[oc + 1]):
+                old_world[so, 0], old_world[so, 1], old_world[so, 2] = _world_point(position, rotation, old.pairs[oc, 1], old.point_inc_body[so])
         nx, ny, nz = mat_vec(rotation[a], fresh.normal_body[c, 0], fresh.normal_body[c, 1], fresh.normal_body[c, 2])
         row = s_out
         s_out = _copy_contact(fresh, c, out, c_out, s_out)
@@ -152,8 +157,7 @@ def _merge(old, keep, fresh, position, rotation):
             for k in range(first, last):
                 oc = order[k]
                 for so in range(old.start[oc], old.start[oc + 1]):
-                    ox, oy, oz = _world_point(position, rotation, old.pairs[oc, 1], old.point_inc_body[so])
-                    d_sq = (x - ox) ** 2 + (y - oy) ** 2 + (z - oz) ** 2
+                    d_sq = (x - old_world[so, 0]) ** 2 + (y - old_world[so, 1]) ** 2 + (z - old_world[so, 2]) ** 2
                     if d_sq < nearest_sq:
                         nearest, nearest_contact, nearest_sq = so, oc, d_sq
             if nearest >= 0:

@@ -477,7 +477,7 @@ def _fingerprint(model: Model, settings: TiltSettings) -> str:
 def _progress(records: list[Record], run: _Run, theta: float, step: float) -> dict:
     """The protocol's position, for a checkpoint (with the equilibria before the last one, for
     the predictor)."""
-    nb = len(run.model.block_name)
+    nb = run.model.n_blocks
     previous = run.equilibria[:-1]
     return {
         "previous_theta_deg": np.array([th for th, _ in previous], dtype=float),
