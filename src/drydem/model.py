@@ -15,11 +15,14 @@ import numpy as np
 from drydem import contacts
 from drydem.errors import ModelError
 from drydem.geometry import ConvexPolyhedron, box
-from drydem.parameters import ContactSettings, JointMaterial, SolverSettings, Supports
+from drydem.parameters import DENSITY, ContactSettings, JointMaterial, SolverSettings, Supports
 from drydem.rotation import matrices
 
 #: default contact tolerance as a fraction of the thinnest movable block (m/m)
 TOLERANCE_FRACTION = 0.05
+#: largest contact tolerance as a fraction of the thinnest movable block: beyond half of it,
+#: faces on the far side of a block would count as touching its neighbours
+MAX_TOLERANCE_FRACTION = 0.5
 #: initial overlaps deeper than this fraction of the contact tolerance are errors
 OVERLAP_FRACTION = 0.01
 #: an in-plane model's faces are parallel or normal to y, and its blocks' mid-planes coincide,
@@ -168,20 +171,20 @@ def build_model(
 ) -> Model:
     """Validate the blocks and freeze them into a :class:`Model`.
 
-    Raises ModelError for duplicate names, non-positive densities, no movable block, or two
-    blocks overlapping deeper than 1 % of the contact tolerance (naming both and the depth).
+    Raises ModelError for duplicate names, densities out of :data:`drydem.parameters.DENSITY`,
+    no movable block, a contact tolerance above half the thinnest movable block, or two blocks
+    overlapping deeper than 1 % of the contact tolerance (naming both and the depth).
     """
     if not blocks:
         raise ModelError(f"{source}: the model has no blocks")
-    if not (isinstance(density, (int, float)) and np.isfinite(density) and density > 0):
-        raise ModelError(f"{source}: [material] density = {density!r}: must be a positive number (kg/m3)")
+    DENSITY.check(density, f"{source}: [material] density")
     names = [b.name for b in blocks]
     duplicates = sorted({n for n in names if names.count(n) > 1})
     if duplicates:
         raise ModelError(f"{source}: duplicate block names {duplicates}")
     for b in blocks:
-        if b.density is not None and not (np.isfinite(b.density) and b.density > 0):
-            raise ModelError(f"{source}: block {b.name!r}: density = {b.density!r}: must be a positive number (kg/m3)")
+        if b.density is not None:
+            DENSITY.check(b.density, f"{source}: block {b.name!r}: density")
     if all(b.fixed for b in blocks):
         raise ModelError(f"{source}: every block is fixed; nothing can move")
     per_block = np.array([density if b.density is None else b.density for b in blocks], dtype=float)
@@ -194,10 +197,13 @@ def _assemble(blocks, density, *, joint, contacts, supports, solver, source) -> 
     in_plane = _in_plane(shapes, fixed)
     if in_plane:
         fixed[:, [3, 5]] = True
-    tolerance = contacts.tolerance
-    if tolerance is None:
-        movable = [s for s, f in zip(shapes, fixed) if not f.all()]
-        tolerance = TOLERANCE_FRACTION * min(_thickness(s) for s in movable)
+    thinnest = min(_thickness(s) for s, f in zip(shapes, fixed) if not f.all())
+    tolerance = TOLERANCE_FRACTION * thinnest if contacts.tolerance is None else contacts.tolerance
+    if tolerance > MAX_TOLERANCE_FRACTION * thinnest:
+        raise ModelError(
+            f"{source}: [contacts] tolerance = {tolerance!r} m: must be at most {MAX_TOLERANCE_FRACTION:g} of the thinnest "
+            f"movable block ({thinnest:.4g} m), i.e. <= {MAX_TOLERANCE_FRACTION * thinnest:.4g} m (default {TOLERANCE_FRACTION:g} of it)"
+        )
     model = Model(
         block_name=tuple(b.name for b in blocks),
         block_shape=shapes,

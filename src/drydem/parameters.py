@@ -2,6 +2,11 @@
 
 Each class maps one-to-one to a table of the model file (``[joint]``,
 ``[contacts]``, ``[supports]``, ``[solver]``); field names are the TOML keys.
+
+Every number is checked against a :class:`Range` whose bounds say what is physically or
+numerically meaningful (each bound's reason is next to it), so that ``kn = true`` (a boolean
+is not a stiffness, though Python counts it as 1) or ``ratio = 1e300`` stop with a message
+naming the table, the key and the allowed range instead of running on nonsense.
 """
 
 from __future__ import annotations
@@ -12,17 +17,70 @@ from dataclasses import dataclass, fields
 from drydem.errors import ModelError
 
 
+def is_number(value) -> bool:
+    """A finite int or float, and not a boolean (``True`` is an int in Python, not a number here)."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def is_integer(value) -> bool:
+    """An int, and not a boolean."""
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+@dataclass(frozen=True)
+class Range:
+    """An interval of allowed values: ``low`` and ``high`` (None: unbounded), each end open or
+    closed; ``integer`` for counts; ``unit`` for messages."""
+
+    low: float | None
+    high: float | None
+    low_open: bool = False
+    high_open: bool = False
+    integer: bool = False
+    unit: str = ""
+
+    def __contains__(self, value) -> bool:
+        if not (is_integer(value) if self.integer else is_number(value)):
+            return False
+        above = self.low is None or (value > self.low if self.low_open else value >= self.low)
+        below = self.high is None or (value < self.high if self.high_open else value <= self.high)
+        return above and below
+
+    def __str__(self) -> str:
+        kind = "an integer" if self.integer else "a number"
+        low = "-inf" if self.low is None else f"{self.low:.4g}"
+        high = "inf" if self.high is None else f"{self.high:.4g}"
+        interval = f"{'(' if self.low_open or self.low is None else '['}{low}, {high}{')' if self.high_open or self.high is None else ']'}"
+        return f"must be {kind} in {interval}{' ' + self.unit if self.unit else ''}"
+
+    def check(self, value, where: str) -> None:
+        """ModelError ``where = value: must be ... in [low, high] unit`` unless ``value`` is in range."""
+        if value not in self:
+            raise ModelError(f"{where} = {value!r}: {self}")
+
+
+#: joint stiffness, Pa/m: below 1e4 the own weight of a 1 m masonry wall (~2e4 Pa) would close
+#: a joint by metres; 1e15 is E / t of steel (2e11 Pa) over a 0.2 mm joint, stiffer than any block
+JOINT_STIFFNESS = Range(1e4, 1e15, unit="Pa/m")
+#: Coulomb coefficient: > 0 (a frictionless joint has no static equilibrium on a tilted table);
+#: 10 is a friction angle of 84 deg, far beyond any masonry joint (0.4-1.2)
+FRICTION = Range(0.0, 10.0, low_open=True)
+#: cohesion and tensile strength, Pa: 1e8 (100 MPa) exceeds the strength of any masonry unit
+STRENGTH = Range(0.0, 1e8, unit="Pa")
+#: density, kg/m3: from air-light foams (1) to above osmium (22,590)
+DENSITY = Range(1.0, 25_000.0, unit="kg/m3")
+#: sub-contacts per length: a contact costs their square; beyond 32 the trapezoid areas are
+#: converged far below the joints' other uncertainties
+POINTS = Range(1, 32, integer=True)
+
+
+def _check(owner: str, name: str, value, allowed: Range) -> None:
+    allowed.check(value, f"[{owner}] {name}")
+
+
 def _require(ok: bool, owner: str, name: str, value, rule: str) -> None:
     if not ok:
         raise ModelError(f"[{owner}] {name} = {value!r}: {rule}")
-
-
-def _positive(owner: str, name: str, value: float) -> None:
-    _require(isinstance(value, (int, float)) and math.isfinite(value) and value > 0, owner, name, value, "must be a positive number")
-
-
-def _non_negative(owner: str, name: str, value: float) -> None:
-    _require(isinstance(value, (int, float)) and math.isfinite(value) and value >= 0, owner, name, value, "must be a number >= 0")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -42,11 +100,15 @@ class JointMaterial:
     tension: float = 0.0
 
     def __post_init__(self):
-        _positive("joint", "kn", self.kn)
-        _positive("joint", "ks", self.ks)
-        _positive("joint", "friction", self.friction)
-        _non_negative("joint", "cohesion", self.cohesion)
-        _non_negative("joint", "tension", self.tension)
+        _check("joint", "kn", self.kn, JOINT_STIFFNESS)
+        _check("joint", "ks", self.ks, JOINT_STIFFNESS)
+        _check("joint", "friction", self.friction, FRICTION)
+        _check("joint", "cohesion", self.cohesion, STRENGTH)
+        _check("joint", "tension", self.tension, STRENGTH)
+
+
+#: contact tolerance, m: positive; its bound relative to the blocks is checked with the model
+TOLERANCE = Range(0.0, None, low_open=True, unit="m")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -61,8 +123,9 @@ class ContactSettings:
         so one point on the mid-plane with the whole width's area is exact), 2 for other
         models with every block fixed in y, else points_per_length.
     tolerance : m, gap below which faces are in contact; ``None`` = 5 % of the
-        thinnest free block. Contacts are re-detected whenever neighbouring blocks have
-        moved half of it relative to each other.
+        thinnest free block (a given one may be at most half of it: :mod:`drydem.model`).
+        Contacts are re-detected whenever neighbouring blocks have moved half of it relative
+        to each other.
     """
 
     points_per_length: int = 4
@@ -70,16 +133,11 @@ class ContactSettings:
     tolerance: float | None = None
 
     def __post_init__(self):
-        _require(
-            isinstance(self.points_per_length, int) and not isinstance(self.points_per_length, bool) and self.points_per_length >= 1,
-            "contacts", "points_per_length", self.points_per_length, "must be an integer >= 1",
-        )
-        _require(
-            self.points_across is None or (isinstance(self.points_across, int) and not isinstance(self.points_across, bool) and self.points_across >= 1),
-            "contacts", "points_across", self.points_across, "must be an integer >= 1",
-        )
+        _check("contacts", "points_per_length", self.points_per_length, POINTS)
+        if self.points_across is not None:
+            _check("contacts", "points_across", self.points_across, POINTS)
         if self.tolerance is not None:
-            _positive("contacts", "tolerance", self.tolerance)
+            _check("contacts", "tolerance", self.tolerance, TOLERANCE)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -105,6 +163,17 @@ class Supports:
 
 
 CRITERIA = ("ratio", "velocity")
+#: local damping alpha (paper Eq. 4): 1 would remove every force that moves a block
+DAMPING = Range(0.0, 1.0, high_open=True)
+#: fraction of the critical timestep: above 1 the central differences are unstable
+TIMESTEP_SAFETY = Range(0.0, 1.0, low_open=True)
+#: unbalanced force / mean weight: below 1e-12 float64 round-off of the force sums is reached;
+#: above 1e-2 a state still accelerating at 1 % of g would count as equilibrium
+RATIO = Range(1e-12, 1e-2)
+#: m/s: a block point moving 1 mm/s is not at rest (the paper uses 1e-13)
+MAX_VELOCITY = Range(0.0, 1e-3, low_open=True, unit="m/s")
+#: cycles per equilibrium: 1e10 cycles are days of computing for a single load step
+MAX_CYCLES = Range(1, 10**10, integer=True)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -129,16 +198,10 @@ class SolverSettings:
     max_cycles: int = 2_000_000
 
     def __post_init__(self):
-        _require(isinstance(self.damping, (int, float)) and 0 <= self.damping < 1, "solver", "damping", self.damping, "must be in [0, 1)")
-        _require(
-            isinstance(self.timestep_safety, (int, float)) and 0 < self.timestep_safety <= 1,
-            "solver", "timestep_safety", self.timestep_safety, "must be in (0, 1]",
-        )
+        _check("solver", "damping", self.damping, DAMPING)
+        _check("solver", "timestep_safety", self.timestep_safety, TIMESTEP_SAFETY)
         _require(isinstance(self.mass_scaling, bool), "solver", "mass_scaling", self.mass_scaling, "must be true or false")
         _require(self.criterion in CRITERIA, "solver", "criterion", self.criterion, f"must be one of {CRITERIA}")
-        _positive("solver", "ratio", self.ratio)
-        _positive("solver", "max_velocity", self.max_velocity)
-        _require(
-            isinstance(self.max_cycles, int) and not isinstance(self.max_cycles, bool) and self.max_cycles > 0,
-            "solver", "max_cycles", self.max_cycles, "must be a positive integer",
-        )
+        _check("solver", "ratio", self.ratio, RATIO)
+        _check("solver", "max_velocity", self.max_velocity, MAX_VELOCITY)
+        _check("solver", "max_cycles", self.max_cycles, MAX_CYCLES)

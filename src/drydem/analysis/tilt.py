@@ -34,17 +34,26 @@ Adaptive protocol: steps of ``increment_deg * 2**refinements``; a step that fail
 A coarse step is judged failed early, once its motion is clearly not elastic (``_trial_limit``):
 only steps of one increment are followed to the stop criteria.
 
-Blocks that fall out of the model (centroid more than ``lost_drop_heights`` of their own
-heights below where it was drawn, e.g. a brick sliding out of a course) are taken out of the
-analysis and reported, so that a local failure does not hide the global collapse.
+Blocks that fall out of the model (a rigid-body drop of more than ``lost_drop_heights`` of
+their own heights: the centroid's drop below where it was drawn, less the settlement the
+joints' elastic closure explains, :mod:`drydem.support`; e.g. a brick sliding out of a course)
+are taken out of the analysis and reported, so that a local failure does not hide the global
+collapse. A tall or soft wall's elastic settlement is not a fall.
+
+Stage 1 ends in one of three ways: equilibrium; a fall (a block falls or the monitored point
+moves ``stop_displacement_m``: the model cannot stand under its own weight, and the blocks that
+fell are named); or no equilibrium within the solver's ``max_cycles``, which is no verdict on
+stability (``stable_under_gravity`` is then None) and is reported as such.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -54,14 +63,37 @@ from drydem.errors import ModelError
 from drydem.io.checkpoint import load_checkpoint, save_checkpoint
 from drydem.model import Model
 from drydem.motion import contact_stiffness
+from drydem.parameters import Range
 from drydem.contacts import SubContacts
-from drydem.rotation import rotation_vectors
+from drydem.rotation import matrices, rotation_vectors
 from drydem.solve import G, Simulation
 from drydem.state import State
+from drydem.support import elastic_settlement, load_paths
 
 LOADINGS = ("tilt", "multiplier")
+#: how a call of :meth:`_Run.equilibrate` ended
+EQUILIBRIUM, FELL, MONITOR_FELL, STOP_DISPLACEMENT, GAVE_UP, MAX_CYCLES = (
+    "equilibrium", "fell", "monitored block fell", "stop displacement", "gave up", "max cycles",
+)
+#: ``ended_by`` of a stage 1 without equilibrium nor fall
+NO_EQUILIBRIUM_UNDER_GRAVITY = "no equilibrium under gravity within max_cycles"
 #: states past collapse are sampled this many times per chunk_cycles (drydem tilt --vtk)
 FRAME_SAMPLING = 10
+
+
+#: the allowed values of TiltSettings' numbers (a tilt of 90 deg or more is no tilting table)
+SETTING_RANGES = {
+    "increment_deg": Range(0.0, 90.0, low_open=True, high_open=True, unit="deg"),
+    "refinements": Range(0, 12, integer=True),
+    "stop_displacement_m": Range(0.0, 100.0, low_open=True, unit="m"),
+    "max_angle_deg": Range(0.0, 90.0, low_open=True, high_open=True, unit="deg"),
+    "lost_drop_heights": Range(0.0, None, low_open=True),
+    "chunk_cycles": Range(1, None, integer=True),
+    "trial_growth": Range(1.0, None, low_open=True),
+    "trial_floor_m": Range(0.0, None, low_open=True, unit="m"),
+    "predictor_growth": Range(1.0, None),
+    "predictor_cap_closures": Range(0.0, None, low_open=True),
+}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -99,22 +131,17 @@ class TiltSettings:
     predictor_cap_closures: float = 150.0
 
     def __post_init__(self):
-        checks = {
-            "increment_deg": 0 < self.increment_deg < 90,
-            "refinements": isinstance(self.refinements, int) and 0 <= self.refinements <= 12,
-            "stop_displacement_m": self.stop_displacement_m > 0,
-            "loading": self.loading in LOADINGS,
-            "max_angle_deg": 0 < self.max_angle_deg < 90,
-            "lost_drop_heights": self.lost_drop_heights > 0,
-            "chunk_cycles": isinstance(self.chunk_cycles, int) and self.chunk_cycles > 0,
-            "trial_growth": self.trial_growth > 1,
-            "trial_floor_m": self.trial_floor_m > 0,
-            "predictor_growth": self.predictor_growth >= 1,
-            "predictor_cap_closures": self.predictor_cap_closures > 0,
-        }
-        for name, ok in checks.items():
-            if not ok:
-                raise ModelError(f"tilt setting {name} = {getattr(self, name)!r} is out of range")
+        for name, allowed in SETTING_RANGES.items():
+            allowed.check(getattr(self, name), f"tilt setting {name}")
+        if self.loading not in LOADINGS:
+            raise ModelError(f"tilt setting loading = {self.loading!r}: must be one of {LOADINGS}")
+        if self.monitor is not None and not isinstance(self.monitor, str):
+            raise ModelError(f"tilt setting monitor = {self.monitor!r}: must be a block name")
+        if self.increment_deg > self.max_angle_deg:
+            raise ModelError(
+                f"tilt setting increment_deg = {self.increment_deg!r} exceeds max_angle_deg = {self.max_angle_deg!r}: "
+                "no step would be taken"
+            )
 
     def gravity(self, theta_deg: float) -> np.ndarray:
         """Gravity vector (m/s2) at tilt (or tilt-equivalent) ``theta_deg``."""
@@ -174,12 +201,15 @@ class _Trace:
 @dataclass
 class TiltResult:
     """Outcome of :func:`tilt_analysis`. States are block positions/orientations (State);
-    ``cycles`` counts every cycle run, those of abandoned adaptive trials included."""
+    ``cycles`` counts every cycle run, those of abandoned adaptive trials included.
+    ``stable_under_gravity``: True (stage 1 reached equilibrium), False (a block fell under its
+    own weight: named in ``lost_blocks`` at 0 deg), None (no equilibrium within max_cycles: not
+    known). ``ended_by``: why the analysis stopped."""
 
     settings: TiltSettings
     monitored_block: str
     wall_height_m: float
-    stable_under_gravity: bool
+    stable_under_gravity: bool | None
     collapse_angle_deg: float | None
     records: list[Record]
     lost_blocks: list[tuple[str, float]]
@@ -207,6 +237,17 @@ def monitored_block(model: Model) -> int:
     return int(highest[np.argmin(np.abs(model.block_centroid[highest, 0] - middle))])
 
 
+def monitor_index(model: Model, name: str | None) -> int:
+    """The block to monitor: ``name``'s (ModelError if there is none or it is fixed: a fixed
+    block never moves), or by default :func:`monitored_block`."""
+    if name is None:
+        return monitored_block(model)
+    block = model.block_index(name)
+    if not model.block_movable[block]:
+        raise ModelError(f"{model.source}: the monitored block {name!r} is fixed (it cannot move); monitor a movable block")
+    return block
+
+
 def wall_height(model: Model) -> float:
     """Height of the movable blocks above their lowest point, m (the drift's denominator)."""
     z = np.concatenate([model.block_shape[b].vertices[:, 2] for b in np.flatnonzero(model.block_movable)])
@@ -219,7 +260,7 @@ class _Run:
     def __init__(self, model: Model, settings: TiltSettings, on_progress):
         self.model, self.settings, self.on_progress = model, settings, on_progress
         self.sim = Simulation(model)
-        self.monitor = model.block_index(settings.monitor) if settings.monitor else monitored_block(model)
+        self.monitor = monitor_index(model, settings.monitor)
         self.height = wall_height(model)
         self.lost: list[tuple[str, float]] = []
         heights = np.array([np.ptp(shape.vertices[:, 2]) for shape in model.block_shape])
@@ -264,13 +305,16 @@ class _Run:
         return float(moved[0]), float(moved[2])
 
     def equilibrate(self, theta_deg: float, *, vertical: bool = False, chunk_cycles: int | None = None,
-                    trace: _Trace | None = None, give_up: Callable[[], bool] | None = None) -> tuple[bool, int]:
-        """Cycle at ``theta_deg`` until equilibrium (True), the stop displacement, the fall of
-        the monitored block, ``give_up()`` or max cycles (False), reporting progress and adding
-        a frame to ``trace`` every ``chunk_cycles`` (default the settings').
+                    trace: _Trace | None = None, give_up: Callable[[], bool] | None = None) -> tuple[str, int]:
+        """Cycle at ``theta_deg`` until equilibrium, the stop displacement, the fall of the
+        monitored block, ``give_up()`` or max cycles; returns how it ended (EQUILIBRIUM,
+        STOP_DISPLACEMENT, MONITOR_FELL, GAVE_UP, MAX_CYCLES, or FELL under vertical gravity) and
+        the cycles run. Progress is reported and a frame added to ``trace`` every
+        ``chunk_cycles`` (default the settings').
 
         Blocks that fall out are taken out and the cycling goes on, except under vertical
-        gravity (stage 1): a model that loses a block under its own weight cannot stand.
+        gravity (stage 1): a model that loses a block under its own weight cannot stand (the
+        blocks are added to ``lost`` and FELL returned).
         Falls, the stop displacement and ``give_up()`` are also looked at whenever the
         simulation re-detects contacts, so that a falling block (which needs new contacts every
         few cycles) is taken out, and a collapse recognised, as soon as it happens.
@@ -283,9 +327,10 @@ class _Run:
         done = 0
 
         def stop() -> bool:
+            dropped = self._dropped()
             return (
-                self._fallen().size > 0
-                or self.monitor_fell()
+                self._fallen(dropped).size > 0
+                or bool(dropped[self.monitor])
                 or abs(self.displacement()[0]) >= self.settings.stop_displacement_m
                 or (give_up is not None and give_up())
             )
@@ -294,35 +339,47 @@ class _Run:
             chunk = replace(solver, max_cycles=min(chunk_cycles or self.settings.chunk_cycles, solver.max_cycles - done))
             result = self.sim.cycle_to_equilibrium(gravity=gravity, solver=chunk, stop=stop)
             done += result.cycles
-            lost = self._fallen()
-            if lost.size and vertical:
-                return False, done
+            dropped = self._dropped()
+            lost = self._fallen(dropped)
             if lost.size:
-                self.sim.remove_blocks(lost)
                 self.lost += [(self.model.block_name[b], theta_deg) for b in lost]
+                if vertical:
+                    return FELL, done
+                self.sim.remove_blocks(lost)
             ux, _ = self.displacement()
             if self.on_progress is not None:
                 self.on_progress(theta_deg, self.sim.cycles, ux)
             if trace is not None:
                 trace.add(lambda: self.frame("past collapse", theta_deg))
-            if self.monitor_fell() or (give_up is not None and not result.converged and give_up()):
-                return False, done
+            if dropped[self.monitor]:
+                if vertical:
+                    self.lost.append((self.model.block_name[self.monitor], theta_deg))
+                return (FELL if vertical else MONITOR_FELL), done
+            if give_up is not None and not result.converged and give_up():
+                return GAVE_UP, done
             if result.converged:
-                return True, done
-            if abs(ux) >= self.settings.stop_displacement_m or done >= solver.max_cycles:
-                return False, done
+                return EQUILIBRIUM, done
+            if abs(ux) >= self.settings.stop_displacement_m:
+                return (FELL if vertical else STOP_DISPLACEMENT), done
+            if done >= solver.max_cycles:
+                return MAX_CYCLES, done
 
     def _dropped(self) -> np.ndarray:
-        """Whether each block's centroid is more than its lost-drop below where it was drawn."""
-        return self.model.block_centroid[:, 2] - self.sim.state.position[:, 2] > self.lost_drop
+        """(nb,) bool: the block's rigid-body drop exceeds its lost-drop: its centroid is lower
+        than where it was drawn by more than that plus the settlement the joints' elastic
+        closure explains (:mod:`drydem.support`; looked for only when some block has dropped
+        that far at all)."""
+        position = self.sim.state.position
+        drop = self.model.block_centroid[:, 2] - position[:, 2]
+        if not np.any(drop > self.lost_drop):
+            return np.zeros(self.model.n_blocks, dtype=bool)
+        paths = load_paths(self.sim.contacts, position, matrices(self.sim.state.quaternion))
+        return drop - elastic_settlement(*paths, position[:, 2]) > self.lost_drop
 
-    def _fallen(self) -> np.ndarray:
-        """Blocks still in the analysis (but the monitored one) that dropped out of the model."""
-        fallen = np.flatnonzero(self._dropped() & self.sim.active & self.model.block_movable)
+    def _fallen(self, dropped: np.ndarray) -> np.ndarray:
+        """Blocks still in the analysis (but the monitored one) that ``dropped`` out of the model."""
+        fallen = np.flatnonzero(dropped & self.sim.active & self.model.block_movable)
         return fallen[fallen != self.monitor]
-
-    def monitor_fell(self) -> bool:
-        return bool(self._dropped()[self.monitor])
 
     def frame(self, kind: str, theta_deg: float) -> Frame:
         return Frame(kind, theta_deg, self.displacement()[0], self.sim.state.copy(), self.sim.contacts.copy(), self.sim.active.copy())
@@ -351,7 +408,9 @@ def tilt_analysis(
     ``chunk_cycles / FRAME_SAMPLING`` cycles (the result is that of the analysis itself; the
     replay only shows it, and costs nothing unless ``on_frame`` is given).
     With ``checkpoint`` (a path), the run is saved there at every equilibrium state; with
-    ``resume`` too, it goes on from that file instead of starting over.
+    ``resume`` too, it goes on from that file instead of starting over (ModelError naming the
+    settings that differ if it is of another model or protocol), and ``on_record`` is first
+    called for the equilibria the checkpoint holds.
     """
     start = time.perf_counter()
     run = _Run(model, settings, on_progress)
@@ -362,7 +421,7 @@ def tilt_analysis(
         records.append(run.record(theta, cycles))
         run.remember(theta)
         if checkpoint is not None:
-            save_checkpoint(checkpoint, run.sim.snapshot(), _progress(records, run, theta, step) | {"fingerprint": fingerprint})
+            save_checkpoint(checkpoint, run.sim.snapshot(), _progress(records, run, theta, step) | {"fingerprint": json.dumps(fingerprint)})
         if on_record is not None:
             on_record(records[-1])
         if on_frame is not None:
@@ -371,33 +430,27 @@ def tilt_analysis(
     step = settings.increment_deg * (2**settings.refinements if settings.adaptive else 1)
     fingerprint = _fingerprint(model, settings)
     if resume:
-        snapshot, saved = load_checkpoint(checkpoint)
-        if str(saved.get("fingerprint")) != fingerprint:
-            raise ModelError(f"{checkpoint}: this checkpoint is of another model or protocol ({saved.get('fingerprint')}); not resuming")
-        run.sim.restore(snapshot)
-        records += [Record(*row[:4], int(row[4])) for row in saved["records"].tolist()]
-        run.lost = list(zip(saved["lost_blocks"].tolist(), saved["lost_tilt_deg"].tolist()))
-        theta, step, stable = float(saved["theta_deg"]), float(saved["step_deg"]), True
-        rest = np.zeros((model.n_blocks, 3))
-        for th, x, q in zip(saved["previous_theta_deg"], saved["previous_position"], saved["previous_quaternion"]):
-            run.remember(float(th), State(x, q, rest.copy(), rest.copy()))
-        run.remember(theta)
+        theta, step = _resume(run, checkpoint, fingerprint, records)
+        for record in records if on_record is not None else []:
+            on_record(record)
+        stable = True
     else:
         initial = run.sim.snapshot() if on_frame is not None else None
-        stable, cycles = run.equilibrate(0.0, vertical=True)
-        theta = 0.0
+        outcome, cycles = run.equilibrate(0.0, vertical=True)
+        theta, stable = 0.0, {EQUILIBRIUM: True, MAX_CYCLES: None}.get(outcome, False)
         if stable:
             accept(0.0, step, cycles)
     if not stable:
-        collapse, ended_by = None, "unstable under gravity"
+        collapse = None
+        ended_by = "unstable under gravity" if stable is False else NO_EQUILIBRIUM_UNDER_GRAVITY
         last_good, lost_at_good = initial, []
     else:
         last_good, lost_at_good = run.sim.snapshot(), list(run.lost)
         ended_by = "maximum angle"
         while theta + step <= settings.max_angle_deg + 1e-9:
             coarse = settings.adaptive and step > settings.increment_deg * (1 + 1e-9)
-            held, cycles = run.equilibrate(theta + step, give_up=_trial_limit(run, records, step, settings) if coarse else None)
-            if held:
+            outcome, cycles = run.equilibrate(theta + step, give_up=_trial_limit(run, records, step, settings) if coarse else None)
+            if outcome == EQUILIBRIUM:
                 theta = round(theta + step, 9)
                 accept(theta, step, cycles)
                 if keep_snapshots:
@@ -410,13 +463,7 @@ def tilt_analysis(
                 run.lost = list(lost_at_good)
                 step /= 2
                 continue
-            ux, _ = run.displacement()
-            if run.monitor_fell():
-                ended_by = "monitored block fell"
-            elif abs(ux) >= settings.stop_displacement_m:
-                ended_by = "stop displacement"
-            else:
-                ended_by = "no equilibrium within max_cycles"
+            ended_by = {MAX_CYCLES: "no equilibrium within max_cycles"}.get(outcome, outcome)
             break
         collapse = theta if ended_by != "maximum angle" else None
     result = TiltResult(
@@ -433,7 +480,7 @@ def tilt_analysis(
         final_state=run.sim.state.copy(),
         ended_by=ended_by,
     )
-    if on_frame is not None and ended_by != "maximum angle":
+    if on_frame is not None and ended_by not in ("maximum angle", NO_EQUILIBRIUM_UNDER_GRAVITY):
         run.sim.restore(last_good)
         run.lost = list(lost_at_good)
         trace = _Trace()
@@ -442,6 +489,22 @@ def tilt_analysis(
         for frame in trace.frames:
             on_frame(frame)
     return result
+
+
+def _resume(run: _Run, checkpoint: Path, fingerprint: dict[str, str], records: list[Record]) -> tuple[float, float]:
+    """Restore ``run`` and ``records`` from ``checkpoint``; returns the tilt (deg) of its last
+    equilibrium and the step (deg) to take next. ModelError if it is of another model or protocol."""
+    snapshot, saved = load_checkpoint(checkpoint)
+    _check_fingerprint(checkpoint, saved, fingerprint)
+    run.sim.restore(snapshot)
+    records += [Record(*row[:4], int(row[4])) for row in saved["records"].tolist()]
+    run.lost = list(zip(saved["lost_blocks"].tolist(), saved["lost_tilt_deg"].tolist()))
+    rest = np.zeros((run.model.n_blocks, 3))
+    for th, x, q in zip(saved["previous_theta_deg"], saved["previous_position"], saved["previous_quaternion"]):
+        run.remember(float(th), State(x, q, rest.copy(), rest.copy()))
+    theta = float(saved["theta_deg"])
+    run.remember(theta)
+    return theta, float(saved["step_deg"])
 
 
 def _elastic_closure(model: Model, contacts: SubContacts) -> float:
@@ -469,9 +532,32 @@ def _trial_limit(run: _Run, records: list[Record], step: float, settings: TiltSe
     return lambda: len(run.lost) > lost_before or abs(run.displacement()[0] - ux0) > limit
 
 
-def _fingerprint(model: Model, settings: TiltSettings) -> str:
-    """What a checkpoint must match to be resumed: the model's blocks, materials and the protocol."""
-    return repr((model.source, model.n_blocks, model.joint, model.contacts, model.supports, model.solver, settings))
+def _fingerprint(model: Model, settings: TiltSettings) -> dict[str, str]:
+    """What a checkpoint must match to be resumed, by name: the model's source, blocks (a hash
+    of their geometry, densities and fixities), every parameter of its tables and every tilt
+    setting (values as repr strings)."""
+    blocks = hashlib.sha1()
+    for shape in model.block_shape:
+        blocks.update(np.ascontiguousarray(shape.vertices).tobytes())
+    blocks.update(model.block_density.tobytes() + model.block_fixed.tobytes())
+    items = {"model": model.source, "blocks": f"{model.n_blocks} blocks, geometry {blocks.hexdigest()[:12]}"}
+    for table in ("joint", "contacts", "supports", "solver"):
+        items |= {f"[{table}] {k}": v for k, v in asdict(getattr(model, table)).items()}
+    items |= {f"tilt setting {k}": v for k, v in asdict(settings).items()}
+    return {k: repr(v) for k, v in items.items()}
+
+
+def _check_fingerprint(checkpoint: Path, saved: dict, fingerprint: dict[str, str]) -> None:
+    """ModelError naming every setting in which ``checkpoint`` differs from this run."""
+    try:
+        before = json.loads(str(saved["fingerprint"]))
+    except (KeyError, ValueError):
+        before = None
+    if not isinstance(before, dict):
+        raise ModelError(f"{checkpoint}: written by another version of drydem (no settings to compare); start again without --resume")
+    differ = [f"{k}: {before.get(k, 'absent')} in the checkpoint, {v} now" for k, v in fingerprint.items() if before.get(k) != v]
+    if differ:
+        raise ModelError(f"{checkpoint}: the checkpoint is of another model or protocol ({'; '.join(differ)}); not resuming")
 
 
 def _progress(records: list[Record], run: _Run, theta: float, step: float) -> dict:

@@ -9,6 +9,7 @@ while writing leaves the previous checkpoint intact.
 from __future__ import annotations
 
 import os
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -33,14 +34,16 @@ def save_checkpoint(path: Path, snapshot: Snapshot, progress: dict) -> None:
 
 
 def load_checkpoint(path: Path) -> tuple[Snapshot, dict]:
-    """The snapshot and progress saved by :func:`save_checkpoint`."""
+    """The snapshot and progress saved by :func:`save_checkpoint`; DrydemError naming the file
+    if it is missing, empty, truncated or not a drydem checkpoint."""
     try:
-        data = np.load(path)
-    except (OSError, ValueError) as exc:
-        raise DrydemError(f"{path}: cannot read the checkpoint ({exc})") from None
-    with data:
-        parts = {part: cls(**{name: data[f"{part}.{name}"] for name in cls._fields}) for part, cls in _PARTS.items()}
-        scaled = float(data["scaled_timestep"])
-        snapshot = Snapshot(**parts, active=data["active"], cycles=int(data["cycles"]), scaled_timestep=None if np.isnan(scaled) else scaled)
-        progress = {key.removeprefix("progress."): data[key] for key in data.files if key.startswith("progress.")}
+        with np.load(path) as data:
+            parts = {part: cls(**{name: data[f"{part}.{name}"] for name in cls._fields}) for part, cls in _PARTS.items()}
+            scaled = float(data["scaled_timestep"])
+            snapshot = Snapshot(**parts, active=data["active"], cycles=int(data["cycles"]), scaled_timestep=None if np.isnan(scaled) else scaled)
+            progress = {key.removeprefix("progress."): data[key] for key in data.files if key.startswith("progress.")}
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
+        # np.load raises each of these for a missing, empty, truncated or foreign file
+        raise DrydemError(f"{path}: not a readable drydem checkpoint ({type(exc).__name__}: {exc}); "
+                          "start the analysis again without --resume") from None
     return snapshot, progress

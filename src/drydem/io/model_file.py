@@ -44,7 +44,7 @@ import numpy as np
 from drydem.errors import DrydemError, ModelError
 from drydem.geometry import box, convex_hull
 from drydem.model import Block, Model, build_model
-from drydem.parameters import ContactSettings, JointMaterial, SolverSettings, Supports
+from drydem.parameters import DENSITY, ContactSettings, JointMaterial, SolverSettings, Supports, is_number
 
 SECTIONS = {"joint": JointMaterial, "contacts": ContactSettings, "supports": Supports, "solver": SolverSettings}
 BLOCK_KEYS = {"name", "fixed", "density", "box", "vertices"}
@@ -60,10 +60,14 @@ def load_model(path: str | Path) -> Model:
 def read_toml(path: Path) -> tuple[dict, str]:
     """A TOML file's tables and its text (for line numbers); ModelError naming the file if it
     cannot be read or parsed."""
+    if path.is_dir():
+        raise ModelError(f"{path}: is a directory, not a TOML file")
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise ModelError(f"{path}: cannot read the file ({exc.strerror})") from None
+    except UnicodeDecodeError as exc:
+        raise ModelError(f"{path}: not a text file (byte {exc.start} is not UTF-8); a model, wall or study file is TOML text") from None
     try:
         return tomllib.loads(text), text
     except tomllib.TOMLDecodeError as exc:
@@ -129,16 +133,28 @@ def _block(entry: dict, index: int, source: str) -> Block:
         _no_unknown(spec, {"min", "max"}, source, f"{where} box")
         if "min" not in spec or "max" not in spec:
             raise ModelError(f"{source}: {where} box needs 'min' and 'max'")
-        shape = box(spec["min"], spec["max"], name=f"block {name!r}")
+        shape = box(_point(spec["min"], f"{source}: {where} box min"), _point(spec["max"], f"{source}: {where} box max"),
+                    name=f"block {name!r}")
     else:
-        shape = convex_hull(entry["vertices"], name=f"block {name!r}")
+        vertices = entry["vertices"]
+        if not isinstance(vertices, list):
+            raise ModelError(f"{source}: {where} vertices = {vertices!r}: must be a list of [x, y, z] points (m)")
+        shape = convex_hull([_point(v, f"{source}: {where} vertex {k}") for k, v in enumerate(vertices)], name=f"block {name!r}")
     fixed = entry.get("fixed", False)
     if not isinstance(fixed, bool):
         raise ModelError(f"{source}: {where} fixed = {fixed!r}: must be true or false")
     density = entry.get("density")
-    if density is not None and not isinstance(density, (int, float)):
-        raise ModelError(f"{source}: {where} density = {density!r}: must be a number (kg/m3)")
+    if density is not None:
+        DENSITY.check(density, f"{source}: {where} density")
     return Block(name=str(name), shape=shape, density=density, fixed=fixed)
+
+
+def _point(value, where: str) -> list[float]:
+    """``value`` as an [x, y, z] point in metres, or ModelError naming ``where`` (a boolean is
+    not a coordinate, though Python counts True as 1)."""
+    if not (isinstance(value, list) and len(value) == 3 and all(is_number(c) for c in value)):
+        raise ModelError(f"{where} = {value!r}: must be [x, y, z], three finite numbers (m)")
+    return value
 
 
 def model_to_dict(model: Model) -> dict:

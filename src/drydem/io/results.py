@@ -10,10 +10,13 @@ from __future__ import annotations
 
 import csv
 import json
+import shutil
+import tempfile
 from dataclasses import asdict
 from pathlib import Path
 
 from drydem import __version__
+from drydem.errors import DrydemError
 from drydem.analysis.limit import LimitResult, LimitSettings
 from drydem.analysis.tilt import Record, TiltResult
 from drydem.model import Model
@@ -22,14 +25,14 @@ PUSHOVER_COLUMNS = ("tilt_deg", "load_multiplier", "ux_m", "uz_m", "drift", "cyc
 
 
 class PushoverWriter:
-    """Appends equilibrium states to ``pushover.csv`` in ``folder`` as they are found
-    (``append``: after the rows already there, when an analysis resumes)."""
+    """Writes ``pushover.csv`` in ``folder`` anew and appends equilibrium states to it as they
+    are found (a resumed analysis first hands it those of its checkpoint, so the file always
+    matches the checkpoint, whatever a kill left in it)."""
 
-    def __init__(self, folder: Path, *, append: bool = False):
+    def __init__(self, folder: Path):
         self.path = folder / "pushover.csv"
-        if not (append and self.path.is_file()):
-            with self.path.open("w", newline="") as f:
-                csv.writer(f).writerow(PUSHOVER_COLUMNS)
+        with self.path.open("w", newline="") as f:
+            csv.writer(f).writerow(PUSHOVER_COLUMNS)
 
     def __call__(self, record: Record) -> None:
         with self.path.open("a", newline="") as f:
@@ -88,6 +91,36 @@ def model_summary(model: Model) -> dict:
         "supports": asdict(model.supports),
         "solver": asdict(model.solver),
     }
+
+
+def prepare_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool = False, overwrite: bool = False) -> Path:
+    """Make ``folder`` ready for a run's ``outputs`` (file and folder names) and return it.
+
+    Nothing is lost: a folder that already holds files is refused (DrydemError naming them)
+    unless the run goes on from it (``resume``) or ``overwrite`` is asked, which deletes the
+    earlier run's ``outputs`` first, so no stale file (an old video, VTK frames) is left beside
+    the new results; other files are kept. A path that is not a folder, or cannot be made,
+    is refused with the reason.
+    """
+    if folder.exists() and not folder.is_dir():
+        raise DrydemError(f"{folder}: exists and is not a folder; give --out a folder")
+    present = sorted(p.name for p in folder.iterdir()) if folder.is_dir() else []
+    if present and not resume:
+        ours = [name for name in present if name in outputs]
+        if not overwrite:
+            what = f"another run ({', '.join(ours)})" if ours else f"other files ({', '.join(present[:5])}{', ...' if len(present) > 5 else ''})"
+            raise DrydemError(f"{folder}: already holds {what}; pass --overwrite to replace it, --resume to go on from its "
+                              "checkpoint, or another --out")
+        for name in ours:
+            path = folder / name
+            shutil.rmtree(path) if path.is_dir() and not path.is_symlink() else path.unlink()
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as exc:
+        raise DrydemError(f"{folder}: cannot write results there ({exc.strerror or exc})") from None
+    return folder
 
 
 def write_summary(folder: Path, content: dict) -> Path:
