@@ -5,7 +5,7 @@ import pytest
 
 from drydem.brief import PAPER_BRICK
 from drydem.errors import ModelError
-from drydem.layout import BrickSize, parse_layout
+from drydem.layout import MAX_FACE_BRICKS, BrickSize, parse_layout
 
 L, H, W = 0.025, 0.0055, 0.012  # the paper's brick (Section 2): length, height, width, m
 
@@ -89,6 +89,30 @@ def test_an_unknown_token_is_named_with_its_line():
 def test_a_lintel_that_is_not_whole_half_bricks_is_refused():
     with pytest.raises(ModelError, match=r"lintel_length_m = 0.07: must be a whole number of quarter bricks"):
         BrickSize(length_m=L, height_m=H, width_m=W, lintel_length_m=0.07)
+
+
+def test_a_lintel_is_at_least_a_brick_long():
+    # the shortest opening is a half brick ('.'), and the lintel bears a quarter brick on each side
+    assert BrickSize(length_m=L, height_m=H, width_m=W, lintel_length_m=L).lintel_cells == 4
+    with pytest.raises(ModelError, match=r"lintel_length_m = 0.01875: must be at least a brick long \(0.025 m\)"):
+        BrickSize(length_m=L, height_m=H, width_m=W, lintel_length_m=0.01875)  # three quarter bricks
+
+
+@pytest.mark.parametrize("size", [1e-4, 20.0])
+def test_bricks_at_the_ends_of_the_size_range_make_exact_blocks(size):
+    brick = BrickSize(length_m=size, height_m=size, width_m=size)
+    blocks = corners(parse_layout("bLb\nB._.B\n4B\n", brick).blocks(brick))
+    assert np.allclose(blocks["c2b1"], ([0.5 * size, -0.5 * size, 2 * size], [3.5 * size, 0.5 * size, 3 * size]))
+
+
+def test_a_wall_of_the_largest_face_is_read_and_one_course_more_is_refused():
+    # MAX_FACE_BRICKS = 100,000: 100 courses of 1,000 bricks, then a 101st; checked before the
+    # courses are expanded
+    assert MAX_FACE_BRICKS == 100 * 1000
+    layout = parse_layout("1000B\n" * 100, PAPER_BRICK)
+    assert len(layout.courses) == 100 and len(layout.solid_units) == MAX_FACE_BRICKS
+    with pytest.raises(ModelError, match=r"line 101: '1000B' takes the wall past 100,000 bricks of face"):
+        parse_layout("1000B\n" * 101, PAPER_BRICK)
 
 
 def test_blocks_with_nothing_under_them_are_found():

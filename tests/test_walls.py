@@ -1,10 +1,14 @@
 """Wall files, the built-in designs WD1-WD7 and the competition brief."""
 
+import re
+
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
 from drydem import designs
 from drydem.brief import COMPETITION, brief_violations
+from drydem.cli import main
 from drydem.errors import ModelError
 from drydem.io.target import load_target
 from drydem.walls import load_wall
@@ -101,18 +105,67 @@ def test_layout_errors_give_the_wall_file_line(tmp_path):
         load_wall(path)
 
 
-@pytest.mark.parametrize("change, message", [
-    (("[wall]", "[wall]\nauthor = 'me'"), r"unknown key\(s\) \['author'\] in \[wall\]"),
-    (("width_m = 0.012\n", ""), r"\[brick\] needs width_m"),
-    (("length_m = 0.025", "length_m = -0.025"), r"\[brick\] length_m = -0.025: must be a positive number"),
-    (("kn = 1e8", "kn = 0"), r"\[joint\] kn = 0: must be a positive number"),
-    (('courses = """', 'rows = """'), r"unknown key\(s\) \['rows'\] in \[layout\]"),
+LAYOUT = 'courses = """\nBB\nb_b\nBB\n"""'  # the layout of WALL_FILE, on its lines 12-16
+
+
+def with_courses(*lines: str) -> tuple[str, str]:
+    """The change of WALL_FILE that draws ``lines`` as its courses, from line 13 on."""
+    return LAYOUT, 'courses = """\n' + "".join(f"{line}\n" for line in lines) + '"""'
+
+
+@pytest.mark.parametrize("layout, where", [
+    ('courses = """\nBB\nbXb\n"""', "line 14"),  # a multi-line string starts on the line after its key
+    ("courses = '''\nBB\nbXb\n'''", "line 14"),
+    ('courses = """BB\nbXb\n"""', "line 13"),
+    ("courses = 'bXb'", "line 12"),
+    (r'courses = "BB\nbXb"', r"\[layout\] courses, line 2"),  # escapes: the file does not hold the text as read
 ])
-def test_bad_wall_files_are_named_errors(tmp_path, change, message):
-    path = write(tmp_path, WALL_FILE.replace(*change))
-    with pytest.raises(ModelError, match=message) as caught:
+def test_layout_errors_name_the_file_line_whatever_the_string_quotes(tmp_path, layout, where):
+    path = write(tmp_path, WALL_FILE.replace(LAYOUT, layout))
+    with pytest.raises(ModelError, match=rf"{where}: unknown token 'X'"):
         load_wall(path)
-    assert str(caught.value).startswith(str(path))
+
+
+@pytest.mark.parametrize("change, message", [
+    pytest.param(("[wall]", "[wall]\nauthor = 'me'"), r"unknown key\(s\) \['author'\] in \[wall\]", id="unknown [wall] key"),
+    pytest.param(("width_m = 0.012\n", ""), r"\[brick\] needs width_m", id="missing brick width"),
+    pytest.param(("length_m = 0.025", "length_m = -0.025"), r"\[brick\] length_m = -0.025: must be a number in \[0.0001, 20\] m",
+                 id="negative brick length"),
+    pytest.param(("height_m = 0.0055", "height_m = 0"), r"\[brick\] height_m = 0: must be a number in \[0.0001, 20\] m", id="zero brick height"),
+    pytest.param(("height_m = 0.0055", "height_m = true"), r"\[brick\] height_m = True: must be a number", id="boolean brick height"),
+    pytest.param(("width_m = 0.012", "width_m = '12 mm'"), r"\[brick\] width_m = '12 mm': must be a number", id="text brick width"),
+    pytest.param(("width_m = 0.012", "width_m = 1e300"), r"\[brick\] width_m = 1e\+300: must be a number in \[0.0001, 20\] m",
+                 id="astronomic brick width"),
+    pytest.param(("width_m = 0.012", "width_m = nan"), r"\[brick\] width_m = nan: must be a number", id="nan brick width"),
+    pytest.param(("width_m = 0.012", "width_m = 0.012\nlintel_length_m = 0.0125"),
+                 r"\[brick\] lintel_length_m = 0.0125: must be at least a brick long \(0.025 m\)", id="lintel shorter than a brick"),
+    pytest.param(("width_m = 0.012", "width_m = 0.012\ncolour = 'red'"), r"unknown key\(s\) \['colour'\] in \[brick\]", id="unknown [brick] key"),
+    pytest.param(("kn = 1e8", "kn = 0"), r"\[joint\] kn = 0: must be", id="zero stiffness"),
+    pytest.param(('courses = """', 'rows = """'), r"unknown key\(s\) \['rows'\] in \[layout\]", id="unknown [layout] key"),
+    pytest.param(("[layout]\n" + LAYOUT, ""), r"a wall file needs a \[layout\] table with courses = \"\"\"...\"\"\"", id="no [layout]"),
+    pytest.param((LAYOUT, "courses = 3"), r'\[layout\] needs courses = """..."""', id="courses a number"),
+    pytest.param((LAYOUT, "courses = ['BB', 'BB']"), r'\[layout\] needs courses = """..."""', id="courses a list"),
+    pytest.param((LAYOUT, 'courses = ""'), r"the layout has no courses", id="empty courses"),
+    pytest.param(with_courses("# nothing but a comment"), r"the layout has no courses", id="courses only comments"),
+    pytest.param(with_courses("__", "._.", "__"), r"lines 13-15: the layout has only voids; a wall needs at least one brick", id="only voids"),
+    pytest.param(with_courses("BB", "bXb", "BB"), r"line 14: unknown token 'X' in 'bXb'", id="unknown token"),
+    pytest.param(with_courses("BB", "bB２b"), r"line 14: unknown token '２'", id="non-ASCII digit"),
+    pytest.param(with_courses("BB", "0B"), r"line 14: repeat count 0 before 'B' must be at least 1", id="zero repeat"),
+    pytest.param(with_courses("1000000B"), r"line 13: '1000000B' takes the wall past 100,000 bricks of face \(its length in bricks "
+                 r"times its courses, voids included\), the most drydem takes", id="huge repeat"),
+    pytest.param(with_courses("9" * 5000 + "B"), r"line 13: '9{40}'... \(5,001 characters\) takes the wall past 100,000 bricks",
+                 id="repeat count of 5000 digits"),
+    pytest.param(("[wall]", "[wall]\nname = 5"), r"\[wall\] name = 5: must be a string", id="name a number"),
+    pytest.param(("[wall]", "[wall]\nname = '../../x'"), r"\[wall\] name = '../../x': must be a non-empty name without /",
+                 id="name a path"),
+])
+def test_a_bad_wall_file_stops_drydem_check_with_the_file_and_the_rule(tmp_path, change, message):
+    path = write(tmp_path, WALL_FILE.replace(*change))
+    assert path.read_text() != WALL_FILE
+    result = CliRunner().invoke(main, ["check", str(path)])
+    assert result.exit_code == 1 and isinstance(result.exception, SystemExit)  # a message, no traceback
+    assert result.output.startswith(f"Error: {path}")
+    assert re.search(message, result.output), result.output
 
 
 def test_the_brief_checker_reports_every_violation(tmp_path):

@@ -15,8 +15,9 @@ is a row of tokens, each as long as it says along the wall::
 
 A number before a token repeats it (``7B`` = ``BBBBBBB``); spaces are ignored, ``#`` starts
 a comment. The bond and its offsets are written out: a running-bond course starts with a
-half brick. Every course must have the length of the first one. A 2-brick wall of three
-courses, the middle one with half bricks at its ends and a brick-long void between them::
+half brick. Every course must have the length of the first one, and a wall has at least one
+brick. A 2-brick wall of three courses, the middle one with half bricks at its ends and a
+brick-long void between them::
 
     BB            # top course
     b_b
@@ -29,6 +30,7 @@ from x = 0. The wall's bottom is at z = 0, its left end at x = 0.
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 
@@ -37,6 +39,7 @@ import numpy as np
 from drydem.errors import ModelError
 from drydem.geometry import box
 from drydem.model import Block, base_under
+from drydem.parameters import Range
 
 #: token -> (kind, cells); the lintel's cells depend on the brick size (None here)
 TOKENS: dict[str, tuple[str, int | None]] = {
@@ -48,7 +51,19 @@ TOKENS: dict[str, tuple[str, int | None]] = {
     "_": ("void", 4),
     ",": ("void", 1),
 }
-_TOKEN = re.compile(r"(\d*)(\S)")
+#: a token and its repeat count (ASCII digits only: ``int`` would read other scripts' digits)
+_TOKEN = re.compile(r"([0-9]*)(\S)")
+
+#: the largest wall face, in brick faces (wall length in bricks x courses, voids included): 10^5,
+#: about the size of the largest DEM masonry models (~10^5 blocks), whose every cycle would take
+#: milliseconds here (~60 ns per block). Layouts are checked against it before any course is
+#: expanded, so that a mistyped repeat count (``1000000B``) is an error, not a hang.
+MAX_FACE_BRICKS = 100_000
+
+#: a brick's (or the lintel's) dimensions, m: from model-scale bricks of a tenth of a millimetre
+#: to 20 m, about the largest stones ever laid (Baalbek); beyond, the blocks are numbers Qhull
+#: cannot hull (1e-300 m) or millimetres written as metres
+BRICK_SIZE = Range(1e-4, 20.0, unit="m")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -62,15 +77,21 @@ class BrickSize:
     lintel_length_m: float | None = None
 
     def __post_init__(self):
+        """Each dimension in :data:`BRICK_SIZE`; the lintel a whole number of quarter bricks
+        (the layout's cells) and at least a brick long: the shortest opening is half a brick,
+        and a lintel bears on a quarter brick at least on each side of it."""
         for name in ("length_m", "height_m", "width_m", "lintel_length_m"):
             value = getattr(self, name)
-            if value is not None and not (isinstance(value, (int, float)) and value > 0):
-                raise ModelError(f"[brick] {name} = {value!r}: must be a positive number (m)")
+            if value is not None:
+                BRICK_SIZE.check(value, f"[brick] {name}")
         if self.lintel_length_m is None:
             object.__setattr__(self, "lintel_length_m", 3 * self.length_m)
         cells = self.lintel_length_m / self.cell_m
-        if abs(cells - round(cells)) > 1e-9 or round(cells) < 1:
+        if abs(cells - round(cells)) > 1e-9:
             raise ModelError(f"[brick] lintel_length_m = {self.lintel_length_m}: must be a whole number of quarter bricks ({self.cell_m} m)")
+        if round(cells) < 4:
+            raise ModelError(f"[brick] lintel_length_m = {self.lintel_length_m}: must be at least a brick long "
+                             f"({self.length_m} m), to span a half-brick opening with a quarter brick of bearing on each side")
 
     @property
     def cell_m(self) -> float:
@@ -172,42 +193,76 @@ def unit_box(unit: Unit, brick: BrickSize) -> tuple[list[float], list[float]]:
 
 def parse_layout(text: str, brick: BrickSize, *, source: str = "<layout>", first_line: int = 1) -> Layout:
     """Read a layout (module docstring); errors name ``source`` and the line, counting the
-    text's first line as ``first_line``."""
-    rows: list[tuple[int, list[tuple[str, int]]]] = []
+    text's first line as ``first_line``. The courses are read as runs (a token and its repeat
+    count) and checked, against :data:`MAX_FACE_BRICKS` and each other, before any is expanded."""
+    rows: list[tuple[int, list[tuple[str, int, int]]]] = []
+    room = 4 * MAX_FACE_BRICKS  # cells left under the limit
     for number, line in enumerate(text.splitlines(), start=first_line):
         body = line.split("#", 1)[0].replace(" ", "").replace("\t", "")
         if body:
-            rows.append((number, _tokens(body, brick, source, number)))
+            runs = _runs(body, brick, f"{source}, line {number}", room)
+            room -= sum(cells * repeat for _, cells, repeat in runs)
+            rows.append((number, runs))
     if not rows:
         raise ModelError(f"{source}: the layout has no courses")
     first_number, first = rows[0]
-    width = sum(cells for _, cells in first)
+    if all(kind == "void" for _, runs in rows for kind, _, _ in runs):
+        last_number = rows[-1][0]
+        lines = f"line {first_number}" if last_number == first_number else f"lines {first_number}-{last_number}"
+        raise ModelError(f"{source}, {lines}: the layout has only voids; a wall needs at least one brick")
+    width = sum(cells * repeat for _, cells, repeat in first)
     courses = []
-    for course, (number, tokens) in enumerate(reversed(rows)):
-        length = sum(cells for _, cells in tokens)
+    for course, (number, runs) in enumerate(reversed(rows)):
+        length = sum(cells * repeat for _, cells, repeat in runs)
         if length != width:
             raise ModelError(
                 f"{source}, line {number}: the course is {length / 4:g} bricks long ({length * brick.cell_m:.4g} m); "
                 f"the wall is {width / 4:g} ({width * brick.cell_m:.4g} m), set by the top course on line {first_number}"
             )
         start, units = 0, []
-        for kind, cells in tokens:
-            units.append(Unit(kind, course, start, cells))
-            start += cells
+        for kind, cells, repeat in runs:
+            for _ in range(repeat):
+                units.append(Unit(kind, course, start, cells))
+                start += cells
         courses.append(tuple(units))
     return Layout(tuple(courses), width)
 
 
-def _tokens(body: str, brick: BrickSize, source: str, number: int) -> list[tuple[str, int]]:
-    tokens = []
+def _runs(body: str, brick: BrickSize, where: str, room: int) -> list[tuple[str, int, int]]:
+    """A course's tokens as runs (kind, cells, repeat count); ``where`` names the line in errors,
+    ``room`` is the number of cells the wall may still have under :data:`MAX_FACE_BRICKS`."""
+    runs = []
     for match in _TOKEN.finditer(body):
         count, symbol = match.groups()
         if symbol not in TOKENS:
             known = ", ".join(f"{s!r} ({kind})" for s, (kind, _) in TOKENS.items())
-            raise ModelError(f"{source}, line {number}: unknown token {symbol!r} in {body!r}; known: {known}")
+            raise ModelError(f"{where}: unknown token {symbol!r} in {_shown(body)}; known: {known}")
         kind, cells = TOKENS[symbol]
-        repeat = int(count) if count else 1
+        cells = brick.lintel_cells if cells is None else cells
+        repeat = _repeat(count)
         if repeat < 1:
-            raise ModelError(f"{source}, line {number}: repeat count {count} before {symbol!r} must be at least 1")
-        tokens += [(kind, brick.lintel_cells if cells is None else cells)] * repeat
-    return tokens
+            raise ModelError(f"{where}: repeat count {count} before {symbol!r} must be at least 1")
+        room -= repeat * cells
+        if room < 0:
+            raise ModelError(
+                f"{where}: {_shown(match.group(0))} takes the wall past {MAX_FACE_BRICKS:,} bricks of face (its "
+                f"length in bricks times its courses, voids included), the most drydem takes (the largest DEM "
+                f"masonry models have about 10^5 blocks)"
+            )
+        runs.append((kind, cells, repeat))
+    return runs
+
+
+def _repeat(count: str) -> int | float:
+    """A token's repeat count, 1 if it has none. A count of more than 9 digits is past
+    :data:`MAX_FACE_BRICKS` whatever the token: it is read as infinite (``int`` refuses numbers
+    of more than 4,300 digits)."""
+    if not count:
+        return 1
+    digits = count.lstrip("0")
+    return int(digits or "0") if len(digits) <= 9 else math.inf
+
+
+def _shown(text: str, limit: int = 40) -> str:
+    """``text`` quoted for an error message, cut short if longer than ``limit`` characters."""
+    return repr(text) if len(text) <= limit else f"{text[:limit]!r}... ({len(text):,} characters)"

@@ -19,10 +19,12 @@ A wall file is TOML::
 
 plus the model file's optional tables ``[material]``, ``[joint]``, ``[contacts]``,
 ``[supports]`` and ``[solver]`` (drydem.io.model_file). The blocks stand on a fixed base block.
+A TOML file with any of ``[wall]``, ``[brick]`` or ``[layout]`` is a wall file.
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -34,6 +36,10 @@ from drydem.parameters import ContactSettings, JointMaterial, SolverSettings, Su
 
 WALL_KEYS = {"name", "title", "description"}
 LAYOUT_KEYS = {"courses"}
+#: the tables only a wall file has: any of them makes a TOML file a wall file
+WALL_TABLES = {"wall", "brick", "layout"}
+#: what a wall file's layout looks like, for the messages
+COURSES_FORM = 'courses = """...""", one course per line, top course first'
 
 
 @dataclass(frozen=True)
@@ -62,8 +68,10 @@ class Wall:
 
 
 def is_wall_file(data: dict) -> bool:
-    """Whether parsed TOML is a wall file (it has a ``[layout]``) rather than a model file."""
-    return "layout" in data
+    """Whether parsed TOML is a wall file rather than a model file: it has one of
+    :data:`WALL_TABLES` (so that a wall file missing its ``[layout]`` is told so, not read as a
+    model file with unknown tables)."""
+    return not WALL_TABLES.isdisjoint(data)
 
 
 def load_wall(path: str | Path) -> Wall:
@@ -74,28 +82,53 @@ def load_wall(path: str | Path) -> Wall:
 
 
 def wall_from_dict(data: dict, *, source: str, text: str = "", default_name: str = "wall") -> Wall:
-    """A wall from parsed TOML; ``text``, the file's text, lets layout errors give file line numbers."""
-    _no_unknown(data, {"wall", "brick", "layout", "material", *SECTIONS}, source, "top level")
+    """A wall from parsed TOML (it must have a ``[layout]``); ``text``, the file's text, lets
+    layout errors give file line numbers."""
+    _no_unknown(data, {*WALL_TABLES, "material", *SECTIONS}, source, "top level")
+    if "layout" not in data:
+        raise ModelError(f"{source}: a wall file needs a [layout] table with {COURSES_FORM} (drydem.layout)")
     meta, brick_table, layout_table = (data.get(key, {}) for key in ("wall", "brick", "layout"))
     _no_unknown(meta, WALL_KEYS, source, "[wall]")
     _no_unknown(layout_table, LAYOUT_KEYS, source, "[layout]")
     _no_unknown(brick_table, {"length_m", "height_m", "width_m", "lintel_length_m"}, source, "[brick]")
     with errors_naming(source):
+        name, title, description = _texts(meta, default_name)
         missing = sorted({"length_m", "height_m", "width_m"} - set(brick_table))
         if missing:
             raise ModelError(f"[brick] needs {', '.join(missing)}")
         brick = BrickSize(**brick_table)
         courses = layout_table.get("courses")
         if not isinstance(courses, str):
-            raise ModelError('[layout] needs courses = """...""", one course per line, top course first')
-        offset = text.find(courses) if text else -1
-        first_line = text.count("\n", 0, offset) + 1 if offset >= 0 else 1
-        layout = parse_layout(courses, brick, source=source, first_line=first_line)
+            raise ModelError(f"[layout] needs {COURSES_FORM}")
+        first_line = _courses_line(text, courses)
+        where = source if first_line is not None else f"{source}: [layout] courses"
+        layout = parse_layout(courses, brick, source=where, first_line=first_line or 1)
         params = parameters_from_dict(data, source)
-    return Wall(
-        name=str(meta.get("name", default_name)), title=str(meta.get("title", "")), description=str(meta.get("description", "")),
-        brick=brick, layout=layout, source=source, **params,
-    )
+    return Wall(name=name, title=title, description=description, brick=brick, layout=layout, source=source, **params)
+
+
+def _texts(meta: dict, default_name: str) -> tuple[str, str, str]:
+    """``[wall]``'s name (default ``default_name``), title and description, each a string; the
+    name also names the results folder, so it must be a non-empty name without a path separator."""
+    values = {"name": default_name, "title": "", "description": ""} | meta
+    for key, value in values.items():
+        if not isinstance(value, str):
+            raise ModelError(f"[wall] {key} = {value!r}: must be a string")
+    name = values["name"]
+    if not name.strip() or "/" in name or "\\" in name:
+        raise ModelError(f"[wall] name = {name!r}: must be a non-empty name without / or \\ (it names the results folder)")
+    return name, values["title"], values["description"]
+
+
+def _courses_line(text: str, courses: str) -> int | None:
+    """The line of the file ``text`` on which the string ``courses`` starts: after the line of
+    its ``courses =`` key for a multi-line string (TOML drops the newline after the quotes).
+    None where the file does not hold it as written (no text, a string with escapes such as
+    ``\\n``, a quoted or dotted key)."""
+    for match in re.finditer(r"^[ \t]*courses[ \t]*=[ \t]*(\"\"\"|'''|\"|')\n?", text, re.MULTILINE):
+        if text.startswith(courses, match.end()):
+            return text.count("\n", 0, match.end()) + 1
+    return None
 
 
 def benchmark_wall(*, kn: float = 3e7, points_per_length: int = 4, points_across: int | None = None) -> Model:
