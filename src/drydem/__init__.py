@@ -4,6 +4,10 @@ Rigid convex polyhedral blocks, zero-thickness joints with normal and shear stif
 and Mohr-Coulomb friction, explicit dynamic relaxation with local damping.
 """
 
+from drydem import compiled_cache
+
+compiled_cache.check()  # first: no compiled function may be loaded from a stale cache
+
 from drydem.errors import DivergenceError, DrydemError, GeometryError, ModelError
 from drydem.geometry import ConvexPolyhedron, box, convex_hull
 from drydem.model import Block, Model, build_model

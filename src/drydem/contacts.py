@@ -216,11 +216,12 @@ def face_contact(
     if len(overlap) < 3 or polygon.signed_area(overlap) <= 1e-8 * small**2:
         return None, separation
     counts = _PointCounts(density, basis @ np.asarray(density.across_axis))
-    uv, areas = _grid(overlap, ref_poly, inc_poly, counts, 1e-9 * small)
+    sliver = polygon.SLIVER_FRACTION * min(polygon.signed_area(ref_poly), polygon.signed_area(inc_poly))
+    uv, areas = _grid(overlap, ref_poly, inc_poly, counts, 1e-9 * small, sliver)
     points = origin + uv @ basis
     # distance from each point, along n, to the incident face plane
     gaps = (n_inc @ inc.face_polygon(f_inc)[0] - points @ n_inc) / np.dot(n_inc, n)
-    keep = gaps <= tolerance
+    keep = (gaps <= tolerance) & (areas > sliver)
     if not np.any(keep):
         return None, separation
     return _FaceContact(i_ref, i_inc, points[keep], gaps[keep], areas[keep], n), separation
@@ -236,33 +237,45 @@ class _PointCounts:
         return self.across if abs(float(direction @ self.across_2d)) > 0.999 else self.along
 
 
-def _grid(overlap: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, counts: _PointCounts, tol: float) -> tuple[np.ndarray, np.ndarray]:
+def _grid(
+    overlap: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, counts: _PointCounts, tol: float, sliver: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Grid nodes (k, 2) and their tributary areas (k,) on the contact polygon ``overlap``.
 
     Along each grid direction the spacing is the smaller face's extent / (n - 1), n from
-    ``counts``; the overlap is split into the fewest equal intervals not longer than that,
-    with nodes at both ends (trapezoid rule). A quadrilateral overlap (the usual face-on-face
-    case, also when the blocks are turned or rocking) gets a bilinear grid between its
-    corners, so the corners are always points and an affine image of a face maps back to the
-    same material points. Other polygons get an axis-aligned grid whose cells are clipped to
-    the polygon (nodes outside move to their cell's centroid). n = 1 in both directions: one
-    node at the polygon's centroid.
+    ``counts``; the overlap is split into the fewest equal intervals not longer than that (at
+    most n, see :func:`_intervals`), with nodes at both ends (trapezoid rule). A quadrilateral
+    overlap (the usual face-on-face case, also when the blocks are turned or rocking) gets a
+    bilinear grid between its corners, so the corners are always points and an affine image of
+    a face maps back to the same material points. Other polygons get an axis-aligned grid whose
+    cells are clipped to the polygon (nodes outside move to their cell's centroid). n = 1 in
+    both directions: one node at the polygon's centroid.
+
+    A node of at most ``sliver`` m2 is a sliver (:data:`drydem.polygon.SLIVER_FRACTION`), which
+    :func:`face_contact` drops; a clipped cell that small is left out here already (it may have
+    no area to take a centroid of).
     """
     if counts.along == 1 and counts.across == 1:
         return polygon.centroid(overlap)[None, :], np.array([polygon.signed_area(overlap)])
     corners = polygon.without_collinear(overlap, tol)
     if len(corners) == 4:
         return _bilinear_grid(corners, face_a, face_b, counts)
-    return _clipped_grid(overlap, face_a, face_b, counts, tol)
+    return _clipped_grid(overlap, face_a, face_b, counts, tol, sliver)
 
 
 def _intervals(length: float, direction: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, n: int) -> int:
-    """Fewest equal intervals over ``length`` with spacing <= smaller face extent along ``direction`` / (n - 1);
-    0 for n = 1 (a single point in the middle)."""
+    """Fewest equal intervals over ``length`` with spacing <= smaller face extent along ``direction`` / (n - 1),
+    and at most n; 0 for n = 1 (a single point in the middle).
+
+    An overlap is no longer than the faces along a direction, so n - 1 intervals span it. A side
+    of a quadrilateral overlap can be longer than the faces' extent along the bilinear grid's
+    direction (the mean of two opposite sides): a little where the blocks are turned a little
+    (n intervals), much where the quadrilateral is skewed. The cap at n bounds a contact's points
+    (:func:`drydem.narrow.max_points`) and leaves the first case as it was."""
     if n == 1:
         return 0
     extent = min(np.ptp(face_a @ direction), np.ptp(face_b @ direction))
-    return max(1, math.ceil(length / (extent / (n - 1)) - 1e-6))
+    return max(1, math.ceil(min(length / (extent / (n - 1)) - 1e-6, n)))
 
 
 def _trapezoid(intervals: int) -> tuple[np.ndarray, np.ndarray]:
@@ -293,7 +306,9 @@ def _bilinear_grid(quad: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, cou
     return nodes, areas * (polygon.signed_area(quad) / areas.sum())
 
 
-def _clipped_grid(overlap: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, counts: _PointCounts, tol: float) -> tuple[np.ndarray, np.ndarray]:
+def _clipped_grid(
+    overlap: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, counts: _PointCounts, tol: float, sliver: float
+) -> tuple[np.ndarray, np.ndarray]:
     lo, hi = overlap.min(0), overlap.max(0)
     axes = []
     for k in range(2):
@@ -303,7 +318,6 @@ def _clipped_grid(overlap: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, c
         half = 0.5 * (hi[k] - lo[k]) / max(len(nodes) - 1, 0.5)
         axes.append((nodes, np.clip(nodes - half, lo[k], hi[k]), np.clip(nodes + half, lo[k], hi[k])))
     (un, u0, u1), (vn, v0, v1) = axes
-    sliver = polygon.SLIVER_FRACTION * polygon.signed_area(overlap)
     nodes, areas = [], []
     for i in range(len(un)):
         for j in range(len(vn)):

@@ -5,8 +5,10 @@ Same algorithm as :func:`drydem.contacts.face_contact` (its plain-Python referen
 tests hold this one to): reference face of least penetration (separating axis over face
 normals, ties to the first block), most opposed incident face, Sutherland-Hodgman overlap in
 the reference plane, sub-contact grid (bilinear on quadrilaterals, clipped cells otherwise,
-trapezoid areas), gaps along the normal, points beyond the tolerance dropped. Geometry comes
-flattened (:class:`Geometry`), so one call handles every stale pair of a re-detection.
+trapezoid areas), gaps along the normal, points beyond the tolerance or with a sliver's area
+(:data:`drydem.polygon.SLIVER_FRACTION`) dropped. Geometry comes flattened (:class:`Geometry`),
+so one call handles every stale pair of a re-detection. Polygon buffers are sized from the
+model's largest face and grow where round-off needs it; no input writes past one.
 """
 
 from __future__ import annotations
@@ -19,9 +21,6 @@ import numpy as np
 
 from drydem.polygon import SLIVER_FRACTION
 from drydem.rotation import mat_t_vec
-
-#: largest number of vertices of a face or a clipped polygon
-MAX_POLYGON = 64
 
 
 class Geometry(NamedTuple):
@@ -80,9 +79,10 @@ class Found(NamedTuple):
         )
 
 
-def max_points(along: int, across: int) -> int:
-    """Upper bound on the points of one contact: the overlap is no longer than the smaller face,
-    so at most n - 1 intervals (+1 for rounding) per direction."""
+@numba.njit(cache=True)
+def max_points(along, across):
+    """Upper bound on the points of one contact: at most n intervals, so n + 1 points, per
+    direction (:func:`drydem.contacts._intervals`)."""
     n = max(along, across) + 1
     return n * n
 
@@ -161,18 +161,38 @@ def _centroid(poly, count):
     return cx / (3.0 * a), cy / (3.0 * a)
 
 
+@numba.njit(cache=True, inline="always")
+def _append(poly, count, x, y):
+    """``poly`` with (x, y) as vertex ``count``: the same buffer, or, when it is full, a larger
+    one (2 count + 4 rows) with the ``count`` vertices before copied."""
+    if count == poly.shape[0]:
+        larger = np.empty((2 * count + 4, 2))
+        larger[:count] = poly[:count]
+        poly = larger
+    poly[count, 0], poly[count, 1] = x, y
+    return poly
+
+
 @numba.njit(cache=True)
 def _clip(subject, n_subject, clipper, n_clipper, out):
-    """Sutherland-Hodgman: ``subject`` clipped by the convex ``clipper`` into ``out``; returns its size."""
-    work = np.empty((MAX_POLYGON, 2))
+    """Sutherland-Hodgman: ``subject`` clipped by the convex ``clipper``; returns the clipped
+    polygon's buffer and size.
+
+    The buffer is ``out`` when it has room (callers size it for the exact intersection of two
+    convex polygons, at most n_subject + n_clipper vertices), else a larger one: round-off can
+    put a vertex lying on a clipping edge on either side of it, and an edge adds a crossing
+    then, so no count is certain beforehand."""
     n = n_subject
     for i in range(n):
-        out[i, 0], out[i, 1] = subject[i, 0], subject[i, 1]
+        out = _append(out, i, subject[i, 0], subject[i, 1])
+    work = np.empty((out.shape[0], 2))
     for e in range(n_clipper):
         if n == 0:
             break
         ax, ay = clipper[e, 0], clipper[e, 1]
         ex, ey = clipper[(e + 1) % n_clipper, 0] - ax, clipper[(e + 1) % n_clipper, 1] - ay
+        if work.shape[0] < n:
+            work = np.empty((out.shape[0], 2))
         for i in range(n):
             work[i, 0], work[i, 1] = out[i, 0], out[i, 1]
         m = 0
@@ -184,17 +204,17 @@ def _clip(subject, n_subject, clipper, n_clipper, out):
             if c_in >= 0.0:
                 if p_in < 0.0:
                     t = p_in / (p_in - c_in)
-                    out[m, 0], out[m, 1] = px + t * (cx - px), py + t * (cy - py)
+                    out = _append(out, m, px + t * (cx - px), py + t * (cy - py))
                     m += 1
-                out[m, 0], out[m, 1] = cx, cy
+                out = _append(out, m, cx, cy)
                 m += 1
             elif p_in >= 0.0:
                 t = p_in / (p_in - c_in)
-                out[m, 0], out[m, 1] = px + t * (cx - px), py + t * (cy - py)
+                out = _append(out, m, px + t * (cx - px), py + t * (cy - py))
                 m += 1
             px, py, p_in = cx, cy, c_in
         n = m
-    return n
+    return out, n
 
 
 @numba.njit(cache=True)
@@ -219,7 +239,7 @@ def _without_collinear(poly, count, tol):
 
 @numba.njit(cache=True)
 def _intervals(length, dx, dy, face_a, na, face_b, nb, n):
-    """As contacts._intervals: 0 for n = 1, else the fewest intervals of spacing <= extent / (n - 1)."""
+    """As contacts._intervals: 0 for n = 1, else the fewest intervals of spacing <= extent / (n - 1), at most n."""
     if n == 1:
         return 0
     extent = np.inf
@@ -229,7 +249,7 @@ def _intervals(length, dx, dy, face_a, na, face_b, nb, n):
             s = face[i, 0] * dx + face[i, 1] * dy
             lo, hi = min(lo, s), max(hi, s)
         extent = min(extent, hi - lo)
-    return max(1, int(math.ceil(length / (extent / (n - 1)) - 1e-6)))
+    return max(1, int(math.ceil(min(length / (extent / (n - 1)) - 1e-6, n))))
 
 
 @numba.njit(cache=True)
@@ -297,7 +317,7 @@ def _inside(poly, count, x, y, tol):
 
 
 @numba.njit(cache=True)
-def _clipped(overlap, count, face_a, na, face_b, nb, along, across, au, av, tol, out_uv, out_area):
+def _clipped(overlap, count, face_a, na, face_b, nb, along, across, au, av, tol, sliver, out_uv, out_area):
     """As contacts._clipped_grid; returns the number of nodes written."""
     lo = np.array([np.inf, np.inf])
     hi = np.array([-np.inf, -np.inf])
@@ -317,8 +337,7 @@ def _clipped(overlap, count, face_a, na, face_b, nb, along, across, au, av, tol,
         low.append(np.minimum(np.maximum(x - half, lo[c]), hi[c]))
         high.append(np.minimum(np.maximum(x + half, lo[c]), hi[c]))
     rect = np.empty((4, 2))
-    cell = np.empty((MAX_POLYGON, 2))
-    sliver = SLIVER_FRACTION * _area(overlap, count)
+    cell = np.empty((count + 4, 2))  # a rectangle adds 4 vertices at most
     k = 0
     for i in range(nodes[0].shape[0]):
         for j in range(nodes[1].shape[0]):
@@ -326,7 +345,7 @@ def _clipped(overlap, count, face_a, na, face_b, nb, along, across, au, av, tol,
             rect[1, 0], rect[1, 1] = high[0][i], low[1][j]
             rect[2, 0], rect[2, 1] = high[0][i], high[1][j]
             rect[3, 0], rect[3, 1] = low[0][i], high[1][j]
-            m = _clip(overlap, count, rect, 4, cell)
+            cell, m = _clip(overlap, count, rect, 4, cell)
             area = _area(cell, m)
             if area <= sliver:
                 continue
@@ -341,14 +360,19 @@ def _clipped(overlap, count, face_a, na, face_b, nb, along, across, au, av, tol,
 
 @numba.njit(cache=True)
 def narrow_phase(geom, position, rotation, candidates, tolerance, along, across, across_axis, found):
-    """Fill ``found`` (a :class:`Found` sized for the candidates) for every candidate pair (i < j)."""
-    face_a = np.empty((MAX_POLYGON, 2))
-    face_b = np.empty((MAX_POLYGON, 2))
-    overlap = np.empty((MAX_POLYGON, 2))
-    corners = np.empty((MAX_POLYGON, 2))
+    """Fill ``found`` (a :class:`Found` with room for the candidates and :func:`max_points`
+    points each) for every candidate pair (i < j)."""
     m = found.gaps.shape[1]
+    if found.count.shape[0] < candidates.shape[0] or m < max_points(along, across):
+        raise ValueError("found has too little room for the candidates' points")
     uv = np.empty((m, 2))
     area = np.empty(m)
+    # polygons: a face as large as the largest, an overlap of two (at most both faces' vertices)
+    largest = 0
+    for f in range(geom.face_start.shape[0] - 1):
+        largest = max(largest, geom.face_start[f + 1] - geom.face_start[f])
+    face_a, face_b = np.empty((largest, 2)), np.empty((largest, 2))
+    overlap, corners = np.empty((2 * largest, 2)), np.empty((2 * largest, 2))
     # the two blocks' world geometry, in buffers for the largest block (no allocation per pair)
     largest_v = largest_f = 0
     for b in range(geom.size.shape[0]):
@@ -397,10 +421,11 @@ def narrow_phase(geom, position, rotation, candidates, tolerance, along, across,
         v[0], v[1], v[2] = n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0]
         n_ref_2d = _face_2d(geom, ref, f_ref, vr, origin, u, v, face_a)
         n_inc_2d = _face_2d(geom, inc, f_inc, vi, origin, u, v, face_b)
-        n_overlap = _clip(face_b, n_inc_2d, face_a, n_ref_2d, overlap)
+        overlap, n_overlap = _clip(face_b, n_inc_2d, face_a, n_ref_2d, overlap)
         if n_overlap < 3 or _area(overlap, n_overlap) <= 1e-8 * small * small:
             continue
         tol = 1e-9 * small
+        sliver = SLIVER_FRACTION * min(_area(face_a, n_ref_2d), _area(face_b, n_inc_2d))
         au = across_axis[0] * u[0] + across_axis[1] * u[1] + across_axis[2] * u[2]
         av = across_axis[0] * v[0] + across_axis[1] * v[1] + across_axis[2] * v[2]
         if along == 1 and across == 1:
@@ -408,12 +433,14 @@ def narrow_phase(geom, position, rotation, candidates, tolerance, along, across,
             area[0] = _area(overlap, n_overlap)
             nodes = 1
         else:
+            if corners.shape[0] < n_overlap:
+                corners = np.empty((overlap.shape[0], 2))
             corners[:n_overlap] = overlap[:n_overlap]
             n_corners = _without_collinear(corners, n_overlap, tol)
             if n_corners == 4:
                 nodes = _bilinear(corners, face_a, n_ref_2d, face_b, n_inc_2d, along, across, au, av, uv, area)
             else:
-                nodes = _clipped(overlap, n_overlap, face_a, n_ref_2d, face_b, n_inc_2d, along, across, au, av, tol, uv, area)
+                nodes = _clipped(overlap, n_overlap, face_a, n_ref_2d, face_b, n_inc_2d, along, across, au, av, tol, sliver, uv, area)
         inc_first = vi[geom.face_vertex[geom.face_start[geom.block_face_start[inc] + f_inc]]]
         plane = n_inc[0] * inc_first[0] + n_inc[1] * inc_first[1] + n_inc[2] * inc_first[2]
         kept = 0
@@ -422,7 +449,7 @@ def narrow_phase(geom, position, rotation, candidates, tolerance, along, across,
             p1 = origin[1] + uv[i, 0] * u[1] + uv[i, 1] * v[1]
             p2 = origin[2] + uv[i, 0] * u[2] + uv[i, 1] * v[2]
             gap = (plane - (n_inc[0] * p0 + n_inc[1] * p1 + n_inc[2] * p2)) / cos_ni
-            if gap <= tolerance:
+            if gap <= tolerance and area[i] > sliver:
                 found.points[k, kept, 0], found.points[k, kept, 1], found.points[k, kept, 2] = p0, p1, p2
                 found.gaps[k, kept] = gap
                 found.areas[k, kept] = area[i]

@@ -42,6 +42,14 @@ def load_paths(contacts: SubContacts, position: np.ndarray, rotation: np.ndarray
     return lower, upper, np.concatenate([closure[up], closure[down]])
 
 
+def unsupported(model, contacts: SubContacts) -> np.ndarray:
+    """Blocks that touch nothing (no contact within the tolerance) yet are free to move down:
+    under gravity they fall (block indices, int)."""
+    touching = np.zeros(model.n_blocks, dtype=bool)
+    touching[contacts.pairs.ravel()] = True
+    return np.flatnonzero(model.block_movable & ~model.block_fixed[:, 2] & ~touching)
+
+
 def elastic_settlement(lower: np.ndarray, upper: np.ndarray, closure: np.ndarray, height: np.ndarray) -> np.ndarray:
     """(nb,) m: s(b) of the module docstring, the contacts taken from the lowest lower block up
     (``height`` (nb,) m orders the blocks: their centroids' heights now). A supporter that is

@@ -1,0 +1,152 @@
+"""Hostile inputs and faults of model files and `drydem tilt`: each gets a non-zero exit and a
+message naming the file, block or parameter and the rule (ranges say the allowed range), never
+a traceback or a silent acceptance; and no result is lost. (Walls and layouts:
+test_walls.py / test_layout.py; sweeps: test_hostile_sweep.py; geometry files and other
+outputs: test_hostile_io.py.)"""
+
+import os
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import drydem as dd
+from drydem.analysis.tilt import TiltSettings, tilt_analysis
+from drydem.cli import main
+
+#: a brick on a base: the cheapest model that tilts (slides at atan 0.5 = 26.6 deg)
+BRICK_ON_BASE = """\
+[joint]
+kn = 1e8
+ks = 1e8
+friction = 0.5
+[solver]
+ratio = 1e-5
+[[block]]
+name = "base"
+fixed = true
+box = { min = [-0.05, 0.0, -0.01], max = [0.1, 0.012, 0.0] }
+[[block]]
+name = "brick"
+box = { min = [0.0, 0.0, 0.0], max = [0.025, 0.012, 0.0055] }
+"""
+
+
+@pytest.fixture(autouse=True)
+def in_tmp_path(tmp_path, monkeypatch):
+    """Default results folders (results/NAME-TIME) go under the test's folder."""
+    monkeypatch.chdir(tmp_path)
+
+
+def run(*args):
+    """`drydem ARGS` in-process; the result, after checking it did not end in a traceback."""
+    result = CliRunner().invoke(main, [str(a) for a in args])
+    assert result.exception is None or isinstance(result.exception, SystemExit), result.exception
+    return result
+
+
+def model_file(tmp_path, text=BRICK_ON_BASE, name="brick.toml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def refused(result, *fragments):
+    """Non-zero exit, no traceback, and every fragment in the message."""
+    assert result.exit_code not in (0, None), result.output
+    assert "Traceback" not in result.output
+    for fragment in fragments:
+        assert fragment in result.output, result.output
+    return True
+
+
+@pytest.mark.parametrize(
+    "change, fragments",
+    [
+        (("kn = 1e8", "kn = true"), ["[joint] kn = True: must be a number in [1e+04, 1e+15] Pa/m"]),
+        (("friction = 0.5", "friction = false"), ["[joint] friction = False: must be a number in (0, 10]"]),
+        (("ratio = 1e-5", "ratio = 1e300"), ["[solver] ratio = 1e+300: must be a number in [1e-12, 0.01]"]),
+        (("ratio = 1e-5", "damping = 1.0"), ["[solver] damping = 1.0: must be a number in [0, 1)"]),
+        (("ratio = 1e-5", "max_cycles = 2.5"), ["[solver] max_cycles = 2.5: must be an integer in [1, 1e+10]"]),
+        (("[solver]", "[contacts]\ntolerance = 1.0\n[solver]"), ["[contacts] tolerance = 1.0 m: must be at most 0.5 of the thinnest movable block"]),
+        (("[solver]", "[contacts]\npoints_per_length = 100\n[solver]"), ["[contacts] points_per_length = 100: must be an integer in [1, 32]"]),
+        (("[joint]", "[material]\ndensity = true\n[joint]"), ["[material] density = True: must be a number in [1, 2.5e+04] kg/m3"]),
+        (("min = [0.0, 0.0, 0.0]", "min = [true, 0.0, 0.0]"), ["[[block]] #1 ('brick') box min = [True, 0.0, 0.0]: must be [x, y, z]"]),
+        (('name = "brick"', 'name = "brick"\ndensity = 1e9'), ["[[block]] #1 ('brick') density = 1000000000.0: must be a number in [1, 2.5e+04]"]),
+    ],
+)
+def test_absurd_or_boolean_values_are_refused_with_the_allowed_range(tmp_path, change, fragments):
+    text = BRICK_ON_BASE.replace(*change)
+    assert text != BRICK_ON_BASE
+    assert refused(run("check", model_file(tmp_path, text)), "brick.toml", *fragments)
+
+
+def test_a_binary_file_is_not_taken_for_toml(tmp_path):
+    path = tmp_path / "garbage.toml"
+    path.write_bytes(np.random.default_rng(1).integers(0, 256, 400, dtype=np.uint8).tobytes())
+    assert refused(run("check", path), "garbage.toml: not a text file")
+
+
+def test_a_results_folder_holding_a_run_is_never_replaced_silently(tmp_path):
+    path, out = model_file(tmp_path), tmp_path / "run"
+    assert run("tilt", path, "--out", out, "--increment", "2").exit_code == 0
+    first = (out / "summary.json").read_text()
+    (out / "vtk").mkdir()
+    (out / "collapse.mp4").write_bytes(b"old video")
+    assert refused(run("tilt", path, "--out", out, "--increment", "2"), "already holds another run", "--overwrite")
+    assert (out / "summary.json").read_text() == first
+    # --overwrite replaces it and leaves nothing stale of the old run beside the new results
+    assert run("tilt", path, "--out", out, "--increment", "2", "--overwrite").exit_code == 0
+    assert not (out / "vtk").exists() and not (out / "collapse.mp4").exists() and (out / "summary.json").is_file()
+    assert refused(run("tilt", path, "--out", out, "--resume", "--overwrite"), "give one of them")
+
+
+def test_a_results_folder_that_cannot_be_one_is_refused(tmp_path):
+    path, not_a_folder = model_file(tmp_path), tmp_path / "file"
+    not_a_folder.write_text("x")
+    assert refused(run("tilt", path, "--out", os.devnull), f"{os.devnull}: exists and is not a folder")
+    assert refused(run("tilt", path, "--out", not_a_folder / "run"), "file/run: cannot write results there")
+
+
+@pytest.mark.parametrize("content", [b"", b"PK\x03\x04 truncated", bytes(range(256)) * 4])
+def test_an_unreadable_checkpoint_is_named(tmp_path, content):
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "checkpoint.npz").write_bytes(content)
+    assert refused(run("tilt", model_file(tmp_path), "--out", out, "--resume"), "checkpoint.npz: not a readable drydem checkpoint")
+
+
+def test_resuming_with_other_settings_names_each_of_them(tmp_path):
+    from drydem.io.target import load_target
+
+    model = load_target(str(model_file(tmp_path))).model
+    checkpoint = tmp_path / "checkpoint.npz"
+    tilt_analysis(model, TiltSettings(increment_deg=5.0), checkpoint=checkpoint)
+    stiffer = model.replace(joint=dd.JointMaterial(kn=2e8, ks=1e8, friction=0.5))
+    with pytest.raises(dd.ModelError, match=r"\[joint\] kn: 100000000.0 in the checkpoint, 200000000.0 now; "
+                                            r"tilt setting increment_deg: 5.0 in the checkpoint, 2.0 now"):
+        tilt_analysis(stiffer, TiltSettings(increment_deg=2.0), checkpoint=checkpoint, resume=True)
+
+
+def test_tilt_options_out_of_range_are_named(tmp_path):
+    path = model_file(tmp_path)
+    assert refused(run("tilt", path, "--monitor", "base"), "monitored block 'base' is fixed")
+    assert refused(run("tilt", path, "--monitor", "nothing"), "no block named 'nothing'")
+    assert refused(run("tilt", path, "--increment", "10", "--max-angle", "5"), "increment_deg = 10.0 exceeds max_angle_deg = 5.0")
+    assert refused(run("tilt", path, "--increment", "0"), "tilt setting increment_deg = 0.0: must be a number in (0, 90) deg")
+    assert refused(run("tilt", path, "--stop-displacement", "-1"), "stop_displacement_m = -1.0: must be a number in (0, 100] m")
+    assert refused(run("tilt", path, "--kn", "0"), "[joint] kn = 0.0: must be a number in [1e+04, 1e+15] Pa/m")
+    assert not (tmp_path / "results").exists()
+
+
+def test_no_equilibrium_under_gravity_exits_non_zero_without_a_verdict(tmp_path):
+    text = BRICK_ON_BASE.replace("ratio = 1e-5", "damping = 0.0\nmax_cycles = 3000")
+    result = run("tilt", model_file(tmp_path, text), "--out", tmp_path / "run")
+    assert refused(result, "damping = 0", "no equilibrium under gravity within [solver] max_cycles = 3000: no verdict")
+    assert "cannot stand" not in result.output and (tmp_path / "run" / "summary.json").is_file()
+
+
+def test_check_names_a_block_that_touches_nothing(tmp_path):
+    text = BRICK_ON_BASE + '[[block]]\nname = "floater"\nbox = { min = [0.0, 0.0, 0.5], max = [0.025, 0.012, 0.5055] }\n'
+    result = run("check", model_file(tmp_path, text))
+    assert result.exit_code == 0 and "unsupported     1 movable blocks touch nothing and will fall under gravity: 'floater'" in result.output
