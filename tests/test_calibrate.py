@@ -34,3 +34,12 @@ def test_mean_absolute_relative_error_as_in_the_paper():
     # paper Table 3: 20.0 vs 18.3 is +9.5 %, 5.9 vs 7.8 is -24.7 %
     error = mean_absolute_relative_error({"WD1": 20.0, "WD6": 5.9}, {"WD1": 18.3, "WD6": 7.8})
     assert error == pytest.approx((1.7 / 18.3 + 1.9 / 7.8) / 2)
+
+
+def test_the_objective_counts_a_wall_that_cannot_stand_as_0_deg_and_no_verdict_as_no_angle():
+    from drydem.analysis.calibrate import wall_angle
+
+    assert wall_angle({"stable_under_gravity": False, "collapse_angle_deg": None, "ended_by": "unstable under gravity"}) == 0.0
+    assert wall_angle({"stable_under_gravity": True, "collapse_angle_deg": 18.3, "ended_by": "stop displacement"}) == 18.3
+    no_verdict = {"stable_under_gravity": None, "collapse_angle_deg": None, "ended_by": "no equilibrium under gravity within max_cycles"}
+    assert wall_angle(no_verdict) is None

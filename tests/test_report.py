@@ -41,15 +41,15 @@ def results(tmp_path):
     unstable["summary"] |= {"collapse_angle_deg": None, "drift_limit_angles_deg": {"0.005": None, "0.0075": None, "0.01": None}}
     unstable["pushover"] = []
     records = [r for r in records if r["id"] != unstable["id"]] + [unstable]
-    failed = {"id": "tilt-broken", "spec": RunSpec(analysis="tilt", target="WD1", protocol="fixed", kn=5e7).__dict__,
-              "status": "failed", "error": "ModelError: made up"}
+    broken = RunSpec(analysis="tilt", target="WD1", protocol="fixed", kn=5e7, ks=5e7)
+    failed = {"id": broken.id, "spec": broken.__dict__, "status": "failed", "error": "ModelError: made up"}
     for record in records + [failed]:
         write_record(tmp_path, record)
     return tmp_path
 
 
 def test_the_report_has_every_table_and_figure(results):
-    text = build_report(results).read_text()
+    text = build_report(results).markdown.read_text()
     for title in ("Table 2", "Table 3", "Table 4"):
         assert f"## {title}" in text
     for name in FIGURES:

@@ -6,15 +6,31 @@ The search is over log10 kn: a coarse log-spaced grid, then golden-section refin
 its best point (Kiefer 1953), every evaluation memoised so that finished runs are reused. The
 error against kn need not be unimodal over the whole range (the grid is there for that); inside
 the bracket it is assumed to be.
+
+:func:`calibrate_stiffness` is ``drydem calibrate``: a :class:`StiffnessSearch` (its settings all
+checked before anything runs) evaluated by sweeping each kn's tilting runs into a results folder,
+whose records it reuses.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from concurrent.futures import Executor
 from dataclasses import dataclass
+from pathlib import Path
+
+from drydem.analysis.sweep import RecordError, RunSpec, SweepOutcome, read_record, record_path, sweep
+from drydem.errors import DrydemError, ModelError
+from drydem.parameters import JOINT_STIFFNESS, Range
 
 GOLDEN = (math.sqrt(5) - 1) / 2
+#: ks / kn: any positive ratio (the stiffnesses it gives are checked against JOINT_STIFFNESS)
+KS_RATIO = Range(0.0, None, low_open=True)
+
+
+class CalibrationError(DrydemError):
+    """A calibration that cannot go on: its runs failed, or another process is computing them."""
 
 
 @dataclass(frozen=True)
@@ -60,3 +76,105 @@ def calibrate(error: Callable[[float], float], kn_min: float, kn_max: float, *, 
 def mean_absolute_relative_error(computed: dict[str, float], experiment: dict[str, float]) -> float:
     """Mean of |computed - experiment| / experiment over the walls in ``computed`` (paper Table 3)."""
     return sum(abs(computed[d] - experiment[d]) / experiment[d] for d in computed) / len(computed)
+
+
+def experimental_angles() -> dict[str, float]:
+    """The experimental collapse angles (deg) of the seed paper's walls (its Table 1)."""
+    from drydem.published import savalle2022
+
+    return savalle2022()["table1_experiment"]["collapse_angle_deg"]
+
+
+def wall_angle(summary: dict) -> float | None:
+    """The collapse angle a tilting run's ``summary`` gives the objective (deg): a wall that
+    cannot stand under its own weight has no capacity, 0 deg (the paper's WD4, 6, 7 at kn = 1e7),
+    rather than no value, which would leave it out of the mean and flatter that kn. None when the
+    run found no angle to compare: no equilibrium under gravity within max_cycles (no verdict on
+    stability), or no collapse up to the largest tilt tried."""
+    if summary.get("stable_under_gravity") is False:
+        return 0.0
+    return summary["collapse_angle_deg"]
+
+
+@dataclass(frozen=True)
+class StiffnessSearch:
+    """What ``drydem calibrate`` fits: the kn (Pa/m) in [kn_min, kn_max] that best reproduces the
+    experimental collapse angles of ``designs``, with ks = ks_ratio x kn, from adaptive tilting
+    runs down to steps of ``increment`` deg (the field names are the command's options)."""
+
+    designs: tuple[str, ...]
+    kn_min: float = 1e7
+    kn_max: float = 1e9
+    ks_ratio: float = 1.0
+    increment: float = 0.1
+
+    def problems(self, name: Callable[[str], str] = str) -> list[str]:
+        """Every invalid setting and the rule it breaks, each named by ``name(field)``: walls with
+        an experimental angle; kn_min and kn_max joint stiffnesses with kn_min < kn_max; ks =
+        ks_ratio x kn a joint stiffness at both ends; the increment a tilt step (TiltSettings')."""
+        from drydem.analysis.tilt import SETTING_RANGES
+
+        found = []
+        known = experimental_angles()
+        unknown = [d for d in self.designs if d not in known]
+        if not self.designs or unknown:
+            what = f"no experimental collapse angle for {unknown}" if unknown else "needs at least one wall"
+            found.append(f"{name('designs')} {','.join(self.designs)!r}: {what}; known: {', '.join(sorted(known))}")
+        ends = {field: getattr(self, field) for field in ("kn_min", "kn_max")}
+        outside = [field for field, kn in ends.items() if kn not in JOINT_STIFFNESS]
+        found += [f"{name(field)} = {ends[field]!r}: {JOINT_STIFFNESS}" for field in outside]
+        ordered = not outside and self.kn_min < self.kn_max
+        if not outside and not ordered:
+            found.append(f"{name('kn_min')} = {self.kn_min!r}, {name('kn_max')} = {self.kn_max!r}: "
+                         f"need {name('kn_min')} < {name('kn_max')}")
+        if self.ks_ratio not in KS_RATIO:
+            found.append(f"{name('ks_ratio')} = {self.ks_ratio!r}: {KS_RATIO}")
+        elif ordered and not all(self.ks_ratio * kn in JOINT_STIFFNESS for kn in ends.values()):
+            found.append(f"{name('ks_ratio')} = {self.ks_ratio!r}: ks = ratio x kn, {self.ks_ratio * self.kn_min:.3g} to "
+                         f"{self.ks_ratio * self.kn_max:.3g} Pa/m, {JOINT_STIFFNESS}")
+        step = SETTING_RANGES["increment_deg"]
+        if self.increment not in step:
+            found.append(f"{name('increment')} = {self.increment!r}: {step}")
+        return found
+
+    def runs(self, kn: float) -> list[RunSpec]:
+        """The runs that evaluate ``kn``, one per design."""
+        return [RunSpec(analysis="tilt", target=d, protocol="adaptive", kn=kn, ks=self.ks_ratio * kn, increment_deg=self.increment)
+                for d in self.designs]
+
+
+def calibrate_stiffness(search: StiffnessSearch, results: Path, executor: Executor, *, in_flight: int | None = None,
+                        on_evaluation: Callable[[float, float, SweepOutcome], None] | None = None) -> Calibration:
+    """:func:`calibrate` ``search`` on ``executor``: each kn's runs swept into ``results``
+    (reusing those recorded, running again the corrupt ones), the objective the mean absolute
+    relative error of :func:`wall_angle` against the experiments. ``on_evaluation(kn, error,
+    outcome)`` after each kn. ModelError for invalid settings (all named), CalibrationError
+    when a kn's runs failed or are being computed by another process."""
+    problems = search.problems()
+    if problems:
+        raise ModelError("; ".join(problems))
+    experiment = experimental_angles()
+
+    def error(kn: float) -> float:
+        specs = search.runs(kn)
+        outcome = sweep(specs, results, executor, in_flight=in_flight)
+        if outcome.elsewhere:
+            raise CalibrationError(f"kn = {kn:.4g}: {outcome.elsewhere} of its runs are being computed by another drydem process "
+                                   f"on {results} (their claims: {Path(results) / 'runs'}/*.lock); run calibrate again when it has finished")
+        records, unusable = {}, []
+        for design, spec in zip(search.designs, specs):
+            try:
+                records[design] = read_record(record_path(results, spec.id))
+            except RecordError as exc:
+                unusable.append(str(exc))
+        unusable += [f"{d}: {r['error']}" for d, r in records.items() if r["status"] == "failed"]
+        angles = {d: wall_angle(r["summary"]) for d, r in records.items() if r["status"] != "failed"}
+        unusable += [f"{d}: {records[d]['summary']['ended_by']}" for d, angle in angles.items() if angle is None]
+        if unusable:
+            raise CalibrationError(f"kn = {kn:.4g}: runs without a collapse angle:\n  " + "\n  ".join(unusable))
+        value = mean_absolute_relative_error(angles, experiment)
+        if on_evaluation is not None:
+            on_evaluation(kn, value, outcome)
+        return value
+
+    return calibrate(error, search.kn_min, search.kn_max)

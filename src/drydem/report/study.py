@@ -3,18 +3,20 @@ paper: its figures (3, 6, 9-13) and tables (2-4) from the study's run records, d
 beside the paper's (drydem.published), in Markdown and HTML with PNG figures.
 
 A figure or table whose runs are missing says so instead of failing: a report can be built
-from a study still running.
+from a study still running. A corrupt record is left out, and the report names its file.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from drydem.analysis.drift import EC8_DRIFT_LIMITS
-from drydem.analysis.sweep import load_records
+from drydem.analysis.sweep import RecordError, load_records
+from drydem.errors import DrydemError
 from drydem.published import savalle2022
 from drydem.report.plots import pyplot
 
@@ -70,12 +72,29 @@ def _close(a, b) -> bool:
     return a is not None and b is not None and math.isclose(a, b, rel_tol=1e-9)
 
 
-def build_report(results: Path, out: Path | None = None) -> Path:
-    """Write ``report.md``, ``report.html`` and ``figures/*.png`` for the study in ``results``."""
+class ReportError(DrydemError):
+    """No report can be made of the folder given."""
+
+
+@dataclass(frozen=True)
+class Report:
+    """The report's files, and the errors of the records left out (each naming its file)."""
+
+    markdown: Path
+    html: Path
+    corrupt: list[RecordError]
+
+
+def build_report(results: Path, out: Path | None = None) -> Report:
+    """Write ``report.md``, ``report.html`` and ``figures/*.png`` for the study in ``results``;
+    ReportError if ``results`` holds no ``runs`` folder (not a study's results)."""
     import markdown
 
     results = Path(results)
-    runs = Runs(load_records(results))
+    if not (results / "runs").is_dir():
+        raise ReportError(f"{results}: no runs/ folder, so not the results of a study (`drydem sweep STUDY --out {results}` writes them)")
+    records = load_records(results)
+    runs = Runs(records.valid)
     out = Path(out or results / "report")
     figures = out / "figures"
     figures.mkdir(parents=True, exist_ok=True)
@@ -83,6 +102,7 @@ def build_report(results: Path, out: Path | None = None) -> Path:
     sections = [
         f"# Report of the study in `{results}`",
         f"{len(runs.ok)} runs recorded ({len(runs.failed)} failed). {NOTE} Published values: {paper['source'].split(' - ')[0]}.",
+        *([_corrupt(records.corrupt)] if records.corrupt else []),
         _table2(runs, paper), _table3(runs, paper), _table4(runs, paper),
         _figure(figures, "fig03_contact_points", "Fig. 3: collapse angle of WD3 against contact points per length, kn = 3e7",
                 lambda ax: _contact_points(ax, runs)),
@@ -99,7 +119,13 @@ def build_report(results: Path, out: Path | None = None) -> Path:
     (out / "report.html").write_text(f"<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>drydem report</title>"
                                      f"<style>table{{border-collapse:collapse}}td,th{{border:1px solid #999;padding:2px 6px}}</style>"
                                      f"</head><body>\n{body}\n</body></html>\n")
-    return out / "report.md"
+    return Report(out / "report.md", out / "report.html", records.corrupt)
+
+
+def _corrupt(errors: list[RecordError]) -> str:
+    """The paragraph naming the records left out, each with its file and fault."""
+    lines = "\n".join(f"- `{error}`" for error in errors)
+    return f"{len(errors)} corrupt records left out (the same `drydem sweep` runs them again):\n\n{lines}"
 
 
 def _cell(value: float | None, fmt: str = "{:.1f}") -> str:
