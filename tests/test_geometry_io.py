@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from drydem.errors import ModelError
-from drydem.io.mesh import read_mesh, write_mesh
+from drydem.io.mesh import STL_TRIANGLE, read_mesh, write_mesh
 from drydem.io.target import load_target
 from drydem.io.vrml import read_vrml
 from drydem.io.vtk import write_vtu
@@ -111,15 +111,52 @@ def test_a_non_convex_vrml_shape_is_refused(tmp_path):
 
 
 @pytest.mark.parametrize("suffix", [".obj", ".stl"])
-def test_mesh_round_trip_keeps_every_block(tmp_path, suffix):
+def test_mesh_round_trip_keeps_names_fixed_blocks_and_shapes(tmp_path, suffix):
     model = load_target("WD3").model
     path = tmp_path / f"wall{suffix}"
     write_mesh(model, path)
-    blocks = read_mesh(path)
-    # touching blocks share corners and edges; each comes back whole, in the order written
-    assert len(blocks) == model.n_blocks
-    np.testing.assert_allclose([b.shape.centroid for b in blocks], model.block_centroid, atol=1e-9)
-    np.testing.assert_allclose([b.shape.volume for b in blocks], [s.volume for s in model.block_shape], rtol=1e-6)
+    found = load_target(str(path))
+    back = found.model
+    # the old base comes back fixed, so no second base is added under it; nothing to note
+    assert back.block_name == model.block_name and found.notes == ()
+    np.testing.assert_array_equal(back.block_fixed.all(axis=1), model.block_fixed.all(axis=1))
+    size = min(s.size for s in model.block_shape)
+    np.testing.assert_allclose(back.block_centroid, model.block_centroid, rtol=0, atol=1e-9 * size)
+    np.testing.assert_allclose([s.volume for s in back.block_shape], [s.volume for s in model.block_shape], rtol=1e-9)
+
+
+def binary_stl(model, path):
+    """The blocks' faces as a binary STL (float32 coordinates, no names), as CAD programs write it."""
+    triangles = [shape.vertices[[face[0], face[i], face[i + 1]]]
+                 for shape in model.block_shape for face in shape.faces for i in range(1, len(face) - 1)]
+    records = np.zeros(len(triangles), dtype=STL_TRIANGLE)
+    records["vertices"] = triangles
+    path.write_bytes(b"solid (binary files may start so too)".ljust(80) + np.uint32(len(triangles)).tobytes() + records.tobytes())
+    return path
+
+
+def test_a_binary_stl_comes_back_in_file_order_and_says_what_it_cannot_know(tmp_path):
+    wall = load_target("WD3").model
+    path = binary_stl(wall, tmp_path / "wall.stl")
+    blocks, notes = read_mesh(path)
+    assert [b.name for b in blocks] == [f"part{k}" for k in range(wall.n_blocks)] and not any(b.fixed for b in blocks)
+    # float32 coordinates: 6e-8 relative to the wall's 0.3 m extent
+    np.testing.assert_allclose([b.shape.centroid for b in blocks], wall.block_centroid, rtol=0, atol=1e-7)
+    assert notes == [f"{path}: a binary STL names no block: {wall.n_blocks} block(s) are named part0, part1, ... in file order"]
+    found = load_target(str(path))
+    assert found.notes[-1] == f"{path}: no block is marked fixed: the blocks stand on an added fixed block 'base'"
+    assert found.model.block_name[0] == "base" and found.model.block_fixed[0].all()
+
+
+def test_obj_groups_name_the_blocks_of_a_file_without_objects(tmp_path):
+    cube = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+    faces = "f -8 -5 -6 -7\nf -4 -3 -2 -1\nf -8 -7 -3 -4\nf -7 -6 -2 -3\nf -6 -5 -1 -2\nf -5 -8 -4 -1\n"
+    lifted = "".join(f"v {x} {y} {z + 1}\n" for x, y, z in [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)])
+    path = tmp_path / "groups.obj"
+    path.write_text(f"g ground\nusemtl Fixed\n{cube}{faces}g top stone\nusemtl stone\n{lifted}{faces}")
+    blocks, notes = read_mesh(path)
+    assert [(b.name, b.fixed) for b in blocks] == [("ground", True), ("top stone", False)] and notes == []
+    assert blocks[1].shape.centroid.tolist() == [0.5, 0.5, 1.5]
 
 
 def test_an_imported_mesh_stands_on_a_fixed_base(tmp_path):
@@ -134,7 +171,7 @@ def test_an_imported_mesh_stands_on_a_fixed_base(tmp_path):
 def test_an_open_mesh_names_its_free_edge(tmp_path):
     path = tmp_path / "open.obj"
     path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\n")
-    with pytest.raises(ModelError, match=r"open.obj: part 0 \(from face 0\) is not a closed surface: 3 edge\(s\) are not in exactly two faces"):
+    with pytest.raises(ModelError, match=r"open.obj: 'part0' \(from line 5\) is not a closed surface: 3 edge\(s\) are not in exactly two faces"):
         read_mesh(path)
 
 

@@ -150,3 +150,13 @@ def test_check_names_a_block_that_touches_nothing(tmp_path):
     text = BRICK_ON_BASE + '[[block]]\nname = "floater"\nbox = { min = [0.0, 0.0, 0.5], max = [0.025, 0.012, 0.5055] }\n'
     result = run("check", model_file(tmp_path, text))
     assert result.exit_code == 0 and "unsupported     1 movable blocks touch nothing and will fall under gravity: 'floater'" in result.output
+
+
+def test_a_limit_analysis_never_replaces_an_earlier_one_silently(tmp_path):
+    path, out = model_file(tmp_path), tmp_path / "limit"
+    assert run("limit", path, "--out", out).exit_code == 0
+    first = (out / "summary.json").read_text()
+    assert refused(run("limit", path, "--out", out, "--friction", "0.8"), "already holds another run (mechanism.png, summary.json)")
+    assert (out / "summary.json").read_text() == first
+    assert run("limit", path, "--out", out, "--friction", "0.8", "--overwrite").exit_code == 0
+    assert (out / "summary.json").read_text() != first

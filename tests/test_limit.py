@@ -129,3 +129,13 @@ def test_bad_input_is_a_clear_error():
 def test_an_unconverged_non_associative_run_says_so():
     result = limit_analysis(load_target("WD6").model, LimitSettings(non_associative=True, max_iterations=2))
     assert not result.converged and result.iterations == 3 and len(result.history) == 3
+
+
+def test_progress_names_each_stage_as_it_starts():
+    stages = []
+    result = limit_analysis(load_target("WD6").model, LimitSettings(non_associative=True, max_iterations=2), on_progress=stages.append)
+    assert [stage.split(" (")[0] for stage in stages] == [
+        "finding the contacts of 166 blocks", "assembling the equilibrium matrix", "solving the associative LP with HiGHS",
+        "non-associative iteration 1 of at most 2: solving the LP with HiGHS", "non-associative iteration 2 of at most 2: solving the LP with HiGHS",
+    ]
+    assert stages[-1].endswith(f"(lambda {result.history[1]:.4f} so far)")

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-import os
+import itertools
+import signal
 import time
 from contextlib import contextmanager
 from dataclasses import replace
@@ -35,11 +36,14 @@ scheduler_option = click.option("--scheduler", help="Address of a Dask distribut
 
 
 def _target(target: str, unit: str = "m") -> Target:
-    """Load TARGET or exit with its error."""
+    """Load TARGET or exit with its error; print to stderr what an imported file could not say."""
     try:
-        return load_target(target, unit_m=UNITS[unit])
+        found = load_target(target, unit_m=UNITS[unit])
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
+    for note in found.notes:
+        click.echo(f"note: {note}", err=True)
+    return found
 
 
 @click.group()
@@ -57,6 +61,7 @@ def check(target: str, settle: bool, strict: bool, unit: str) -> None:
     """Validate TARGET (a built-in wall, a wall or model file, or a .wrl/.obj/.stl) and print
     its blocks, contacts and timestep."""
     from drydem.brief import brief_violations
+    from drydem.support import unsupported
 
     found = _target(target, unit)
     model = found.model
@@ -80,6 +85,10 @@ def check(target: str, settle: bool, strict: bool, unit: str) -> None:
     click.echo(f"joint           kn {model.joint.kn:.3g} Pa/m, ks {model.joint.ks:.3g} Pa/m, friction {model.joint.friction:g}")
     mass_note = " (mass scaled)" if model.solver.mass_scaling else ""
     click.echo(f"timestep        {sim.timestep:.4g} s{mass_note}")
+    floating = [model.block_name[b] for b in unsupported(model, c)]
+    if floating:
+        click.echo(f"unsupported     {len(floating)} movable blocks touch nothing and will fall under gravity: "
+                   + ", ".join(repr(name) for name in floating[:10]) + (", ..." if len(floating) > 10 else ""), err=True)
     if settle:
         _settle(sim)
 
@@ -127,23 +136,26 @@ def _settle(sim: Simulation) -> None:
 @click.option("--loading", type=click.Choice(["tilt", "multiplier"]), default="tilt", show_default=True, help="Tilt the gravity or add lambda g horizontally.")
 @click.option("--monitor", help="Block whose centroid is monitored (default: the top block nearest the middle).")
 @click.option("--max-angle", type=float, default=80.0, show_default=True, help="Largest tilt tried, deg.")
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), help="Results folder (default: results/TARGET-TIME).")
+@click.option("--out", type=click.Path(path_type=Path), help="Results folder (default: results/TARGET-TIME).")
 @click.option("--resume", is_flag=True, help="Go on from the checkpoint in --out (same TARGET and options).")
+@click.option("--overwrite", is_flag=True, help="Replace the results of an earlier run in --out (they are kept otherwise).")
 @click.option("--vtk", is_flag=True, help="Write a VTK time series for ParaView (OUT/vtk: blocks and sub-contacts).")
 @click.option("--save-every", type=click.IntRange(min=1), default=1, show_default=True,
               help="With --vtk: keep every N-th equilibrium state (the states past collapse are all kept).")
 @click.option("--video", is_flag=True, help="Also render OUT/collapse.mp4 (GIF if ffmpeg is missing); implies --vtk.")
 @unit_option
 def tilt(target, kn, ks, friction, points, density, increment, adaptive, predictor, stop_displacement, criterion, loading, monitor, max_angle,
-         out, resume, vtk, save_every, video, unit) -> None:
+         out, resume, overwrite, vtk, save_every, video, unit) -> None:
     """Tilting-table analysis of TARGET (a built-in wall, a wall or model file, or a
-    .wrl/.obj/.stl): collapse angle, pushover curve, Eurocode 8 drift-limit angles, plots."""
+    .wrl/.obj/.stl): collapse angle, pushover curve, Eurocode 8 drift-limit angles, plots.
+    Exits 1 when equilibrium could not be reached within max_cycles (no verdict), 130 or 143
+    when interrupted (the last equilibrium is kept for --resume)."""
     from tqdm import tqdm
 
-    from drydem.analysis.tilt import TiltSettings, tilt_analysis
-    from drydem.io.results import PushoverWriter, tilt_summary, write_summary
+    from drydem.analysis.tilt import TiltSettings, monitor_index, tilt_analysis
+    from drydem.io.checkpoint import load_checkpoint
+    from drydem.io.results import PushoverWriter
     from drydem.io.vtk import VtkSeries
-    from drydem.report.plots import mechanism_figure, pushover_figure
 
     found = _target(target, unit)
     try:
@@ -152,69 +164,149 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, predict
             increment_deg=increment, adaptive=adaptive, predictor=predictor, stop_displacement_m=stop_displacement, loading=loading,
             monitor=monitor, max_angle_deg=max_angle,
         )
-        if monitor is not None:
-            model.block_index(monitor)
+        monitor_index(model, monitor)
+        if resume and overwrite:
+            raise DrydemError("--resume goes on from the run in --out and --overwrite deletes it: give one of them")
+        if resume and (out is None or not (out / CHECKPOINT).is_file()):
+            raise DrydemError(f"--resume needs --out DIR holding a {CHECKPOINT} from an earlier run" + (f" ({out} has none)" if out else ""))
+        folder = _results_folder(out, found.name, TILT_OUTPUTS, resume=resume, overwrite=overwrite)
+        if resume:
+            _, saved = load_checkpoint(folder / CHECKPOINT)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
-    if resume and (out is None or not (out / CHECKPOINT).is_file()):
-        raise click.ClickException(f"--resume needs --out DIR holding a {CHECKPOINT} from an earlier run")
-    out = out or Path("results") / f"{found.name}-{datetime.now():%Y%m%d-%H%M%S}"
-    out.mkdir(parents=True, exist_ok=True)
     click.echo(f"{found.name} ({found.path}): {model.n_blocks} blocks, kn {model.joint.kn:.3g} Pa/m, ks {model.joint.ks:.3g} Pa/m, "
-               f"mu {model.joint.friction:g}, {model.contacts.points_per_length} points per length -> {out}")
-    with tqdm(desc="tilting", unit=" cycles", unit_scale=True, leave=False) as bar:
+               f"mu {model.joint.friction:g}, {model.contacts.points_per_length} points per length -> {folder}")
+    if resume:
+        click.echo(f"resuming from {folder / CHECKPOINT}: last equilibrium at {float(saved['theta_deg']):g} deg "
+                   f"({len(saved['records'])} equilibrium states)")
+    if model.solver.damping == 0:
+        click.echo("warning: [solver] damping = 0: dynamic relaxation has nothing to dissipate energy with and may never "
+                   "reach equilibrium", err=True)
+    go_on = "the same command plus --resume" if out is not None else f"the same command plus --out {folder} --resume"
+    with _signals_interrupt() as received, tqdm(desc="tilting", unit=" cycles", unit_scale=True, leave=False) as bar:
 
         def progress(theta, cycles, ux):
             bar.update(cycles - bar.n)
             bar.set_postfix_str(f"{theta:.2f} deg, ux {ux * 1e3:.2f} mm")
 
-        series = VtkSeries(out / "vtk", model, every=save_every) if vtk or video else None
         try:
+            series = VtkSeries(folder / "vtk", model, every=save_every) if vtk or video else None
             result = tilt_analysis(
-                model, settings, on_record=PushoverWriter(out, append=resume), on_progress=progress, on_frame=series,
-                checkpoint=out / CHECKPOINT, resume=resume,
+                model, settings, on_record=PushoverWriter(folder), on_progress=progress, on_frame=series,
+                checkpoint=folder / CHECKPOINT, resume=resume,
             )
         except DrydemError as exc:
             raise click.ClickException(str(exc)) from None
+        except OSError as exc:
+            raise click.ClickException(f"{exc.filename or folder}: cannot write results ({exc.strerror or exc})") from None
         except KeyboardInterrupt:
-            click.echo(f"\ninterrupted; what was found is in {out}. Go on with the same command plus --out {out} --resume", err=True)
-            raise SystemExit(130) from None
-    write_summary(out, tilt_summary(result, model))
-    pushover_figure(result, out / "pushover.png", title=found.name)
+            saved = f"the last equilibrium is saved in {folder / CHECKPOINT}" if (folder / CHECKPOINT).is_file() else "no equilibrium was reached yet"
+            click.echo(f"\ninterrupted ({received.name}); {saved}. Go on with {go_on}", err=True)
+            raise SystemExit(128 + received.number) from None
+    _tilt_outputs(found, model, result, folder, series)
+    if video:
+        _render(series.folder, folder / "collapse.mp4", fps=8.0)
+    if result.stable_under_gravity is None or result.ended_by == "no equilibrium within max_cycles":
+        raise SystemExit(1)
+
+
+#: what ``drydem tilt`` and ``drydem limit`` write in their results folders (deleted first by --overwrite)
+TILT_OUTPUTS = ("summary.json", "pushover.csv", "pushover.png", "mechanism.png", CHECKPOINT, "vtk", "collapse.mp4", "collapse.gif")
+LIMIT_OUTPUTS = ("summary.json", "mechanism.png")
+
+
+def _results_folder(out: Path | None, name: str, outputs: tuple[str, ...], *, resume: bool = False, overwrite: bool = False) -> Path:
+    """``out`` made ready for a run (drydem.io.results.prepare_folder), or by default a new
+    results/NAME-TIME folder (numbered -2, -3, ... if two runs start in the same second)."""
+    from drydem.io.results import prepare_folder
+
+    if out is None:
+        stem = f"{name}-{datetime.now():%Y%m%d-%H%M%S}"
+        out = Path("results") / stem
+        for k in itertools.count(2):
+            if not out.exists():
+                break
+            out = Path("results") / f"{stem}-{k}"
+    return prepare_folder(out, outputs, resume=resume, overwrite=overwrite)
+
+
+class _Received:
+    """The signal that interrupted a command: its name and number (SIGINT until told otherwise)."""
+
+    name, number = "SIGINT", int(signal.SIGINT)
+
+
+@contextmanager
+def _signals_interrupt():
+    """SIGTERM (a kill, a scheduler's time limit) interrupts like Ctrl-C: KeyboardInterrupt,
+    so that the command says what it saved and how to go on. Yields what was received."""
+    received = _Received()
+
+    def interrupt(number, frame):
+        received.name, received.number = signal.Signals(number).name, number
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield received
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _tilt_outputs(found: Target, model: Model, result, folder: Path, series) -> None:
+    """Write summary.json and the figures of a tilting analysis and print what it found."""
+    from drydem.io.results import tilt_summary, write_summary
+    from drydem.report.plots import mechanism_figure, pushover_figure
+
+    write_summary(folder, tilt_summary(result, model))
+    pushover_figure(result, folder / "pushover.png", title=found.name)
     collapse = result.collapse_angle_deg
     lost_by_then = frozenset(name for name, theta in result.lost_blocks if collapse is not None and theta <= collapse)
     states = [
         ("last equilibrium" if collapse is not None else "under gravity", result.collapse_state or result.final_state, lost_by_then),
         (f"past collapse ({result.ended_by})", result.final_state, frozenset(name for name, _ in result.lost_blocks)),
     ]
-    mechanism_figure(model, states, out / "mechanism.png", monitored=result.monitored_block)
-    if not result.stable_under_gravity:
-        click.echo("the model cannot stand under its own weight (state saved in the plots)")
-    elif result.collapse_angle_deg is None:
-        click.echo(f"no collapse up to {max_angle} deg")
-    else:
-        click.echo(f"collapse angle  {result.collapse_angle_deg:.2f} deg (load multiplier {result.load_multiplier:.4f}; ended by {result.ended_by})")
+    mechanism_figure(model, states, folder / "mechanism.png", monitored=result.monitored_block)
+    for line in _tilt_verdict(result, model):
+        click.echo(line)
     dls = result.drift_limit_angles_deg
     click.echo("drift limits    " + ", ".join(f"{float(k):.2%}: " + ("not reached" if v is None else f"{v:.2f} deg") for k, v in dls.items()))
-    if result.lost_blocks:
+    if result.lost_blocks and result.stable_under_gravity:
         first = min(theta for _, theta in result.lost_blocks)
         click.echo(f"lost blocks     {len(result.lost_blocks)} fell out of the model, the first at {first:.2f} deg (listed in summary.json)")
-    click.echo(f"cycles          {result.cycles} in {result.runtime_s:.1f} s; results in {out}")
+    click.echo(f"cycles          {result.cycles} in {result.runtime_s:.1f} s; results in {folder}")
     if series is not None:
         click.echo(f"vtk             {len(series.rows)} states in {series.folder} (open blocks.pvd and contacts.pvd in ParaView)")
-    if video:
-        _render(series.folder, out / "collapse.mp4", fps=8.0)
+
+
+def _tilt_verdict(result, model: Model) -> list[str]:
+    """What the analysis found, in words that claim no more than it showed."""
+    fell = ", ".join(repr(name) for name, _ in result.lost_blocks[:5]) + (", ..." if len(result.lost_blocks) > 5 else "")
+    if result.stable_under_gravity is False:
+        return [f"the model cannot stand under its own weight: {fell} fell (state in mechanism.png)"]
+    if result.stable_under_gravity is None:
+        return [f"no equilibrium under gravity within [solver] max_cycles = {model.solver.max_cycles}: no verdict on whether it "
+                "stands; raise max_cycles (or check damping) and run again"]
+    if result.collapse_angle_deg is None:
+        return [f"no collapse up to {result.settings.max_angle_deg} deg"]
+    if result.ended_by == "no equilibrium within max_cycles":
+        return [f"last equilibrium {result.collapse_angle_deg:.2f} deg; the next step reached no equilibrium within [solver] "
+                f"max_cycles = {model.solver.max_cycles} and did not collapse either: not a verified collapse angle "
+                "(raise max_cycles to decide)"]
+    return [f"collapse angle  {result.collapse_angle_deg:.2f} deg (load multiplier {result.load_multiplier:.4f}; ended by {result.ended_by})"]
 
 
 @main.command()
 @click.argument("target")
 @click.option("--non-associative", is_flag=True, help="Friction without dilatancy (iterative LP of Gilbert et al. 2006).")
 @click.option("--friction", type=float, help="Coulomb friction coefficient (overrides the model file).")
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), help="Results folder (default: results/TARGET-limit-TIME).")
+@click.option("--out", type=click.Path(path_type=Path), help="Results folder (default: results/TARGET-limit-TIME).")
+@click.option("--overwrite", is_flag=True, help="Replace the results of an earlier run in --out (they are kept otherwise).")
 @unit_option
-def limit(target, non_associative, friction, out, unit) -> None:
+def limit(target, non_associative, friction, out, overwrite, unit) -> None:
     """Limit analysis of TARGET: the largest horizontal load multiplier (tilt angle atan(lambda))
-    that rigid blocks can carry, with its collapse mechanism."""
+    that rigid blocks can carry, with its collapse mechanism. Each stage is printed to stderr
+    as it starts, with the time so far (the LP of a large wall takes minutes)."""
     from drydem.analysis.limit import LimitSettings, limit_analysis
     from drydem.analysis.tilt import wall_height
     from drydem.io.results import limit_summary, write_summary
@@ -222,15 +314,21 @@ def limit(target, non_associative, friction, out, unit) -> None:
 
     found = _target(target, unit)
     settings = LimitSettings(non_associative=non_associative)
+    try:  # before the analysis, which can take minutes
+        out = _results_folder(out, f"{found.name}-limit", LIMIT_OUTPUTS, overwrite=overwrite)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
     start = time.perf_counter()
+
+    def progress(stage: str) -> None:
+        click.echo(f"[{time.perf_counter() - start:7.1f} s] {stage}", err=True)
+
     try:
         model = _with_overrides(found.model, kn=None, ks=None, friction=friction, points=None, density=None, criterion=None)
-        result = limit_analysis(model, settings)
+        result = limit_analysis(model, settings, on_progress=progress)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     runtime = time.perf_counter() - start
-    out = out or Path("results") / f"{found.name}-limit-{datetime.now():%Y%m%d-%H%M%S}"
-    out.mkdir(parents=True, exist_ok=True)
     write_summary(out, limit_summary(result, settings, model, runtime))
     label = "LA-NA" if non_associative else "LA-A"
     moved = result.mechanism_state(model, 0.1 * wall_height(model))
@@ -271,13 +369,13 @@ def _render(folder: Path, path: Path, *, fps: float) -> None:
 def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str | None, retry_failed: bool) -> None:
     """Run a parametric study (STUDY_FILE, TOML, or a shipped study: savalle2022): every run a
     tilting or limit analysis, each recorded in OUT/runs as it finishes; run again to go on
-    where it stopped."""
+    where it stopped (corrupt records are run again). The whole study is checked before the
+    first run; two sweeps on one OUT share its runs."""
     from tqdm import tqdm
 
+    from drydem import studies
     from drydem.analysis.sweep import load_study, pending
     from drydem.analysis.sweep import sweep as run_sweep
-
-    from drydem import studies
 
     path = Path(study_file) if Path(study_file).is_file() else studies.find(study_file)
     if path is None:
@@ -288,10 +386,12 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
         raise click.ClickException(str(exc)) from None
     out = out or Path("results") / study.name
     out.mkdir(parents=True, exist_ok=True)
-    todo = len(pending(study.runs, out, retry_failed=retry_failed))
-    click.echo(f"{study.name}: {len(study.runs)} runs, {len(study.runs) - todo} already recorded in {out}")
-    with _executor(workers, scheduler) as (executor, where), tqdm(total=todo, desc="runs", unit=" run") as bar:
-        bar.write(f"running {todo} on {where}")
+    plan = pending(study.runs, out, retry_failed=retry_failed)
+    click.echo(f"{study.name}: {len(study.runs)} runs, {plan.recorded} already recorded in {out}")
+    for corrupt in plan.corrupt:
+        click.echo(f"corrupt record, run again: {corrupt}", err=True)
+    with _executor(workers, scheduler) as pool, _signals_interrupt() as received, tqdm(total=len(plan.todo), desc="runs", unit=" run") as bar:
+        bar.write(f"running {len(plan.todo)} on {pool.where}")
         failures = []
 
         def done(record):
@@ -301,54 +401,55 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
                 bar.set_postfix(failed=len(failures))
 
         try:
-            outcome = run_sweep(study.runs, out, executor, retry_failed=retry_failed, on_done=done)
+            outcome = run_sweep(study.runs, out, pool.executor, retry_failed=retry_failed, in_flight=pool.slots, on_done=done,
+                                on_other=lambda spec: bar.update(1))
         except KeyboardInterrupt:
-            click.echo(f"\ninterrupted; the finished runs are recorded in {out}; the same command goes on", err=True)
-            raise SystemExit(130) from None
+            click.echo(f"\ninterrupted ({received.name}); the finished runs are recorded in {out}; the same command goes on", err=True)
+            raise SystemExit(128 + received.number) from None
+        except DrydemError as exc:
+            raise click.ClickException(str(exc)) from None
     for failure in failures:
         click.echo(f"failed: {failure}", err=True)
     click.echo(f"{outcome.finished} runs done ({outcome.failed} failed), {outcome.skipped} skipped; records in {out / 'runs'}")
+    if outcome.elsewhere:
+        click.echo(f"{outcome.elsewhere} runs left to another sweep working on {out} (it holds their claims, runs/*.lock); "
+                   "run this command again once it has finished to check that every run is recorded")
 
 
 @contextmanager
 def _executor(workers: int | None, scheduler: str | None):
-    """Where runs go: ``workers`` local processes (default: all cores), or a Dask scheduler's
-    cluster; yields a concurrent.futures executor and its description. On an interrupt the
-    queued runs are cancelled rather than waited for (a Ctrl-C also stops the local workers)."""
-    if scheduler:
-        from distributed import Client
+    """Where runs go (drydem.analysis.sweep.open_workers): ``workers`` local processes, or a
+    Dask scheduler's cluster; a scheduler that is not an address or does not answer is an error
+    naming it and what to check, within seconds."""
+    from contextlib import ExitStack
 
-        client = Client(scheduler)
-        executor, where = client.get_executor(), f"Dask scheduler {scheduler}"
-    else:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
+    from drydem.analysis.sweep import open_workers
 
-        workers = workers or os.cpu_count() or 1
-        executor = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
-        client, where = None, f"{workers} local processes"
-    try:
-        yield executor, where
-    except BaseException:
-        if client is None:
-            executor.shutdown(wait=False, cancel_futures=True)
-        raise
-    else:
-        executor.shutdown()
-    finally:
-        if client is not None:
-            client.close()
+    with ExitStack() as stack:
+        try:
+            pool = stack.enter_context(open_workers(workers, scheduler))
+        except DrydemError as exc:
+            raise click.ClickException(str(exc)) from None
+        yield pool
 
 
 @main.command()
 @click.argument("results_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), help="Report folder (default: RESULTS_DIR/report).")
 def report(results_dir: Path, out: Path | None) -> None:
-    """Write the report of a study (Markdown, HTML, PNG figures in the style of the paper)."""
+    """Write the report of a study (Markdown, HTML, PNG figures in the style of the paper);
+    corrupt records are left out and named."""
     from drydem.report.study import build_report
 
-    path = build_report(results_dir, out)
-    click.echo(f"report          {path} and {path.with_suffix('.html')}")
+    try:
+        written = build_report(results_dir, out)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    except OSError as exc:
+        raise click.ClickException(f"{exc.filename}: cannot write the report ({exc.strerror})") from None
+    for corrupt in written.corrupt:
+        click.echo(f"corrupt record left out: {corrupt}", err=True)
+    click.echo(f"report          {written.markdown} and {written.html}")
 
 
 @main.command()
@@ -362,39 +463,32 @@ def report(results_dir: Path, out: Path | None) -> None:
 @scheduler_option
 def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, workers, scheduler) -> None:
     """Find the kn that best reproduces the experimental collapse angles (paper Table 1) of
-    DESIGNS, reusing and adding runs in RESULTS_DIR (the paper's post-diction, Section 4.4)."""
-    from drydem.analysis.calibrate import calibrate as search
-    from drydem.analysis.calibrate import mean_absolute_relative_error
-    from drydem.analysis.sweep import RunSpec, load_records
-    from drydem.analysis.sweep import sweep as run_sweep
-    from drydem.published import savalle2022
-    from drydem.report.study import Runs
+    DESIGNS, reusing and adding runs in RESULTS_DIR (the paper's post-diction, Section 4.4);
+    every option is checked before anything runs."""
+    from drydem.analysis.calibrate import StiffnessSearch, calibrate_stiffness
 
-    names = [d.strip() for d in designs.split(",") if d.strip()]
-    experiment = savalle2022()["table1_experiment"]["collapse_angle_deg"]
-    unknown = [d for d in names if d not in experiment]
-    if unknown:
-        raise click.ClickException(f"no experimental collapse angle for {unknown}; known: {sorted(experiment)}")
+    search = StiffnessSearch(tuple(d.strip() for d in designs.split(",") if d.strip()), kn_min, kn_max, ks_ratio, increment)
+    problems = search.problems(name=lambda field: "--" + field.replace("_", "-"))
+    if problems:
+        raise click.ClickException("\n".join(problems))
     results_dir.mkdir(parents=True, exist_ok=True)
-    click.echo(f"calibrating kn over [{kn_min:.3g}, {kn_max:.3g}] Pa/m on {', '.join(names)} (runs kept in {results_dir})")
+    click.echo(f"calibrating kn over [{kn_min:.3g}, {kn_max:.3g}] Pa/m on {', '.join(search.designs)} (runs kept in {results_dir})")
 
-    def error(kn: float) -> float:
-        specs = [RunSpec(analysis="tilt", target=d, protocol="adaptive", kn=kn, ks=ks_ratio * kn, increment_deg=increment) for d in names]
-        run_sweep(specs, results_dir, executor)
-        runs = Runs(load_records(results_dir))
-        found = {d: runs.tilt(d, kn, ks=ks_ratio * kn) for d in names}
-        missing = [d for d, run in found.items() if run is None]
-        if missing:
-            raise click.ClickException(f"kn = {kn:.4g}: the runs of {missing} failed (see {results_dir / 'runs'})")
-        # a wall that cannot stand under its own weight has no capacity: 0 deg (paper: WD4, 6, 7 at 1e7)
-        angles = {d: run["summary"]["collapse_angle_deg"] or 0.0 for d, run in found.items()}
-        value = mean_absolute_relative_error(angles, experiment)
-        click.echo(f"  kn {kn:10.4g} Pa/m   mean absolute error {value:.2%}")
-        return value
+    def evaluated(kn, error, outcome):
+        for corrupt in outcome.corrupt:
+            click.echo(f"corrupt record, run again: {corrupt}", err=True)
+        click.echo(f"  kn {kn:10.4g} Pa/m   mean absolute error {error:.2%}")
 
-    with _executor(workers, scheduler) as (executor, where):
-        click.echo(f"running on {where}")
-        result = search(error, kn_min, kn_max)
+    with _executor(workers, scheduler) as pool, _signals_interrupt() as received:
+        click.echo(f"running on {pool.where}")
+        try:
+            result = calibrate_stiffness(search, results_dir, pool.executor, in_flight=pool.slots, on_evaluation=evaluated)
+        except KeyboardInterrupt:
+            click.echo(f"\ninterrupted ({received.name}); the finished runs are recorded in {results_dir}; the same command reuses them",
+                       err=True)
+            raise SystemExit(128 + received.number) from None
+        except DrydemError as exc:
+            raise click.ClickException(str(exc)) from None
     click.echo(f"best kn         {result.best_kn:.4g} Pa/m (ks = {ks_ratio:g} kn): mean absolute error {result.best_error:.2%}")
 
 
@@ -432,10 +526,12 @@ def list_designs() -> None:
 @click.option("--strict", is_flag=True, help="Fail if a wall breaks the competition brief.")
 @unit_option
 def show(target: str, out: Path | None, strict: bool, unit: str) -> None:
-    """Draw TARGET as built (bricks, half bricks, headers, lintel, voids, the monitored block) to a PNG."""
+    """Draw TARGET as built (bricks, half bricks, headers, lintel, voids, the monitored block) to
+    a PNG (or another format matplotlib writes, by the suffix), written whole or not at all."""
     from drydem.analysis.tilt import monitored_block
     from drydem.brief import brief_violations
-    from drydem.report.plots import layout_figure
+    from drydem.io.output import replaced_atomically, writable
+    from drydem.report.plots import figure_path, layout_figure
 
     found = _target(target, unit)
     model, wall = found.model, found.wall
@@ -444,7 +540,11 @@ def show(target: str, out: Path | None, strict: bool, unit: str) -> None:
     title = found.name if wall is None else f"{wall.name} {wall.title}: {wall.layout.void_ratio:.1%} voids"
     kinds = wall.layout.kinds() if wall is not None else None
     voids = wall.layout.void_outlines(wall.brick) if wall is not None else []
-    layout_figure(model, out, kinds=kinds, voids=voids, monitored=monitored, title=title)
+    try:
+        with replaced_atomically(writable(figure_path(out))) as partial:
+            layout_figure(model, partial, kinds=kinds, voids=voids, monitored=monitored, title=title)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
     click.echo(f"{found.name}: {model.n_blocks} blocks, monitored block {monitored} -> {out}")
     if wall is not None:
         violations = brief_violations(wall)
@@ -458,15 +558,26 @@ def show(target: str, out: Path | None, strict: bool, unit: str) -> None:
 @click.argument("output", type=click.Path(dir_okay=False, path_type=Path))
 @unit_option
 def export(target: str, output: Path, unit: str) -> None:
-    """Write TARGET's blocks to OUTPUT: a model file (.toml), ParaView (.vtu) or a mesh (.obj, .stl)."""
+    """Write TARGET's blocks to OUTPUT: a model file (.toml), ParaView (.vtu) or a mesh (.obj,
+    .stl: block names, shapes and fixed blocks; not the material, joint, contacts, supports or
+    solver, which only a .toml keeps). OUTPUT is written whole or not at all."""
     from drydem.io.mesh import write_mesh
     from drydem.io.model_file import save_model
+    from drydem.io.output import replaced_atomically, writable
     from drydem.io.vtk import write_vtu
 
     writers = {".toml": save_model, ".vtu": write_vtu, ".obj": write_mesh, ".stl": write_mesh}
     writer = writers.get(output.suffix.lower())
     if writer is None:
         raise click.ClickException(f"{output}: unknown output type {output.suffix!r}; drydem writes {', '.join(writers)}")
-    found = _target(target, unit)
-    writer(found.model, output)
+    try:
+        writable(output)
+        found = _target(target, unit)
+        with replaced_atomically(output) as partial:
+            writer(found.model, partial)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
     click.echo(f"{found.name}: {found.model.n_blocks} blocks -> {output}")
+    if writer is write_mesh:
+        click.echo(f"note: {output} keeps the block names, shapes and fixed blocks, not the material, joint, contacts, "
+                   "supports or solver settings (export to .toml for those)", err=True)

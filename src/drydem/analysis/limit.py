@@ -33,6 +33,7 @@ return wrong optima on badly scaled input; bricks weigh ~0.03 N).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -118,19 +119,31 @@ class _Problem:
     source: str  # the model's, for messages
 
 
-def limit_analysis(model: Model, settings: LimitSettings = LimitSettings()) -> LimitResult:
-    """LA-A (and LA-NA with ``settings.non_associative``) of ``model`` (see module docstring)."""
-    problem = _assemble(model)
+def limit_analysis(model: Model, settings: LimitSettings = LimitSettings(), *,
+                   on_progress: Callable[[str], None] | None = None) -> LimitResult:
+    """LA-A (and LA-NA with ``settings.non_associative``) of ``model`` (see module docstring).
+
+    ``on_progress(stage)`` is called as each stage starts (finding the contacts, assembling the
+    equilibrium matrix, each LP solved by HiGHS: the associative one, then each non-associative
+    iteration with the last lambda), with a line that says it and its size, so that a command
+    can show where it is: on a large wall nearly all the time is in the LP (a 60 x 60 brick
+    wall, 3631 blocks: contacts 0.1 s, assembly 0.6 s, the associative LP 15 min)."""
+    progress = on_progress or (lambda stage: None)
+    problem = _assemble(model, progress)
     joint, weight = model.joint, problem.weight
     friction = joint.friction
     cohesion = joint.cohesion * problem.area / weight
     tension = joint.tension * problem.area / weight
+    rows, columns = problem.equilibrium.shape
+    progress(f"solving the associative LP with HiGHS ({rows} equilibrium rows, {columns} contact forces)")
     lam, forces, duals, status = _solve(problem, friction=friction, cohesion=cohesion, tension=tension, capacity=None)
     history, converged, iterations = [lam], True, 1
     if settings.non_associative:
         converged = False
         normal = forces[: problem.n_points]
         for iterations in range(2, settings.max_iterations + 2):
+            progress(f"non-associative iteration {iterations - 1} of at most {settings.max_iterations}: "
+                     f"solving the LP with HiGHS (lambda {lam:.4f} so far)")
             capacity = cohesion + friction * np.maximum(normal, 0.0)
             lam_new, forces_new, duals_new, status = _solve(problem, friction=0.0, cohesion=cohesion, tension=tension, capacity=capacity)
             history.append(lam_new)
@@ -148,17 +161,19 @@ def limit_analysis(model: Model, settings: LimitSettings = LimitSettings()) -> L
     )
 
 
-def _assemble(model: Model) -> _Problem:
+def _assemble(model: Model, progress: Callable[[str], None]) -> _Problem:
     """Contact points at the contact polygons' corners, and the equilibrium rows of the free dofs."""
     movable = model.block_movable
     if not movable.any():
         raise LimitAnalysisError(f"{model.source}: no movable block to analyse")
+    progress(f"finding the contacts of {model.n_blocks} blocks")
     corners = model.replace(contacts=ContactSettings(points_per_length=2, points_across=model.contacts.points_across,
                                                      tolerance=model.contacts.tolerance))
     sim = Simulation(corners)
     sub = sim.contacts
     if sub.count == 0:
         raise LimitAnalysisError(f"{model.source}: no contacts: the blocks do not touch")
+    progress(f"assembling the equilibrium matrix ({sub.count} contact points)")
     rotation = np.repeat(np.eye(3)[None], model.n_blocks, axis=0)
     point, _, normal = contacts.world_points(sub, sim.state.position, rotation)
     # in-plane models (the paper's walls, Model.in_plane): every contact normal lies in the x-z

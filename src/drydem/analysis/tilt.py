@@ -365,16 +365,16 @@ class _Run:
                 return MAX_CYCLES, done
 
     def _dropped(self) -> np.ndarray:
-        """(nb,) bool: the block's rigid-body drop exceeds its lost-drop: its centroid is lower
-        than where it was drawn by more than that plus the settlement the joints' elastic
-        closure explains (:mod:`drydem.support`; looked for only when some block has dropped
-        that far at all)."""
+        """(nb,) bool: the block, still in the analysis, has a rigid-body drop beyond its
+        lost-drop: its centroid is lower than where it was drawn by more than that plus the
+        settlement the joints' elastic closure explains (:mod:`drydem.support`; looked for only
+        when some such block has dropped that far at all)."""
         position = self.sim.state.position
         drop = self.model.block_centroid[:, 2] - position[:, 2]
-        if not np.any(drop > self.lost_drop):
+        if not np.any((drop > self.lost_drop) & self.sim.active):
             return np.zeros(self.model.n_blocks, dtype=bool)
         paths = load_paths(self.sim.contacts, position, matrices(self.sim.state.quaternion))
-        return drop - elastic_settlement(*paths, position[:, 2]) > self.lost_drop
+        return (drop - elastic_settlement(*paths, position[:, 2]) > self.lost_drop) & self.sim.active
 
     def _fallen(self, dropped: np.ndarray) -> np.ndarray:
         """Blocks still in the analysis (but the monitored one) that ``dropped`` out of the model."""

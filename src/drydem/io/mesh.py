@@ -1,13 +1,30 @@
-"""Blocks from surface meshes (OBJ, STL via meshio) and blocks to them.
+"""Blocks from surface meshes (OBJ, STL) and blocks to them.
 
-Each closed surface of the mesh (its faces one after another in the file) becomes a block: every edge must be shared by
-exactly two faces (an open mesh names its free edge), no vertex may lie inside the hull of the
-others (drydem.geometry.convex_hull names it), and the surface must enclose its convex hull's
-volume (this catches reflex vertices that lie on a hull face, such as an L-shaped prism's).
+A block is a closed surface: every edge shared by exactly two faces (an open mesh names its
+free edge), no vertex inside the hull of the others (drydem.geometry.convex_hull names it),
+and enclosing its convex hull's volume (this catches reflex vertices that lie on a hull
+face, such as an L-shaped prism's).
+
+Names and fixed blocks, so that a round trip keeps them (:func:`write_mesh` writes them so):
+
+* OBJ: each object (``o NAME``; in a file without objects, each group ``g NAME``) is a block
+  of that name; a block is fixed when its faces use the material ``fixed`` (``usemtl fixed``:
+  Blender, Rhino and MeshLab keep object names and materials).
+* ASCII STL: each solid (``solid NAME`` ... ``endsolid``) is a block of that name; a solid
+  named ``NAME [fixed]`` is the fixed block NAME.
+* Binary STL, and faces the file does not name: the file cannot say, so the blocks are the
+  runs of faces that close a surface, in file order (mesh writers write each solid's faces one
+  after another), named ``part0``, ``part1``, ...; :func:`read_mesh` returns a note saying so.
+
+The readers are drydem's own, not meshio's: meshio's OBJ reader drops objects, groups and
+materials, and its ASCII STL reader drops solid names and skips lines unchecked; both formats
+are a handful of statements. Every error names the file and the line (or binary triangle).
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -20,37 +37,82 @@ from drydem.model import Block, Model
 MERGE_FRACTION = 1e-9
 #: a surface enclosing less than (1 - this) of its convex hull's volume is not convex
 CONVEX_VOLUME_TOLERANCE = 1e-6
+#: the OBJ material of fixed blocks, and the one written for the others
+FIXED_MATERIAL, MOVABLE_MATERIAL = "fixed", "block"
+#: the end of an STL solid's name that marks it fixed
+FIXED_SOLID = " [fixed]"
+#: binary STL: an 80-byte header, the triangle count, then 50 bytes per triangle
+STL_TRIANGLE = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
 
 
-def read_mesh(path: str | Path, *, unit_m: float = 1.0) -> list[Block]:
-    """The blocks of an OBJ or STL file (one per closed surface, its faces written one after
-    another, named ``part{k}`` in file order), coordinates times ``unit_m``."""
-    import meshio
+@dataclass
+class _Solid:
+    """Faces read as one named block, or as blocks to tell apart (name None: the file gives
+    none): the faces (indices into the file's points), where each is in the file (line or
+    triangle) and whether each is marked fixed."""
 
+    name: str | None
+    faces: list[list[int]] = field(default_factory=list)
+    origins: list[str] = field(default_factory=list)
+    fixed: list[bool] = field(default_factory=list)
+
+    def add(self, face: list[int], origin: str, fixed: bool) -> None:
+        self.faces.append(face)
+        self.origins.append(origin)
+        self.fixed.append(fixed)
+
+    def run_name(self, k: int, first: int) -> str:
+        """The name of the k-th closed run of faces: the solid's (then NAME-2, NAME-3, ...), or
+        ``part{first + k}`` for unnamed faces."""
+        if self.name is None:
+            return f"part{first + k}"
+        return self.name if k == 0 else f"{self.name}-{k + 1}"
+
+
+def read_mesh(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], list[str]]:
+    """The blocks of an OBJ or STL file (coordinates times ``unit_m``, m) and notes on what the
+    file does not say (block names). See the module docstring for names and fixed blocks."""
     path = Path(path)
     try:
-        with np.errstate(over="ignore"):  # meshio's binary-STL sniffing overflows a uint32 on ASCII files
-            mesh = meshio.read(path)
-    except Exception as exc:  # meshio raises many types (ReadError, ValueError, ...) for bad files
-        raise ModelError(f"{path}: cannot read the mesh: {exc}") from None
-    faces = [list(face) for cells in mesh.cells if cells.type in ("triangle", "quad", "polygon") for face in cells.data]
-    if not faces:
-        raise ModelError(f"{path}: no faces (triangles or polygons) in the mesh")
-    points, faces = _merged(np.asarray(mesh.points, dtype=float) * unit_m, faces)
-    return [closed_convex_block(points, part, name=f"part{k}", where=f"{path}: part {k}")
-            for k, part in enumerate(_closed_runs(faces, path))]
+        data = path.read_bytes()
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    reader = _read_obj if path.suffix.lower() == ".obj" else _read_stl
+    points, solids = reader(path, data)
+    if not any(s.faces for s in solids):
+        raise ModelError(f"{path}: no faces: the file holds no block")
+    points, merged = _merged(np.asarray(points, dtype=float) * unit_m, [face for s in solids for face in s.faces])
+    blocks, start, unnamed = [], 0, 0
+    for solid in solids:
+        faces, start = merged[start:start + len(solid.faces)], start + len(solid.faces)
+        runs = _closed_runs(faces, solid.origins, lambda k, solid=solid, first=unnamed: f"{path}: {solid.run_name(k, first)!r}")
+        for k, (a, b) in enumerate(runs):
+            name, fixed = solid.run_name(k, unnamed), solid.fixed[a:b]
+            where = f"{path}: {name!r}"
+            if any(fixed) and not all(fixed):
+                raise ModelError(f"{where}: {sum(fixed)} of its {b - a} faces are marked fixed (from {solid.origins[a + fixed.index(True)]}), "
+                                 f"the others not; a fixed block has all its faces in the material {FIXED_MATERIAL!r}")
+            blocks.append(Block(name=name, shape=_convex_shape(points, faces[a:b], where=where), fixed=all(fixed)))
+        unnamed += len(runs) if solid.name is None else 0
+    notes = []
+    if unnamed:
+        what = "a binary STL names no block" if _is_binary_stl(path, data) else "some faces are in no named object or solid"
+        notes.append(f"{path}: {what}: {unnamed} block(s) are named part0, part1, ... in file order")
+    return blocks, notes
 
 
 def write_mesh(model: Model, path: str | Path) -> None:
-    """Every block's faces as triangles, in one OBJ or STL file (by the suffix)."""
-    import meshio
-
-    points, triangles = [], []
-    for shape in model.block_shape:
-        offset = sum(len(p) for p in points)
-        points.append(shape.vertices)
-        triangles += [[offset + f[0], offset + f[i], offset + f[i + 1]] for f in shape.faces for i in range(1, len(f) - 1)]
-    meshio.write(path, meshio.Mesh(np.vstack(points), [("triangle", np.array(triangles))]))
+    """Every block as a named solid in one OBJ (its faces as polygons) or ASCII STL file (as
+    triangles), by the suffix; fixed blocks marked as the module docstring says. Coordinates
+    are written to full double precision, so the blocks read back as they were."""
+    path = Path(path)
+    fixed = model.block_fixed.all(axis=1)
+    for name in model.block_name:
+        if name != name.strip() or len(name.splitlines()) != 1 or name.endswith(FIXED_SOLID):
+            raise ModelError(f"{model.source}: block {name!r}: a mesh file cannot keep this name (empty, surrounding "
+                             f"blanks, a line break, or ending in {FIXED_SOLID.strip()!r}); rename the block")
+    writer = _obj_text if path.suffix.lower() == ".obj" else _stl_text
+    path.write_text(writer(model, fixed))
 
 
 def closed_convex_block(points: np.ndarray, faces: list[list[int]], *, name: str, where: str) -> Block:
@@ -66,13 +128,18 @@ def closed_convex_block(points: np.ndarray, faces: list[list[int]], *, name: str
         (a, b), n = bad[0]
         raise ModelError(f"{where}: the surface is not closed: the edge {points[a].tolist()} - {points[b].tolist()} "
                          f"belongs to {n} face(s), not 2 ({len(bad)} such edges)")
+    return Block(name=name, shape=_convex_shape(points, faces, where=where))
+
+
+def _convex_shape(points: np.ndarray, faces: list[list[int]], *, where: str):
+    """The convex polyhedron of a closed surface, which must enclose its hull's volume."""
     used = sorted({i for face in faces for i in face})
     shape = convex_hull(points[used], name=where)
     enclosed = enclosed_volume(points, faces)
     if enclosed < (1 - CONVEX_VOLUME_TOLERANCE) * shape.volume:
         raise ModelError(f"{where}: the surface is not convex: it encloses {enclosed:.6g} m3, its convex hull "
                          f"{shape.volume:.6g} m3 (split it into convex blocks)")
-    return Block(name=name, shape=shape)
+    return shape
 
 
 def enclosed_volume(points: np.ndarray, faces: list[list[int]]) -> float:
@@ -86,6 +153,165 @@ def enclosed_volume(points: np.ndarray, faces: list[list[int]]) -> float:
     return abs(total) / 6.0
 
 
+def _read_obj(path: Path, data: bytes) -> tuple[list[list[float]], list[_Solid]]:
+    """Vertices and solids of an OBJ file: ``v``, ``f`` (``i``, ``i/t``, ``i/t/n``, ``i//n``;
+    negative indices count back from the last vertex), ``o``, ``g``, ``usemtl``; the other
+    statements (normals, texture coordinates, smoothing, lines) do not shape blocks."""
+    points: list[list[float]] = []
+    faces = []  # (line, object, group, material, vertex indices)
+    obj = group = material = None
+    for number, line in enumerate(_text(path, data).splitlines(), start=1):
+        words = line.split()
+        if not words or words[0].startswith("#"):
+            continue
+        key, rest = words[0], line.strip()[len(words[0]):].strip() or None
+        if key == "v":
+            points.append(_coordinates(words[1:4], f"{path}: line {number}: vertex {len(points) + 1}"))
+        elif key == "f":
+            faces.append((number, obj, group, material, _face(words[1:], len(points), f"{path}: line {number}")))
+        elif key == "o":
+            obj = rest
+        elif key == "g":
+            group = rest
+        elif key == "usemtl":
+            material = rest
+    for number, *_, face in faces:
+        if max(face) >= len(points):
+            raise ModelError(f"{path}: line {number}: the face refers to vertex {max(face) + 1}; the file has {len(points)}")
+    by_object = any(obj is not None for _, obj, *_ in faces)
+    solids: dict[str | None, _Solid] = {}  # a name seen again adds faces to its solid, as OBJ groups do
+    for number, obj, group, material, face in faces:
+        name = obj if by_object else group
+        solids.setdefault(name, _Solid(name)).add(face, f"line {number}", (material or "").lower() == FIXED_MATERIAL)
+    return points, list(solids.values())
+
+
+def _face(words: list[str], count: int, where: str) -> list[int]:
+    """0-based vertex indices of an OBJ face (its vertex references, ``count`` vertices read so far)."""
+    if len(words) < 3:
+        raise ModelError(f"{where}: a face needs at least 3 vertices, this one has {len(words)}")
+    indices = []
+    for word in words:
+        try:
+            index = int(word.split("/")[0])
+        except ValueError:
+            raise ModelError(f"{where}: {word!r} is not a vertex number") from None
+        if index == 0 or index < -count:
+            raise ModelError(f"{where}: the face refers to vertex {index}, which does not exist "
+                             f"({count} vertices so far; numbers start at 1, negative ones count back)")
+        indices.append(index - 1 if index > 0 else count + index)
+    return indices
+
+
+def _read_stl(path: Path, data: bytes) -> tuple[list[list[float]], list[_Solid]]:
+    """Vertices and solids of a binary or ASCII STL file, told apart by the size: a binary file
+    is 84 + 50 n bytes for the n triangles its header counts (some start with "solid" too)."""
+    if _is_binary_stl(path, data):
+        triangles = np.frombuffer(data, dtype=STL_TRIANGLE, offset=84)["vertices"].astype(float)
+        bad = np.flatnonzero(~np.isfinite(triangles).all(axis=(1, 2)))
+        if len(bad):
+            raise ModelError(f"{path}: binary triangle {bad[0]}: a vertex is not a finite number ({len(bad)} such triangles)")
+        solid = _Solid(None, faces=np.arange(3 * len(triangles)).reshape(-1, 3).tolist(),
+                       origins=[f"triangle {k}" for k in range(len(triangles))], fixed=[False] * len(triangles))
+        return triangles.reshape(-1, 3).tolist(), [solid]
+    if not data.lstrip().startswith(b"solid"):
+        count = int.from_bytes(data[80:84], "little") if len(data) >= 84 else 0
+        raise ModelError(f"{path}: not an STL file: it does not start with 'solid' (ASCII), and its {len(data)} bytes are not "
+                         f"84 + 50 x {count} (binary, {count} triangles by its header)")
+    return _read_ascii_stl(path, _text(path, data))
+
+
+def _is_binary_stl(path: Path, data: bytes) -> bool:
+    return path.suffix.lower() == ".stl" and len(data) >= 84 and len(data) == 84 + 50 * int.from_bytes(data[80:84], "little")
+
+
+def _read_ascii_stl(path: Path, text: str) -> tuple[list[list[float]], list[_Solid]]:
+    """``solid NAME``, then facets (``facet normal``, ``outer loop``, ``vertex x y z`` ...,
+    ``endloop``, ``endfacet``), ``endsolid``; one or more solids. The normals are not used
+    (drydem orients faces itself); each statement is checked in its place."""
+    points: list[list[float]] = []
+    solids: list[_Solid] = []
+    solid = facet = None
+    number = 0
+    for number, line in enumerate(text.splitlines(), start=1):
+        words = line.split()
+        if not words:
+            continue
+        where, key = f"{path}: line {number}", words[0].lower()
+        expected = {"solid": solid is None, "facet": solid is not None and facet is None, "outer": facet is not None,
+                    "vertex": facet is not None, "endloop": facet is not None, "endfacet": facet is not None,
+                    "endsolid": solid is not None and facet is None}
+        if key not in expected:
+            raise ModelError(f"{where}: {words[0]!r} is not an ASCII STL statement")
+        if not expected[key]:
+            place = "inside a facet" if facet is not None else "inside a solid" if solid is not None else "outside any solid"
+            raise ModelError(f"{where}: {words[0]!r} is out of place ({place})")
+        if key == "solid":
+            name = line.strip()[len(words[0]):].strip() or None
+            fixed = name is not None and name.endswith(FIXED_SOLID)
+            solid = _Solid(name[: -len(FIXED_SOLID)] if fixed else name)
+            solids.append(solid)
+        elif key == "facet":
+            facet, start = [], number
+        elif key == "vertex":
+            facet.append(len(points))
+            points.append(_coordinates(words[1:], f"{where}: vertex"))
+        elif key == "endfacet":
+            if len(facet) < 3:
+                raise ModelError(f"{where}: the facet has {len(facet)} vertices; it needs at least 3")
+            solid.add(facet, f"line {start}", fixed)
+            facet = None
+        elif key == "endsolid":
+            solid = None
+    if solid is not None:
+        raise ModelError(f"{path}: line {number}: the file ends inside the solid {solid.name!r} (no endsolid): is it cut short?")
+    return points, solids
+
+
+def _coordinates(words: list[str], where: str) -> list[float]:
+    """x, y, z: three finite numbers (an OBJ vertex may add w or a colour, which are not used)."""
+    try:
+        xyz = [float(w) for w in words[:3]]
+    except ValueError:
+        raise ModelError(f"{where}: {' '.join(words)!r}: the coordinates must be numbers") from None
+    if len(xyz) < 3 or not all(map(math.isfinite, xyz)):
+        raise ModelError(f"{where}: {' '.join(words)!r}: a vertex needs three finite numbers x y z")
+    return xyz
+
+
+def _text(path: Path, data: bytes) -> str:
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ModelError(f"{path}: not a text file (byte {exc.start} is not UTF-8)") from None
+
+
+def _obj_text(model: Model, fixed: np.ndarray) -> str:
+    lines = [f"# {model.n_blocks} blocks of {model.source}, written by drydem: one object per block; "
+             f"fixed blocks use the material {FIXED_MATERIAL!r}"]
+    offset = 1
+    for name, shape, is_fixed in zip(model.block_name, model.block_shape, fixed):
+        lines += [f"o {name}", f"usemtl {FIXED_MATERIAL if is_fixed else MOVABLE_MATERIAL}"]
+        lines += [f"v {x!r} {y!r} {z!r}" for x, y, z in shape.vertices.tolist()]
+        lines += ["f " + " ".join(str(offset + i) for i in face) for face in shape.faces]
+        offset += len(shape.vertices)
+    return "\n".join(lines) + "\n"
+
+
+def _stl_text(model: Model, fixed: np.ndarray) -> str:
+    lines = []
+    for name, shape, is_fixed in zip(model.block_name, model.block_shape, fixed):
+        solid = name + FIXED_SOLID if is_fixed else name
+        lines.append(f"solid {solid}")
+        for face, (nx, ny, nz) in zip(shape.faces, shape.face_normals.tolist()):
+            for i in range(1, len(face) - 1):
+                lines += [f"facet normal {nx!r} {ny!r} {nz!r}", "outer loop"]
+                lines += [f"vertex {x!r} {y!r} {z!r}" for x, y, z in shape.vertices[[face[0], face[i], face[i + 1]]].tolist()]
+                lines += ["endloop", "endfacet"]
+        lines.append(f"endsolid {solid}")
+    return "\n".join(lines) + "\n"
+
+
 def _merged(points: np.ndarray, faces: list[list[int]]) -> tuple[np.ndarray, list[list[int]]]:
     """Coincident vertices made one (STL repeats every vertex in each triangle)."""
     size = float(np.ptp(points, axis=0).max()) or 1.0
@@ -95,25 +321,26 @@ def _merged(points: np.ndarray, faces: list[list[int]]) -> tuple[np.ndarray, lis
     return points[first], [[int(inverse[i]) for i in face] for face in faces]
 
 
-def _closed_runs(faces: list[list[int]], source: Path) -> list[list[list[int]]]:
+def _closed_runs(faces: list[list[int]], origins: list[str], where) -> list[tuple[int, int]]:
     """The faces split into runs that each close a surface, in file order.
 
     Touching blocks share vertices and edges, so the surfaces cannot be told apart by
     connectivity; but mesh writers (Rhino, CAD exports, :func:`write_mesh`) write each solid's
     faces one after another. A run ends as soon as each of its edges is in exactly two faces.
+    Returns each run as (first, end) face positions. ``where(k)`` names the k-th run in
+    errors; ``origins`` says where each face is in the file.
     """
-    runs, run, edges, unpaired = [], [], {}, 0
-    for face in faces:
-        run.append(face)
+    runs, start, edges, unpaired = [], 0, {}, 0
+    for end, face in enumerate(faces, start=1):
         for a, b in zip(face, face[1:] + face[:1]):
             key = (min(a, b), max(a, b))
             count = edges.get(key, 0) + 1
             edges[key] = count
             unpaired += {1: 1, 2: -1, 3: 1}.get(count, 0)  # edges in other than two faces
         if unpaired == 0:
-            runs.append(run)
-            run, edges = [], {}
-    if run:
-        raise ModelError(f"{source}: part {len(runs)} (from face {len(faces) - len(run)}) is not a closed surface: "
+            runs.append((start, end))
+            start, edges = end, {}
+    if start < len(faces):
+        raise ModelError(f"{where(len(runs))} (from {origins[start]}) is not a closed surface: "
                          f"{unpaired} edge(s) are not in exactly two faces")
     return runs

@@ -17,12 +17,14 @@ MESH_SUFFIXES = {".wrl": "VRML", ".vrml": "VRML", ".obj": "OBJ", ".stl": "STL"}
 
 @dataclass(frozen=True)
 class Target:
-    """A resolved target: its name (for titles and folders), file, model and, for walls, the wall."""
+    """A resolved target: its name (for titles and folders), file, model and, for walls, the
+    wall; notes: what an imported file could not say and was assumed (the commands print them)."""
 
     name: str
     path: Path
     model: Model
     wall: Wall | None = None
+    notes: tuple[str, ...] = ()
 
 
 def load_target(target: str, *, unit_m: float = 1.0) -> Target:
@@ -34,11 +36,13 @@ def load_target(target: str, *, unit_m: float = 1.0) -> Target:
     if not path.is_file():
         builtin = designs.find(target)
         if builtin is None:
-            raise ModelError(f"{target}: no such file, and not a built-in wall ({', '.join(designs.names())})")
+            what = "a folder, not a file" if path.is_dir() else "no such file"
+            raise ModelError(f"{target}: {what}, and not a built-in wall ({', '.join(designs.names())})")
         path = builtin
     suffix = path.suffix.lower()
     if suffix in MESH_SUFFIXES:
-        return Target(path.stem, path, imported_model(path, unit_m=unit_m))
+        model, notes = imported_model(path, unit_m=unit_m)
+        return Target(path.stem, path, model, notes=tuple(notes))
     if suffix != ".toml":
         known = ", ".join([".toml", *MESH_SUFFIXES])
         raise ModelError(f"{path}: unknown file type {path.suffix!r}; drydem reads {known}")
@@ -49,13 +53,19 @@ def load_target(target: str, *, unit_m: float = 1.0) -> Target:
     return Target(path.stem, path, model_from_dict(data, source=str(path)))
 
 
-def imported_model(path: Path, *, unit_m: float = 1.0) -> Model:
-    """The blocks of a VRML, OBJ or STL file on a fixed base block, density 1800 kg/m3, the
-    default joint and options, no other supports (``drydem export`` writes it as a model file
-    to edit)."""
+def imported_model(path: Path, *, unit_m: float = 1.0) -> tuple[Model, list[str]]:
+    """The blocks of a VRML, OBJ or STL file, density 1800 kg/m3, the default joint and
+    options, no supports (``drydem export`` writes it as a model file to edit), and notes on
+    what was assumed. Blocks the file marks fixed (drydem.io.mesh) are the supports; a file
+    with none gets a fixed base block under its blocks (drydem.model.base_under), and a note."""
     from drydem.io.mesh import read_mesh
     from drydem.io.vrml import read_vrml
 
-    reader = read_vrml if MESH_SUFFIXES[path.suffix.lower()] == "VRML" else read_mesh
-    blocks = reader(path, unit_m=unit_m)
-    return build_model([base_under(blocks), *blocks], density=1800.0, source=str(path))
+    if MESH_SUFFIXES[path.suffix.lower()] == "VRML":
+        blocks, notes = read_vrml(path, unit_m=unit_m), []
+    else:
+        blocks, notes = read_mesh(path, unit_m=unit_m)
+    if not any(b.fixed for b in blocks):
+        blocks = [base_under(blocks), *blocks]
+        notes.append(f"{path}: no block is marked fixed: the blocks stand on an added fixed block 'base'")
+    return build_model(blocks, density=1800.0, source=str(path)), notes

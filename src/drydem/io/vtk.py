@@ -15,7 +15,6 @@ c A + mu N), ``gap`` (m, negative when closed) and the two blocks.
 from __future__ import annotations
 
 import csv
-import os
 from itertools import groupby
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
@@ -25,6 +24,7 @@ from scipy.spatial.transform import Rotation
 
 from drydem import contacts as contact_geometry
 from drydem.contacts import SubContacts
+from drydem.io.output import replaced_atomically
 from drydem.model import Model
 from drydem.rotation import matrices
 from drydem.state import State
@@ -107,21 +107,15 @@ class VtkSeries:
         write_contacts_vtu(self.model, self.folder / f"contacts_{k:04d}.vtu", frame.state, frame.contacts)
         self.rows.append((k, frame.kind, frame.tilt_deg, frame.ux_m))
         for series in ("blocks", "contacts"):
-            _atomic_write(self.folder / f"{series}.pvd", _pvd([f"{series}_{i:04d}.vtu" for i, *_ in self.rows]))
-        with (self.folder / "frames.csv.tmp").open("w", newline="") as f:
+            with replaced_atomically(self.folder / f"{series}.pvd") as partial:
+                partial.write_text(_pvd([f"{series}_{i:04d}.vtu" for i, *_ in self.rows]))
+        with replaced_atomically(self.folder / "frames.csv") as partial, partial.open("w", newline="") as f:
             writer = csv.writer(f)
             writer.writerow(("frame", "kind", "tilt_deg", "ux_m"))
             writer.writerows((i, kind, f"{tilt:.6f}", f"{ux:.8g}") for i, kind, tilt, ux in self.rows)
-        os.replace(self.folder / "frames.csv.tmp", self.folder / "frames.csv")
 
 
 def _pvd(files: list[str]) -> str:
     """A ParaView collection: one DataSet per file, time = its position."""
     entries = "\n".join(f'    <DataSet timestep="{t}" part="0" file={quoteattr(name)}/>' for t, name in enumerate(files))
     return f'<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n{entries}\n  </Collection>\n</VTKFile>\n'
-
-
-def _atomic_write(path: Path, text: str) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)

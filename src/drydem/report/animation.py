@@ -4,7 +4,8 @@ and the monitored displacement on every frame, the states past collapse at the e
 
 Frames are drawn by the renderer of ``mechanism.png`` (drydem.report.plots.draw_displacements),
 so pictures and videos agree. MP4 through imageio-ffmpeg (the ffmpeg binary ships in that
-package); GIF (Pillow) when MP4 cannot be written or is not asked for.
+package); GIF (Pillow) when MP4 cannot be written or is not asked for. The video file is
+checked before any frame is drawn, and written whole or not at all (drydem.io.output).
 """
 
 from __future__ import annotations
@@ -16,10 +17,13 @@ from pathlib import Path
 import numpy as np
 
 from drydem.errors import DrydemError
+from drydem.io.output import replaced_atomically, writable
 from drydem.report.plots import pyplot, draw_displacements, xz_outline
 
 #: frame size: 1280 x 720 pixels (a multiple of 16, as H.264 wants)
 FIGURE_IN, DPI = (8.0, 4.5), 160
+#: the video formats written, by suffix
+VIDEO_SUFFIXES = (".mp4", ".gif")
 
 
 @dataclass(frozen=True)
@@ -45,13 +49,20 @@ def series_frames(folder: Path) -> list[VideoFrame]:
     if not rows:
         raise DrydemError(f"{index}: no frames")
     frames = []
-    for row in rows:
-        mesh = meshio.read(folder / f"blocks_{int(row['frame']):04d}.vtu")
-        active = np.concatenate(mesh.cell_data["active"]).astype(bool)
-        magnitude = np.concatenate(mesh.cell_data["displacement_magnitude"]) * 1e3
+    for line, row in enumerate(rows, start=2):
+        try:
+            file = folder / f"blocks_{int(row['frame']):04d}.vtu"
+            caption = f"{row['kind']}: tilt {float(row['tilt_deg']):.2f} deg, monitored ux {float(row['ux_m']) * 1e3:.2f} mm"
+        except (KeyError, TypeError, ValueError) as exc:
+            raise DrydemError(f"{index}: line {line}: not a frame of drydem tilt --vtk ({exc!r})") from None
+        try:
+            mesh = meshio.read(file)
+            active = np.concatenate(mesh.cell_data["active"]).astype(bool)
+            magnitude = np.concatenate(mesh.cell_data["displacement_magnitude"]) * 1e3
+        except Exception as exc:  # meshio raises many types (ReadError, ...); a foreign file lacks the fields (KeyError)
+            raise DrydemError(f"{file}: cannot read the frame: {exc!r}") from None
         cells = [cell for block in mesh.cells for cell in block.data]
         outlines = [xz_outline(mesh.points[np.unique(np.concatenate(faces))]) for faces, on in zip(cells, active) if on]
-        caption = f"{row['kind']}: tilt {float(row['tilt_deg']):.2f} deg, monitored ux {float(row['ux_m']) * 1e3:.2f} mm"
         frames.append(VideoFrame(outlines, magnitude[active], caption))
     return frames
 
@@ -62,6 +73,10 @@ def render_video(folder: Path, path: Path, *, fps: float = 8.0) -> Path:
     import imageio.v2 as imageio
     from matplotlib.colors import LogNorm
 
+    path = writable(path)
+    if path.suffix.lower() not in VIDEO_SUFFIXES:
+        raise DrydemError(f"{path}: cannot write {path.suffix or 'a file without suffix'!r} videos; "
+                          f"the suffix must be {' or '.join(VIDEO_SUFFIXES)}")
     frames = series_frames(folder)
     largest = max(float(f.magnitude_mm.max(initial=0.0)) for f in frames) or 1.0
     norm = LogNorm(largest * 1e-3, largest)  # equilibria (mm) and collapse (dm) on one scale
@@ -69,16 +84,16 @@ def render_video(folder: Path, path: Path, *, fps: float = 8.0) -> Path:
     low, high = points.min(axis=0), points.max(axis=0)
     margin = 0.05 * (high - low).max()
     images = [_image(frame, norm, low - margin, high + margin) for frame in frames]
-    path = Path(path)
     if path.suffix.lower() == ".mp4":
         try:
-            with imageio.get_writer(path, fps=fps, codec="libx264", macro_block_size=16) as writer:
+            with replaced_atomically(path) as partial, imageio.get_writer(partial, fps=fps, codec="libx264", macro_block_size=16) as writer:
                 for image in images:
                     writer.append_data(image)
             return path
-        except (ImportError, RuntimeError, OSError):  # no ffmpeg: fall back to a GIF
+        except (ImportError, RuntimeError, DrydemError):  # no ffmpeg, or it failed (an OSError): fall back to a GIF
             path = path.with_suffix(".gif")
-    imageio.mimsave(path, images, duration=1.0 / fps, loop=0)
+    with replaced_atomically(path) as partial:
+        imageio.mimsave(partial, images, duration=1.0 / fps, loop=0)
     return path
 
 

@@ -11,6 +11,7 @@ import numpy as np
 
 from drydem.analysis.drift import EC8_DRIFT_LIMITS
 from drydem.analysis.tilt import TiltResult
+from drydem.errors import DrydemError
 from drydem.model import Model
 from drydem.state import State
 
@@ -22,6 +23,19 @@ def pyplot():
     import matplotlib.pyplot as plt
 
     return plt
+
+
+def figure_path(path: str | Path) -> Path:
+    """``path`` if matplotlib writes the format its suffix names (.png, .pdf, .svg, ...), else
+    a DrydemError listing them: checked before drawing, as matplotlib would fail only at the end."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    path = Path(path)
+    formats = FigureCanvasBase.get_supported_filetypes()
+    if path.suffix[1:].lower() not in formats:
+        raise DrydemError(f"{path}: cannot draw a figure in the format {path.suffix or '(no suffix)'!r}; "
+                          f"the suffix must be one of {', '.join('.' + f for f in formats)}")
+    return path
 
 
 def pushover_figure(result: TiltResult, path: Path, *, title: str = "") -> Path:

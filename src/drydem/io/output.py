@@ -1,0 +1,44 @@
+"""Output files: refuse a path that cannot be written before any work, and write each file whole or not at all."""
+
+from __future__ import annotations
+
+import os
+from contextlib import contextmanager
+from pathlib import Path
+
+from drydem.errors import DrydemError
+
+
+def writable(path: str | Path) -> Path:
+    """``path`` if a file can be created there; else a DrydemError naming it and the reason (its
+    folder is missing or not a folder or not writable, or the path is a folder). Commands call it
+    before their work, so that a long analysis does not end on a path it cannot write."""
+    path = Path(path)
+    folder = path.parent
+    if path.is_dir():
+        raise DrydemError(f"{path}: is a folder; give a file name")
+    if not folder.exists():
+        raise DrydemError(f"{path}: the folder {folder} does not exist")
+    if not folder.is_dir():
+        raise DrydemError(f"{path}: {folder} is not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise DrydemError(f"{path}: no permission to write in {folder}")
+    return path
+
+
+@contextmanager
+def replaced_atomically(path: str | Path):
+    """Yield a temporary file name beside ``path`` (same suffix: writers that go by it still
+    work) to write to. When the block ends normally the file replaces ``path`` in one step
+    (os.replace); when it raises, the file is removed. So ``path`` is never half-written: it
+    is the old file or the whole new one. An OSError is re-raised as a DrydemError naming
+    ``path`` and the reason."""
+    path = Path(path)
+    temporary = path.with_name(f".{path.stem}.partial{path.suffix}")
+    try:
+        yield temporary
+        os.replace(temporary, path)
+    except OSError as exc:
+        raise DrydemError(f"{path}: cannot write: {exc.strerror or exc}") from None
+    finally:
+        temporary.unlink(missing_ok=True)

@@ -1,0 +1,152 @@
+"""Off the happy path in and out: every bad file, path or format is refused with a message that
+names it and the rule, a non-zero exit and no traceback; a failed write leaves nothing behind."""
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import drydem as dd
+from drydem.cli import main
+from drydem.io.mesh import STL_TRIANGLE
+from drydem.io.model_file import save_model
+
+#: a unit cube as OBJ statements, lines 1-14 (8 vertices, 6 faces)
+CUBE = ("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+        "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n")
+
+
+def fails(args: list[str], *messages: str):
+    """Run drydem with ``args``: it must exit non-zero through click (SystemExit, no traceback)
+    and say each of ``messages``."""
+    result = CliRunner().invoke(main, [str(a) for a in args])
+    assert result.exit_code != 0 and isinstance(result.exception, SystemExit), result.output
+    assert "Traceback" not in result.output
+    for message in messages:
+        assert message in result.output
+    return result
+
+
+@pytest.mark.parametrize("name, text, message", [
+    ("nan.obj", CUBE.replace("v 1 1 0\n", "v 1 nan 0\n"), "line 3: vertex 3: '1 nan 0': a vertex needs three finite numbers x y z"),
+    ("inf.obj", CUBE.replace("v 1 1 0\n", "v 1 1 inf\n"), "line 3: vertex 3: '1 1 inf': a vertex needs three finite numbers"),
+    ("short.obj", CUBE.replace("v 1 1 0\n", "v 1 1\n"), "line 3: vertex 3: '1 1': a vertex needs three finite numbers"),
+    ("text.obj", CUBE.replace("v 1 1 0\n", "v 1 one 0\n"), "line 3: vertex 3: '1 one 0': the coordinates must be numbers"),
+    ("missing.obj", CUBE.replace("f 5 6 7 8", "f 5 6 7 9"), "line 10: the face refers to vertex 9; the file has 8"),
+    ("zero.obj", CUBE.replace("f 5 6 7 8", "f 0 6 7 8"), "line 10: the face refers to vertex 0, which does not exist"),
+    ("back.obj", CUBE.replace("f 5 6 7 8", "f -9 6 7 8"), "line 10: the face refers to vertex -9, which does not exist"),
+    ("two.obj", CUBE.replace("f 5 6 7 8", "f 5 6"), "line 10: a face needs at least 3 vertices, this one has 2"),
+    ("word.obj", CUBE.replace("f 5 6 7 8", "f 5 six 7 8"), "line 10: 'six' is not a vertex number"),
+    ("empty.obj", "", "empty.obj: no faces: the file holds no block"),
+    ("points.obj", "# only vertices\nv 0 0 0\nv 1 0 0\n", "points.obj: no faces: the file holds no block"),
+    ("open.obj", CUBE[:CUBE.rindex("f ")], "'part0' (from line 9) is not a closed surface"),
+    ("half.obj", "o stone\nusemtl fixed\n" + CUBE.replace("f 3 4 8 7", "usemtl stone\nf 3 4 8 7"),
+     "'stone': 4 of its 6 faces are marked fixed (from line 11), the others not"),
+    ("cut.stl", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n", "line 4: the file ends inside the solid 'a' (no endsolid)"),
+    ("stray.stl", "solid a\nvertex 0 0 0\n", "line 2: 'vertex' is out of place (inside a solid)"),
+    ("word.stl", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 zero\n", "line 4: vertex: '0 0 zero': the coordinates must be numbers"),
+    ("outside.stl", "solid a\nendsolid a\nfacet normal 0 0 1\n", "line 3: 'facet' is out of place (outside any solid)"),
+    ("verb.stl", "solid a\nfacets\n", "line 2: 'facets' is not an ASCII STL statement"),
+    ("edge.stl", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\nendfacet\nendsolid a\n",
+     "line 7: the facet has 2 vertices; it needs at least 3"),
+    ("empty.stl", "", "not an STL file: it does not start with 'solid' (ASCII), and its 0 bytes are not 84 + 50 x 0"),
+])
+def test_a_bad_mesh_file_is_refused_naming_the_file_and_line(tmp_path, name, text, message):
+    path = tmp_path / name
+    path.write_text(text)
+    fails(["check", path], f"{path}: ", message)
+
+
+def test_a_binary_stl_with_a_nan_names_the_triangle(tmp_path):
+    records = np.zeros(2, dtype=STL_TRIANGLE)
+    records["vertices"][1, 2, 0] = np.nan
+    path = tmp_path / "nan.stl"
+    path.write_bytes(bytes(80) + np.uint32(2).tobytes() + records.tobytes())
+    fails(["check", path], f"{path}: binary triangle 1: a vertex is not a finite number (1 such triangles)")
+
+
+def test_a_mesh_that_is_not_text_is_refused(tmp_path):
+    path = tmp_path / "photo.obj"
+    path.write_bytes(b"v 0 0 0\n\xff\xd8\xff\xe0")
+    fails(["check", path], f"{path}: not a text file (byte 8 is not UTF-8)")
+
+
+@pytest.mark.parametrize("name", ["walls", "walls.obj"])
+def test_a_folder_as_target_is_called_a_folder(tmp_path, name):
+    (tmp_path / name).mkdir()
+    fails(["check", tmp_path / name], f"{tmp_path / name}: a folder, not a file, and not a built-in wall")
+
+
+def test_obj_export_then_check_keeps_the_base_fixed_and_adds_no_second_one(tmp_path):
+    path = tmp_path / "wall.obj"
+    result = CliRunner().invoke(main, ["export", "WD3", str(path)])
+    assert result.exit_code == 0 and "not the material, joint, contacts, supports or solver settings" in result.stderr
+    result = CliRunner().invoke(main, ["check", str(path)])
+    assert result.exit_code == 0 and "blocks          171 (170 movable, 1 fixed)" in result.output
+    assert result.stderr == ""
+
+
+def test_an_unnamed_mesh_prints_what_it_assumed(tmp_path):
+    path = tmp_path / "cube.obj"
+    path.write_text(CUBE)
+    result = CliRunner().invoke(main, ["check", str(path)])
+    assert result.exit_code == 0
+    assert f"note: {path}: some faces are in no named object or solid: 1 block(s) are named part0" in result.stderr
+    assert f"note: {path}: no block is marked fixed: the blocks stand on an added fixed block 'base'" in result.stderr
+
+
+@pytest.mark.parametrize("output, message", [
+    ("nowhere/wall.obj", "nowhere/wall.obj: the folder {tmp}/nowhere does not exist"),
+    ("file.txt/wall.stl", "file.txt/wall.stl: {tmp}/file.txt is not a folder"),
+    ("folder", "{tmp}/folder' is a directory"),
+])
+def test_export_to_an_unwritable_path_names_it_and_writes_nothing(tmp_path, output, message):
+    (tmp_path / "file.txt").write_text("keep")
+    (tmp_path / "folder").mkdir()
+    before = sorted(tmp_path.rglob("*"))
+    fails(["export", "WD3", tmp_path / output], message.format(tmp=tmp_path))
+    assert sorted(tmp_path.rglob("*")) == before
+
+
+def test_a_failed_export_keeps_the_old_file_whole(tmp_path):
+    model = dd.build_model([dd.Block(name="base", shape=dd.box([0, 0, -1], [1, 1, 0]), fixed=True),
+                            dd.Block(name=" padded", shape=dd.box([0, 0, 0], [1, 1, 1]))], density=1800.0)
+    save_model(model, tmp_path / "padded.toml")
+    out = tmp_path / "wall.obj"
+    out.write_text("the old file")
+    fails(["export", tmp_path / "padded.toml", out], "block ' padded': a mesh file cannot keep this name")
+    assert out.read_text() == "the old file" and sorted(p.name for p in tmp_path.iterdir()) == ["padded.toml", "wall.obj"]
+
+
+@pytest.mark.parametrize("output, message", [
+    ("wall.webm", "wall.webm: cannot draw a figure in the format '.webm'; the suffix must be one of"),
+    ("wall", "wall: cannot draw a figure in the format '(no suffix)'"),
+    ("nowhere/wall.png", "nowhere/wall.png: the folder {tmp}/nowhere does not exist"),
+])
+def test_show_to_a_bad_output_names_it_and_writes_nothing(tmp_path, output, message):
+    fails(["show", "WD3", "-o", tmp_path / output], message.format(tmp=tmp_path))
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("output, message", [
+    ("collapse.webm", "collapse.webm: cannot write '.webm' videos; the suffix must be .mp4 or .gif"),
+    ("nowhere/collapse.gif", "nowhere/collapse.gif: the folder {tmp}/nowhere does not exist"),
+])
+def test_animate_refuses_a_bad_video_path_before_reading_any_frame(tmp_path, output, message):
+    # the folder holds no series: an error about it would mean the frames were read first
+    fails(["animate", tmp_path, "--out", tmp_path / output], message.format(tmp=tmp_path))
+
+
+def test_limit_refuses_a_results_folder_it_cannot_make_before_the_analysis(tmp_path):
+    (tmp_path / "file.txt").write_text("keep")
+    result = fails(["limit", "WD3", "--out", tmp_path / "file.txt" / "results"],
+                   f"{tmp_path / 'file.txt' / 'results'}: cannot write results there (Not a directory)")
+    assert "finding the contacts" not in result.output
+
+
+def test_limit_shows_each_stage_on_stderr(tmp_path):
+    result = CliRunner().invoke(main, ["limit", "WD3", "--non-associative", "--out", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    stages = [line.split("] ", 1)[1] for line in result.stderr.splitlines()]
+    assert stages == ["finding the contacts of 171 blocks", "assembling the equilibrium matrix (644 contact points)",
+                      "solving the associative LP with HiGHS (510 equilibrium rows, 1288 contact forces)",
+                      "non-associative iteration 1 of at most 100: solving the LP with HiGHS (lambda 0.5000 so far)"]
