@@ -142,3 +142,21 @@ def test_without_ffmpeg_the_video_falls_back_to_a_gif(run, tmp_path, monkeypatch
     monkeypatch.setattr(imageio, "get_writer", no_ffmpeg)
     written = render_video(short, tmp_path / "collapse.mp4", fps=4)
     assert written == tmp_path / "collapse.gif" and len(imageio.mimread(written)) == 3
+
+
+def test_a_resumed_run_keeps_the_frames_already_written_and_goes_on_after_them(wall, run, tmp_path):
+    # interrupted at the third equilibrium, before its frame and checkpoint were written (as a
+    # kill could be), then resumed: the series is the uninterrupted run's, frame for frame
+    folder, checkpoint = tmp_path / "vtk", tmp_path / "checkpoint.npz"
+    series = VtkSeries(folder, wall)
+
+    def interrupt(record):
+        if record.tilt_deg >= 10.0:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        tilt_analysis(wall, SETTINGS, on_frame=series, on_record=interrupt, checkpoint=checkpoint)
+    assert [row["tilt_deg"] for row in frames(folder)] == ["0.000000", "5.000000"]
+    tilt_analysis(wall, SETTINGS, on_frame=VtkSeries(folder, wall, resume=True), checkpoint=checkpoint, resume=True)
+    resumed, uninterrupted = frames(folder), frames(run[1])
+    assert [(r["frame"], r["kind"], r["tilt_deg"]) for r in resumed] == [(r["frame"], r["kind"], r["tilt_deg"]) for r in uninterrupted]

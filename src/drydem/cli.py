@@ -190,7 +190,7 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, predict
             bar.set_postfix_str(f"{theta:.2f} deg, ux {ux * 1e3:.2f} mm")
 
         try:
-            series = VtkSeries(folder / "vtk", model, every=save_every) if vtk or video else None
+            series = VtkSeries(folder / "vtk", model, every=save_every, resume=resume) if vtk or video else None
             result = tilt_analysis(
                 model, settings, on_record=PushoverWriter(folder), on_progress=progress, on_frame=series,
                 checkpoint=folder / CHECKPOINT, resume=resume,

@@ -418,14 +418,16 @@ def tilt_analysis(
     records: list[Record] = []
 
     def accept(theta: float, step: float, cycles: int) -> None:
+        # the checkpoint last: an interrupt before it is saved redoes this step on --resume,
+        # which hands the callbacks this equilibrium again rather than never
         records.append(run.record(theta, cycles))
         run.remember(theta)
-        if checkpoint is not None:
-            save_checkpoint(checkpoint, run.sim.snapshot(), _progress(records, run, theta, step) | {"fingerprint": json.dumps(fingerprint)})
         if on_record is not None:
             on_record(records[-1])
         if on_frame is not None:
             on_frame(run.frame("equilibrium", theta))
+        if checkpoint is not None:
+            save_checkpoint(checkpoint, run.sim.snapshot(), _progress(records, run, theta, step) | {"fingerprint": json.dumps(fingerprint)})
 
     step = settings.increment_deg * (2**settings.refinements if settings.adaptive else 1)
     fingerprint = _fingerprint(model, settings)

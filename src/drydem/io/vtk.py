@@ -24,6 +24,7 @@ from scipy.spatial.transform import Rotation
 
 from drydem import contacts as contact_geometry
 from drydem.contacts import SubContacts
+from drydem.errors import DrydemError
 from drydem.io.output import replaced_atomically
 from drydem.model import Model
 from drydem.rotation import matrices
@@ -87,18 +88,24 @@ class VtkSeries:
     ``contacts.pvd`` (time = frame number), and ``frames.csv`` (frame, kind, tilt, monitored
     displacement). Each frame is written as it comes, and the indexes rewritten atomically, so a
     crash keeps what was written. Equilibrium frames are kept every ``every``-th; the states
-    past collapse all. Use an instance as ``tilt_analysis(..., on_frame=series)``."""
+    past collapse all. Use an instance as ``tilt_analysis(..., on_frame=series)``. With
+    ``resume``, the equilibrium frames already in ``folder`` (its ``frames.csv``) are kept and
+    the series goes on after them, as the analysis goes on from its checkpoint (an equilibrium
+    given again replaces the frames from its tilt on)."""
 
-    def __init__(self, folder: Path, model: Model, *, every: int = 1):
+    def __init__(self, folder: Path, model: Model, *, every: int = 1, resume: bool = False):
         if every < 1:
             raise ValueError(f"every = {every}: must be at least 1")
         self.folder, self.model, self.every = Path(folder), model, every
         self.folder.mkdir(parents=True, exist_ok=True)
-        self.rows: list[tuple[int, str, float, float]] = []
-        self.equilibria = 0
+        self.rows: list[tuple[int, str, float, float]] = _equilibrium_rows(self.folder / "frames.csv") if resume else []
+        self.equilibria = (len(self.rows) - 1) * every + 1 if self.rows else 0
 
     def __call__(self, frame) -> None:
         if frame.kind == "equilibrium":
+            # a step redone after --resume replaces the frames it had already given
+            while self.rows and self.rows[-1][2] >= frame.tilt_deg - 1e-9:
+                self.rows.pop()
             self.equilibria += 1
             if (self.equilibria - 1) % self.every:
                 return
@@ -113,6 +120,23 @@ class VtkSeries:
             writer = csv.writer(f)
             writer.writerow(("frame", "kind", "tilt_deg", "ux_m"))
             writer.writerows((i, kind, f"{tilt:.6f}", f"{ux:.8g}") for i, kind, tilt, ux in self.rows)
+
+
+def _equilibrium_rows(index: Path) -> list[tuple[int, str, float, float]]:
+    """The equilibrium frames listed in a series' ``frames.csv`` (none if it is missing);
+    DrydemError naming the file and line if it is not one drydem wrote."""
+    if not index.is_file():
+        return []
+    rows = []
+    with index.open(newline="") as f:
+        for line, row in enumerate(csv.DictReader(f), start=2):
+            try:
+                frame = (int(row["frame"]), row["kind"], float(row["tilt_deg"]), float(row["ux_m"]))
+            except (KeyError, TypeError, ValueError) as exc:
+                raise DrydemError(f"{index}: line {line}: not a frame of drydem tilt --vtk ({exc!r})") from None
+            if frame[1] == "equilibrium" and frame[0] == len(rows):
+                rows.append(frame)
+    return rows
 
 
 def _pvd(files: list[str]) -> str:
