@@ -251,3 +251,12 @@ def test_a_coarse_adaptive_trial_is_given_up_once_its_motion_is_not_elastic():
     assert give_up()
     run.ux, run.lost = 0.011, [("c3b1", 11.6)]
     assert give_up()
+
+
+def test_a_step_without_equilibrium_nor_collapse_gives_no_collapse_angle():
+    # 200 cycles a step: enough for the elastic steps, not for the slide past atan(0.5) = 26.6
+    # deg to reach the stop displacement: no equilibrium, no collapse, so no collapse angle
+    model = stack_model([BRICK[2]] * 3, joint=dd.JointMaterial(kn=1e8, ks=1e8, friction=0.5), solver=dd.SolverSettings(max_cycles=200))
+    result = tilt_analysis(model, TiltSettings(increment_deg=5.0))
+    assert result.ended_by == "no equilibrium within max_cycles" and result.stable_under_gravity
+    assert result.last_equilibrium_deg == 25.0 and result.collapse_angle_deg is None and result.load_multiplier is None

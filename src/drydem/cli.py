@@ -6,7 +6,6 @@ import itertools
 import signal
 import time
 from contextlib import contextmanager
-from dataclasses import replace
 from datetime import datetime
 from pathlib import Path
 
@@ -20,8 +19,9 @@ from drydem.model import Model
 from drydem.parameters import CRITERIA
 from drydem.solve import Simulation
 
-#: the tilting analysis' checkpoint in its results folder
+#: the tilting analysis' checkpoint in its results folder, and the file it is written to first
 CHECKPOINT = "checkpoint.npz"
+CHECKPOINT_PARTIAL = ".checkpoint.partial.npz"
 
 
 #: length units of imported geometry (VRML, OBJ, STL), in metres
@@ -152,14 +152,14 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, predict
     when interrupted (the last equilibrium is kept for --resume)."""
     from tqdm import tqdm
 
-    from drydem.analysis.tilt import TiltSettings, monitor_index, tilt_analysis
+    from drydem.analysis.tilt import NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY, TiltSettings, monitor_index, tilt_analysis
     from drydem.io.checkpoint import load_checkpoint
     from drydem.io.results import PushoverWriter
     from drydem.io.vtk import VtkSeries
 
     found = _target(target, unit)
     try:
-        model = _with_overrides(found.model, kn=kn, ks=ks, friction=friction, points=points, density=density, criterion=criterion)
+        model = found.model.overridden(kn=kn, ks=ks, friction=friction, points=points, density=density, criterion=criterion)
         settings = TiltSettings(
             increment_deg=increment, adaptive=adaptive, predictor=predictor, stop_displacement_m=stop_displacement, loading=loading,
             monitor=monitor, max_angle_deg=max_angle,
@@ -169,7 +169,7 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, predict
             raise DrydemError("--resume goes on from the run in --out and --overwrite deletes it: give one of them")
         if resume and (out is None or not (out / CHECKPOINT).is_file()):
             raise DrydemError(f"--resume needs --out DIR holding a {CHECKPOINT} from an earlier run" + (f" ({out} has none)" if out else ""))
-        folder = _results_folder(out, found.name, TILT_OUTPUTS, resume=resume, overwrite=overwrite)
+        folder = _results_folder(out, found.name, resume=resume, overwrite=overwrite)
         if resume:
             _, saved = load_checkpoint(folder / CHECKPOINT)
     except DrydemError as exc:
@@ -206,16 +206,17 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, predict
     _tilt_outputs(found, model, result, folder, series)
     if video:
         _render(series.folder, folder / "collapse.mp4", fps=8.0)
-    if result.stable_under_gravity is None or result.ended_by == "no equilibrium within max_cycles":
+    if result.ended_by in (NO_EQUILIBRIUM_UNDER_GRAVITY, NO_EQUILIBRIUM):
         raise SystemExit(1)
 
 
-#: what ``drydem tilt`` and ``drydem limit`` write in their results folders (deleted first by --overwrite)
-TILT_OUTPUTS = ("summary.json", "pushover.csv", "pushover.png", "mechanism.png", CHECKPOINT, "vtk", "collapse.mp4", "collapse.gif")
-LIMIT_OUTPUTS = ("summary.json", "mechanism.png")
+#: what ``drydem tilt`` and ``drydem limit`` write in their results folders (deleted first by
+#: --overwrite, whichever of the two wrote them)
+RUN_OUTPUTS = ("summary.json", "pushover.csv", "pushover.png", "mechanism.png", CHECKPOINT, CHECKPOINT_PARTIAL, "vtk",
+               "collapse.mp4", "collapse.gif")
 
 
-def _results_folder(out: Path | None, name: str, outputs: tuple[str, ...], *, resume: bool = False, overwrite: bool = False) -> Path:
+def _results_folder(out: Path | None, name: str, *, resume: bool = False, overwrite: bool = False) -> Path:
     """``out`` made ready for a run (drydem.io.results.prepare_folder), or by default a new
     results/NAME-TIME folder (numbered -2, -3, ... if two runs start in the same second)."""
     from drydem.io.results import prepare_folder
@@ -227,7 +228,7 @@ def _results_folder(out: Path | None, name: str, outputs: tuple[str, ...], *, re
             if not out.exists():
                 break
             out = Path("results") / f"{stem}-{k}"
-    return prepare_folder(out, outputs, resume=resume, overwrite=overwrite)
+    return prepare_folder(out, RUN_OUTPUTS, resume=resume, overwrite=overwrite)
 
 
 class _Received:
@@ -260,10 +261,10 @@ def _tilt_outputs(found: Target, model: Model, result, folder: Path, series) -> 
 
     write_summary(folder, tilt_summary(result, model))
     pushover_figure(result, folder / "pushover.png", title=found.name)
-    collapse = result.collapse_angle_deg
-    lost_by_then = frozenset(name for name, theta in result.lost_blocks if collapse is not None and theta <= collapse)
+    last = result.last_equilibrium_deg
+    lost_by_then = frozenset(name for name, theta in result.lost_blocks if last is not None and theta <= last)
     states = [
-        ("last equilibrium" if collapse is not None else "under gravity", result.collapse_state or result.final_state, lost_by_then),
+        ("last equilibrium" if last is not None else "under gravity", result.collapse_state or result.final_state, lost_by_then),
         (f"past collapse ({result.ended_by})", result.final_state, frozenset(name for name, _ in result.lost_blocks)),
     ]
     mechanism_figure(model, states, folder / "mechanism.png", monitored=result.monitored_block)
@@ -281,17 +282,21 @@ def _tilt_outputs(found: Target, model: Model, result, folder: Path, series) -> 
 
 def _tilt_verdict(result, model: Model) -> list[str]:
     """What the analysis found, in words that claim no more than it showed."""
+    from drydem.analysis.tilt import MAXIMUM_ANGLE, NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY
+
     fell = ", ".join(repr(name) for name, _ in result.lost_blocks[:5]) + (", ..." if len(result.lost_blocks) > 5 else "")
     if result.stable_under_gravity is False:
-        return [f"the model cannot stand under its own weight: {fell} fell (state in mechanism.png)"]
-    if result.stable_under_gravity is None:
+        what = f"{fell} fell" if fell else (f"the monitored block {result.monitored_block!r} moved "
+                                           f"{result.settings.stop_displacement_m:g} m (the stop displacement)")
+        return [f"the model cannot stand under its own weight: {what} (state in mechanism.png)"]
+    if result.ended_by == NO_EQUILIBRIUM_UNDER_GRAVITY:
         return [f"no equilibrium under gravity within [solver] max_cycles = {model.solver.max_cycles}: no verdict on whether it "
                 "stands; raise max_cycles (or check damping) and run again"]
-    if result.collapse_angle_deg is None:
+    if result.ended_by == MAXIMUM_ANGLE:
         return [f"no collapse up to {result.settings.max_angle_deg} deg"]
-    if result.ended_by == "no equilibrium within max_cycles":
-        return [f"last equilibrium {result.collapse_angle_deg:.2f} deg; the next step reached no equilibrium within [solver] "
-                f"max_cycles = {model.solver.max_cycles} and did not collapse either: not a verified collapse angle "
+    if result.ended_by == NO_EQUILIBRIUM:
+        return [f"last equilibrium {result.last_equilibrium_deg:.2f} deg; the next step reached no equilibrium within [solver] "
+                f"max_cycles = {model.solver.max_cycles} and did not collapse either: no collapse angle "
                 "(raise max_cycles to decide)"]
     return [f"collapse angle  {result.collapse_angle_deg:.2f} deg (load multiplier {result.load_multiplier:.4f}; ended by {result.ended_by})"]
 
@@ -315,7 +320,8 @@ def limit(target, non_associative, friction, out, overwrite, unit) -> None:
     found = _target(target, unit)
     settings = LimitSettings(non_associative=non_associative)
     try:  # before the analysis, which can take minutes
-        out = _results_folder(out, f"{found.name}-limit", LIMIT_OUTPUTS, overwrite=overwrite)
+        model = found.model.overridden(friction=friction)
+        out = _results_folder(out, f"{found.name}-limit", overwrite=overwrite)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     start = time.perf_counter()
@@ -324,7 +330,6 @@ def limit(target, non_associative, friction, out, overwrite, unit) -> None:
         click.echo(f"[{time.perf_counter() - start:7.1f} s] {stage}", err=True)
 
     try:
-        model = _with_overrides(found.model, kn=None, ks=None, friction=friction, points=None, density=None, criterion=None)
         result = limit_analysis(model, settings, on_progress=progress)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
@@ -490,19 +495,6 @@ def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, workers
         except DrydemError as exc:
             raise click.ClickException(str(exc)) from None
     click.echo(f"best kn         {result.best_kn:.4g} Pa/m (ks = {ks_ratio:g} kn): mean absolute error {result.best_error:.2%}")
-
-
-def _with_overrides(model: Model, *, kn, ks, friction, points, density, criterion) -> Model:
-    """The model with the command-line options that were given."""
-    joint = {k: v for k, v in {"kn": kn, "ks": ks, "friction": friction}.items() if v is not None}
-    changes = {}
-    if joint:
-        changes["joint"] = replace(model.joint, **joint)
-    if points is not None:
-        changes["contacts"] = replace(model.contacts, points_per_length=points)
-    if criterion is not None:
-        changes["solver"] = replace(model.solver, criterion=criterion)
-    return model.replace(density=density, **changes) if changes or density is not None else model
 
 
 @main.command(name="designs")

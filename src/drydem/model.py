@@ -7,6 +7,7 @@ a run lives in :class:`drydem.state.State` and :class:`drydem.contacts.SubContac
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -142,6 +143,25 @@ class Model:
         ``quaternion`` (4,) (body -> world, drydem.state): x = R(q) (v - c0) + position."""
         shape = self.block_shape[block]
         return (shape.vertices - shape.centroid) @ matrices(quaternion[None])[0].T + position
+
+    def parameter_changes(self, *, kn: float | None = None, ks: float | None = None, friction: float | None = None,
+                          points: int | None = None, criterion: str | None = None) -> dict:
+        """The tables that the given values (None: unchanged) change, for :meth:`replace`: joint
+        kn, ks (Pa/m) and friction, contacts points_per_length, solver criterion. Building them
+        checks each value (ModelError naming it and its range) without building a model."""
+        joint = {k: v for k, v in (("kn", kn), ("ks", ks), ("friction", friction)) if v is not None}
+        changes = {"joint": dataclasses.replace(self.joint, **joint)} if joint else {}
+        if points is not None:
+            changes["contacts"] = dataclasses.replace(self.contacts, points_per_length=points)
+        if criterion is not None:
+            changes["solver"] = dataclasses.replace(self.solver, criterion=criterion)
+        return changes
+
+    def overridden(self, *, density: float | None = None, **values) -> Model:
+        """The model with the given values changed (those of :meth:`parameter_changes`, and one
+        ``density`` in kg/m3 for every block); itself if none is given."""
+        changes = self.parameter_changes(**values)
+        return self.replace(density=density, **changes) if changes or density is not None else self
 
     def replace(self, *, density: float | None = None, **changes) -> Model:
         """A copy with some parameters changed: joint, contacts, supports, solver, or one

@@ -123,7 +123,8 @@ class ContactSettings:
         so one point on the mid-plane with the whole width's area is exact), 2 for other
         models with every block fixed in y, else points_per_length.
     tolerance : m, gap below which faces are in contact; ``None`` = 5 % of the
-        thinnest free block (a given one may be at most half of it: :mod:`drydem.model`).
+        thinnest free block; a given one may be at most half the thinnest free block
+        (:data:`drydem.model.MAX_TOLERANCE_FRACTION`).
         Contacts are re-detected whenever neighbouring blocks have moved half of it relative
         to each other.
     """

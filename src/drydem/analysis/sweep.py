@@ -209,13 +209,9 @@ def _list(value) -> list:
 
 
 def _overrides(model, spec: RunSpec) -> dict:
-    """``model``'s parameters that ``spec`` changes (kn, ks, friction, points), for Model.replace;
+    """``model``'s tables that ``spec`` changes (kn, ks, friction, points), for Model.replace;
     ModelError (from JointMaterial, ContactSettings) for a value out of its range."""
-    joint = {k: v for k, v in (("kn", spec.kn), ("ks", spec.ks), ("friction", spec.friction)) if v is not None}
-    changes = {"joint": replace(model.joint, **joint)} if joint else {}
-    if spec.points is not None:
-        changes["contacts"] = replace(model.contacts, points_per_length=spec.points)
-    return changes
+    return model.parameter_changes(kn=spec.kn, ks=spec.ks, friction=spec.friction, points=spec.points)
 
 
 def _tilt_settings(spec: RunSpec):

@@ -75,8 +75,12 @@ LOADINGS = ("tilt", "multiplier")
 EQUILIBRIUM, FELL, MONITOR_FELL, STOP_DISPLACEMENT, GAVE_UP, MAX_CYCLES = (
     "equilibrium", "fell", "monitored block fell", "stop displacement", "gave up", "max cycles",
 )
-#: ``ended_by`` of a stage 1 without equilibrium nor fall
+#: why an analysis ended (TiltResult.ended_by): a collapse (MONITOR_FELL, STOP_DISPLACEMENT),
+#: or one of these, none of which is a collapse
+UNSTABLE_UNDER_GRAVITY = "unstable under gravity"
 NO_EQUILIBRIUM_UNDER_GRAVITY = "no equilibrium under gravity within max_cycles"
+NO_EQUILIBRIUM = "no equilibrium within max_cycles"
+MAXIMUM_ANGLE = "maximum angle"
 #: states past collapse are sampled this many times per chunk_cycles (drydem tilt --vtk)
 FRAME_SAMPLING = 10
 
@@ -203,13 +207,18 @@ class TiltResult:
     """Outcome of :func:`tilt_analysis`. States are block positions/orientations (State);
     ``cycles`` counts every cycle run, those of abandoned adaptive trials included.
     ``stable_under_gravity``: True (stage 1 reached equilibrium), False (a block fell under its
-    own weight: named in ``lost_blocks`` at 0 deg), None (no equilibrium within max_cycles: not
-    known). ``ended_by``: why the analysis stopped."""
+    own weight: named in ``lost_blocks`` at 0 deg, or the monitored point moved the stop
+    displacement), None (no equilibrium within max_cycles: not known). ``ended_by``: why the
+    analysis stopped. ``last_equilibrium_deg``: the largest tilt in equilibrium;
+    ``collapse_angle_deg`` is that tilt only when the next step collapsed (the monitored block
+    fell or moved the stop displacement), else None (no collapse up to the maximum angle, or no
+    equilibrium within max_cycles, which is no verdict)."""
 
     settings: TiltSettings
     monitored_block: str
     wall_height_m: float
     stable_under_gravity: bool | None
+    last_equilibrium_deg: float | None
     collapse_angle_deg: float | None
     records: list[Record]
     lost_blocks: list[tuple[str, float]]
@@ -443,12 +452,11 @@ def tilt_analysis(
         if stable:
             accept(0.0, step, cycles)
     if not stable:
-        collapse = None
-        ended_by = "unstable under gravity" if stable is False else NO_EQUILIBRIUM_UNDER_GRAVITY
+        ended_by = UNSTABLE_UNDER_GRAVITY if stable is False else NO_EQUILIBRIUM_UNDER_GRAVITY
         last_good, lost_at_good = initial, []
     else:
         last_good, lost_at_good = run.sim.snapshot(), list(run.lost)
-        ended_by = "maximum angle"
+        ended_by = MAXIMUM_ANGLE
         while theta + step <= settings.max_angle_deg + 1e-9:
             coarse = settings.adaptive and step > settings.increment_deg * (1 + 1e-9)
             outcome, cycles = run.equilibrate(theta + step, give_up=_trial_limit(run, records, step, settings) if coarse else None)
@@ -465,15 +473,15 @@ def tilt_analysis(
                 run.lost = list(lost_at_good)
                 step /= 2
                 continue
-            ended_by = {MAX_CYCLES: "no equilibrium within max_cycles"}.get(outcome, outcome)
+            ended_by = {MAX_CYCLES: NO_EQUILIBRIUM}.get(outcome, outcome)
             break
-        collapse = theta if ended_by != "maximum angle" else None
     result = TiltResult(
         settings=settings,
         monitored_block=model.block_name[run.monitor],
         wall_height_m=run.height,
         stable_under_gravity=stable,
-        collapse_angle_deg=collapse,
+        last_equilibrium_deg=theta if stable else None,
+        collapse_angle_deg=theta if ended_by in (MONITOR_FELL, STOP_DISPLACEMENT) else None,
         records=records,
         lost_blocks=run.lost,
         cycles=run.sim.cycles,
@@ -482,7 +490,7 @@ def tilt_analysis(
         final_state=run.sim.state.copy(),
         ended_by=ended_by,
     )
-    if on_frame is not None and ended_by not in ("maximum angle", NO_EQUILIBRIUM_UNDER_GRAVITY):
+    if on_frame is not None and ended_by not in (MAXIMUM_ANGLE, NO_EQUILIBRIUM_UNDER_GRAVITY):
         run.sim.restore(last_good)
         run.lost = list(lost_at_good)
         trace = _Trace()

@@ -2,13 +2,13 @@
 
 One ``.npz`` file holds a :class:`drydem.solve.Snapshot` (block state, contacts with their
 shear history, neighbour list, blocks still in the analysis) and the analysis' own progress
-(arrays and scalars by name). It is written to a temporary file and renamed, so a kill
-while writing leaves the previous checkpoint intact.
+(arrays and scalars by name). It is written to a temporary file and renamed
+(:func:`drydem.io.output.replaced_atomically`), so a kill while writing leaves the previous
+checkpoint intact.
 """
 
 from __future__ import annotations
 
-import os
 import zipfile
 from pathlib import Path
 
@@ -16,6 +16,7 @@ import numpy as np
 
 from drydem.contacts import NeighbourList, SubContacts
 from drydem.errors import DrydemError
+from drydem.io.output import replaced_atomically
 from drydem.solve import Snapshot
 from drydem.state import State
 
@@ -27,10 +28,8 @@ def save_checkpoint(path: Path, snapshot: Snapshot, progress: dict) -> None:
     arrays = {f"{part}.{name}": value for part in _PARTS for name, value in getattr(snapshot, part)._asdict().items()}
     arrays |= {"active": snapshot.active, "cycles": snapshot.cycles, "scaled_timestep": np.nan if snapshot.scaled_timestep is None else snapshot.scaled_timestep}
     arrays |= {f"progress.{name}": np.asarray(value) for name, value in progress.items()}
-    path = Path(path)
-    temporary = path.with_name(path.name + ".tmp.npz")
-    np.savez(temporary, **arrays)
-    os.replace(temporary, path)
+    with replaced_atomically(path) as partial:
+        np.savez(partial, **arrays)
 
 
 def load_checkpoint(path: Path) -> tuple[Snapshot, dict]:

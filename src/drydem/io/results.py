@@ -17,6 +17,7 @@ from pathlib import Path
 
 from drydem import __version__
 from drydem.errors import DrydemError
+from drydem.io.output import replaced_atomically
 from drydem.analysis.limit import LimitResult, LimitSettings
 from drydem.analysis.tilt import Record, TiltResult
 from drydem.model import Model
@@ -47,6 +48,7 @@ def tilt_summary(result: TiltResult, model: Model) -> dict:
     return {
         "collapse_angle_deg": result.collapse_angle_deg,
         "load_multiplier": result.load_multiplier,
+        "last_equilibrium_deg": result.last_equilibrium_deg,
         "stable_under_gravity": result.stable_under_gravity,
         "ended_by": result.ended_by,
         "drift_limit_angles_deg": result.drift_limit_angles_deg,
@@ -126,5 +128,6 @@ def prepare_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool = Fal
 def write_summary(folder: Path, content: dict) -> Path:
     """``content`` as ``folder/summary.json``."""
     path = folder / "summary.json"
-    path.write_text(json.dumps(content, indent=2) + "\n")
+    with replaced_atomically(path) as partial:
+        partial.write_text(json.dumps(content, indent=2) + "\n")
     return path
