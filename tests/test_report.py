@@ -70,3 +70,14 @@ def test_a_report_of_an_unfinished_study_says_what_is_missing(tmp_path):
     text = (tmp_path / "report" / "report.md").read_text()
     assert text.count("(no runs for this figure in the study)") == len(FIGURES)
     assert "| WD2 | 7.8 | 17.0 / 21.0 | 16.0 / - |" in text
+
+
+def test_a_run_without_equilibrium_nor_collapse_is_a_lower_bound_not_an_angle():
+    from drydem.report.study import Runs
+
+    record = tilt_record("WD7", 1e10)
+    record["summary"] |= {"collapse_angle_deg": None, "last_equilibrium_deg": 22.9, "stable_under_gravity": True,
+                          "ended_by": "no equilibrium within max_cycles"}
+    runs = Runs([record])
+    assert runs.angle_cell("WD7", 1e10) == ">= 22.9" and runs.capacity("WD7", 1e10) is None
+    assert Runs([tilt_record("WD7", 1e9)]).angle_cell("WD7", 1e9) == "18.0"  # 5 + 3 log10(100) + 7, truncated

@@ -276,7 +276,7 @@ def write_record(results: Path, record: dict) -> Path:
 RECORD_KEYS = {"ok": {"id", "spec", "status", "summary", "pushover"}, "failed": {"id", "spec", "status", "error"}}
 SUMMARY_KEYS = {"tilt": {"collapse_angle_deg", "drift_limit_angles_deg", "wall_height_m"}, "limit": {"collapse_angle_deg", "method"}}
 #: the columns of a pushover curve: tilt (deg), ux, uz (m), drift, cycles
-PUSHOVER_COLUMNS = 5
+CURVE_COLUMNS = 5
 
 
 def read_record(path: str | Path) -> dict:
@@ -327,8 +327,8 @@ def _record_problem(record, run_id: str) -> str | None:
         return f"summary collapse_angle_deg = {summary['collapse_angle_deg']!r}: must be a number (deg) or null"
     if spec.analysis == "tilt" and not isinstance(summary["drift_limit_angles_deg"], dict):
         return "summary drift_limit_angles_deg must map drift limits to angles"
-    if not isinstance(curve, list) or not all(isinstance(row, list) and len(row) == PUSHOVER_COLUMNS and all(map(_numeric, row)) for row in curve):
-        return f"pushover must be a list of rows of {PUSHOVER_COLUMNS} numbers (tilt, ux, uz, drift, cycles)"
+    if not isinstance(curve, list) or not all(isinstance(row, list) and len(row) == CURVE_COLUMNS and all(map(_numeric, row)) for row in curve):
+        return f"pushover must be a list of rows of {CURVE_COLUMNS} numbers (tilt, ux, uz, drift, cycles)"
     return None
 
 
