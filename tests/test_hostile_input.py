@@ -160,3 +160,11 @@ def test_a_limit_analysis_never_replaces_an_earlier_one_silently(tmp_path):
     assert (out / "summary.json").read_text() == first
     assert run("limit", path, "--out", out, "--friction", "0.8", "--overwrite").exit_code == 0
     assert (out / "summary.json").read_text() != first
+
+
+@pytest.mark.parametrize("command", [["sweep", "savalle2022", "--out"], ["calibrate"]])
+def test_a_study_folder_that_cannot_be_one_is_refused(tmp_path, command):
+    not_a_folder = tmp_path / "file"
+    not_a_folder.write_text("x")
+    assert refused(run(*command, os.devnull), f"{os.devnull}: exists and is not a folder")
+    assert refused(run(*command, not_a_folder / "results"), "file/results: cannot write results there")

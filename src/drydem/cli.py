@@ -367,7 +367,7 @@ def _render(folder: Path, path: Path, *, fps: float) -> None:
 
 @main.command()
 @click.argument("study_file")
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), help="Results folder (default: results/STUDY-NAME).")
+@click.option("--out", type=click.Path(path_type=Path), help="Results folder (default: results/STUDY-NAME).")
 @workers_option
 @scheduler_option
 @click.option("--retry-failed", is_flag=True, help="Run again the runs recorded as failed.")
@@ -380,6 +380,7 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
 
     from drydem import studies
     from drydem.analysis.sweep import load_study, pending
+    from drydem.io.output import writable_folder
     from drydem.analysis.sweep import sweep as run_sweep
 
     path = Path(study_file) if Path(study_file).is_file() else studies.find(study_file)
@@ -389,8 +390,10 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
         study = load_study(path)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
-    out = out or Path("results") / study.name
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out = writable_folder(out or Path("results") / study.name)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
     plan = pending(study.runs, out, retry_failed=retry_failed)
     click.echo(f"{study.name}: {len(study.runs)} runs, {plan.recorded} already recorded in {out}")
     for corrupt in plan.corrupt:
@@ -458,7 +461,7 @@ def report(results_dir: Path, out: Path | None) -> None:
 
 
 @main.command()
-@click.argument("results_dir", type=click.Path(file_okay=False, path_type=Path))
+@click.argument("results_dir", type=click.Path(path_type=Path))
 @click.option("--designs", default="WD1,WD2,WD3,WD4,WD5,WD6,WD7", show_default=True, help="Walls to fit, comma-separated.")
 @click.option("--kn-min", type=float, default=1e7, show_default=True, help="Smallest kn searched, Pa/m.")
 @click.option("--kn-max", type=float, default=1e9, show_default=True, help="Largest kn searched, Pa/m.")
@@ -471,12 +474,16 @@ def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, workers
     DESIGNS, reusing and adding runs in RESULTS_DIR (the paper's post-diction, Section 4.4);
     every option is checked before anything runs."""
     from drydem.analysis.calibrate import StiffnessSearch, calibrate_stiffness
+    from drydem.io.output import writable_folder
 
     search = StiffnessSearch(tuple(d.strip() for d in designs.split(",") if d.strip()), kn_min, kn_max, ks_ratio, increment)
     problems = search.problems(name=lambda field: "--" + field.replace("_", "-"))
     if problems:
         raise click.ClickException("\n".join(problems))
-    results_dir.mkdir(parents=True, exist_ok=True)
+    try:
+        writable_folder(results_dir)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
     click.echo(f"calibrating kn over [{kn_min:.3g}, {kn_max:.3g}] Pa/m on {', '.join(search.designs)} (runs kept in {results_dir})")
 
     def evaluated(kn, error, outcome):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -24,6 +25,22 @@ def writable(path: str | Path) -> Path:
     if not os.access(folder, os.W_OK | os.X_OK):
         raise DrydemError(f"{path}: no permission to write in {folder}")
     return path
+
+
+def writable_folder(folder: str | Path) -> Path:
+    """``folder``, made (with its parents) if missing, once a file could be created in it; else a
+    DrydemError naming it and the reason (it is a file or a device, a parent is a file, no
+    permission, no space). Commands call it before their work, as :func:`writable`."""
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise DrydemError(f"{folder}: exists and is not a folder; give a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as exc:
+        raise DrydemError(f"{folder}: cannot write results there ({exc.strerror or exc})") from None
+    return folder
 
 
 @contextmanager

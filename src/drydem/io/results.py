@@ -11,13 +11,12 @@ from __future__ import annotations
 import csv
 import json
 import shutil
-import tempfile
 from dataclasses import asdict
 from pathlib import Path
 
 from drydem import __version__
 from drydem.errors import DrydemError
-from drydem.io.output import replaced_atomically
+from drydem.io.output import replaced_atomically, writable_folder
 from drydem.analysis.limit import LimitResult, LimitSettings
 from drydem.analysis.tilt import Record, TiltResult
 from drydem.model import Model
@@ -116,13 +115,7 @@ def prepare_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool = Fal
         for name in ours:
             path = folder / name
             shutil.rmtree(path) if path.is_dir() and not path.is_symlink() else path.unlink()
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=folder):
-            pass
-    except OSError as exc:
-        raise DrydemError(f"{folder}: cannot write results there ({exc.strerror or exc})") from None
-    return folder
+    return writable_folder(folder)
 
 
 def write_summary(folder: Path, content: dict) -> Path:
