@@ -200,8 +200,7 @@ def parse_layout(text: str, brick: BrickSize, *, source: str = "<layout>", first
     for number, line in enumerate(text.splitlines(), start=first_line):
         body = line.split("#", 1)[0].replace(" ", "").replace("\t", "")
         if body:
-            runs = _runs(body, brick, f"{source}, line {number}", room)
-            room -= sum(cells * repeat for _, cells, repeat in runs)
+            runs, room = _runs(body, brick, f"{source}, line {number}", room)
             rows.append((number, runs))
     if not rows:
         raise ModelError(f"{source}: the layout has no courses")
@@ -228,9 +227,10 @@ def parse_layout(text: str, brick: BrickSize, *, source: str = "<layout>", first
     return Layout(tuple(courses), width)
 
 
-def _runs(body: str, brick: BrickSize, where: str, room: int) -> list[tuple[str, int, int]]:
-    """A course's tokens as runs (kind, cells, repeat count); ``where`` names the line in errors,
-    ``room`` is the number of cells the wall may still have under :data:`MAX_FACE_BRICKS`."""
+def _runs(body: str, brick: BrickSize, where: str, room: int) -> tuple[list[tuple[str, int, int]], int]:
+    """A course's tokens as runs (kind, cells, repeat count), and the cells the wall may still
+    have after it; ``where`` names the line in errors, ``room`` is the number of cells the wall
+    may still have under :data:`MAX_FACE_BRICKS` before it."""
     runs = []
     for match in _TOKEN.finditer(body):
         count, symbol = match.groups()
@@ -250,7 +250,7 @@ def _runs(body: str, brick: BrickSize, where: str, room: int) -> list[tuple[str,
                 f"masonry models have about 10^5 blocks)"
             )
         runs.append((kind, cells, repeat))
-    return runs
+    return runs, room
 
 
 def _repeat(count: str) -> int | float:

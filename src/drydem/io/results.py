@@ -100,12 +100,10 @@ def prepare_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool = Fal
     Nothing is lost: a folder that already holds files is refused (DrydemError naming them)
     unless the run goes on from it (``resume``) or ``overwrite`` is asked, which deletes the
     earlier run's ``outputs`` first, so no stale file (an old video, VTK frames) is left beside
-    the new results; other files are kept. A path that is not a folder, or cannot be made,
-    is refused with the reason.
+    the new results; other files are kept. A path that is not a folder, or cannot be made or
+    written in, is refused with the reason (:func:`drydem.io.output.writable_folder`).
     """
-    if folder.exists() and not folder.is_dir():
-        raise DrydemError(f"{folder}: exists and is not a folder; give --out a folder")
-    present = sorted(p.name for p in folder.iterdir()) if folder.is_dir() else []
+    present = sorted(p.name for p in writable_folder(folder).iterdir())
     if present and not resume:
         ours = [name for name in present if name in outputs]
         if not overwrite:
@@ -115,7 +113,7 @@ def prepare_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool = Fal
         for name in ours:
             path = folder / name
             shutil.rmtree(path) if path.is_dir() and not path.is_symlink() else path.unlink()
-    return writable_folder(folder)
+    return folder
 
 
 def write_summary(folder: Path, content: dict) -> Path:

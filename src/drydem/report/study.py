@@ -52,9 +52,13 @@ class Runs:
     def angle_cell(self, design: str, kn: float) -> str:
         """The collapse angle for a table; for a run that found no equilibrium within max_cycles
         past its last one, and no collapse either, ">= that tilt" (a lower bound, no verdict)."""
+        from drydem.analysis.tilt import NO_EQUILIBRIUM
+
         run = self.tilt(design, kn)
-        last = None if run is None or run["summary"]["collapse_angle_deg"] is not None else run["summary"].get("last_equilibrium_deg")
-        return _cell(self.angle(design, kn)) if last is None else f">= {last:.1f}"
+        summary = {} if run is None else run["summary"]
+        if summary.get("ended_by") == NO_EQUILIBRIUM:  # records of earlier versions gave that tilt as the collapse angle
+            return f">= {summary.get('last_equilibrium_deg', summary['collapse_angle_deg']):.1f}"
+        return _cell(summary.get("collapse_angle_deg"))
 
     def capacity(self, design: str, kn: float) -> float | None:
         """The angle the objective of the calibration uses (:func:`drydem.analysis.calibrate.wall_angle`:
