@@ -156,7 +156,8 @@ def test_a_limit_analysis_never_replaces_an_earlier_one_silently(tmp_path):
     path, out = model_file(tmp_path), tmp_path / "limit"
     assert run("limit", path, "--out", out).exit_code == 0
     first = (out / "summary.json").read_text()
-    assert refused(run("limit", path, "--out", out, "--friction", "0.8"), "already holds another run (mechanism.png, summary.json)")
+    result = run("limit", path, "--out", out, "--friction", "0.8")
+    assert refused(result, "already holds another run (mechanism.png, summary.json); pass --overwrite to replace it, or another --out")
     assert (out / "summary.json").read_text() == first
     assert run("limit", path, "--out", out, "--friction", "0.8", "--overwrite").exit_code == 0
     assert (out / "summary.json").read_text() != first

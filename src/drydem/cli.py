@@ -216,9 +216,10 @@ RUN_OUTPUTS = ("summary.json", "pushover.csv", "pushover.png", "mechanism.png", 
                "collapse.mp4", "collapse.gif")
 
 
-def _results_folder(out: Path | None, name: str, *, resume: bool = False, overwrite: bool = False) -> Path:
-    """``out`` made ready for a run (drydem.io.results.prepare_folder), or by default a new
-    results/NAME-TIME folder (numbered -2, -3, ... if two runs start in the same second)."""
+def _results_folder(out: Path | None, name: str, *, resume: bool | None = False, overwrite: bool = False) -> Path:
+    """``out`` made ready for a run (drydem.io.results.prepare_folder; ``resume`` None for a
+    command that cannot resume), or by default a new results/NAME-TIME folder (numbered -2,
+    -3, ... if two runs start in the same second)."""
     from drydem.io.results import prepare_folder
 
     if out is None:
@@ -321,7 +322,7 @@ def limit(target, non_associative, friction, out, overwrite, unit) -> None:
     settings = LimitSettings(non_associative=non_associative)
     try:  # before the analysis, which can take minutes
         model = found.model.overridden(friction=friction)
-        out = _results_folder(out, f"{found.name}-limit", overwrite=overwrite)
+        out = _results_folder(out, f"{found.name}-limit", resume=None, overwrite=overwrite)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     start = time.perf_counter()

@@ -94,11 +94,12 @@ def model_summary(model: Model) -> dict:
     }
 
 
-def prepare_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool = False, overwrite: bool = False) -> Path:
+def prepare_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | None = False, overwrite: bool = False) -> Path:
     """Make ``folder`` ready for a run's ``outputs`` (file and folder names) and return it.
 
     Nothing is lost: a folder that already holds files is refused (DrydemError naming them)
-    unless the run goes on from it (``resume``) or ``overwrite`` is asked, which deletes the
+    unless the run goes on from it (``resume``; None for a run that cannot, so the message does
+    not offer it) or ``overwrite`` is asked, which deletes the
     earlier run's ``outputs`` first, so no stale file (an old video, VTK frames) is left beside
     the new results; other files are kept. A path that is not a folder, or cannot be made or
     written in, is refused with the reason (:func:`drydem.io.output.writable_folder`).
@@ -108,8 +109,8 @@ def prepare_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool = Fal
         ours = [name for name in present if name in outputs]
         if not overwrite:
             what = f"another run ({', '.join(ours)})" if ours else f"other files ({', '.join(present[:5])}{', ...' if len(present) > 5 else ''})"
-            raise DrydemError(f"{folder}: already holds {what}; pass --overwrite to replace it, --resume to go on from its "
-                              "checkpoint, or another --out")
+            go_on = "" if resume is None else ", --resume to go on from its checkpoint"
+            raise DrydemError(f"{folder}: already holds {what}; pass --overwrite to replace it{go_on}, or another --out")
         for name in ours:
             path = folder / name
             shutil.rmtree(path) if path.is_dir() and not path.is_symlink() else path.unlink()
