@@ -2,11 +2,11 @@
 
 The wall: the seed paper's bricks (25 x 5.5 x 12 mm), 8 per course, 27 courses, running bond,
 33 % voids, 4 points per length in both directions of every face (the 3D grid)
-(drydem.walls.benchmark_wall), settled under gravity and then tilted 10 deg so that every
+(tests/wall_fixtures.py), settled under gravity and then tilted 10 deg so that every
 joint carries shear. Every engine runs the same cycles from the same state, on one core, in
 this process. Goals (issue 2): <= 15 ns per sub-contact-step for the 3D numba kernel, >= 15x
 faster than the vectorised NumPy reference. The wall is in-plane, so drydem cycles it with the
-planar kernel (drydem.planar) and one point across the width (its default there): timed on
+planar kernel (drydem.engine.cycle_planar) and one point across the width (its default there): timed on
 the same 3D grid and on that default, against the 3D kernel on the grid.
 
 Run: python benchmarks/bench_step.py [--cycles N]
@@ -15,14 +15,19 @@ Run: python benchmarks/bench_step.py [--cycles N]
 from __future__ import annotations
 
 import argparse
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
 import drydem as dd
-from drydem import kernels, planar, reference
-from drydem.joints import JointArrays
-from drydem.walls import benchmark_wall
+from drydem.engine import cycle3d, cycle_planar, loop
+from drydem.engine.joints import JointConstants
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the oracles and the wall live with the tests
+from oracles import cycle as reference  # noqa: E402
+from wall_fixtures import benchmark_wall  # noqa: E402
 
 
 def time_engine(run_cycles, sim, cycles: int, gravity) -> float:
@@ -32,11 +37,11 @@ def time_engine(run_cycles, sim, cycles: int, gravity) -> float:
         state = sim.state.copy()
         contacts = sim.contacts.copy()
         start = time.perf_counter()
-        loop = kernels.LoopSettings(gravity, sim.timestep, 0.8, cycles, kernels.RATIO, -1.0, 1.0, 1.0, np.inf)
+        settings = loop.LoopSettings(gravity, sim.timestep, 0.8, cycles, loop.RATIO, -1.0, 1.0, 1.0, np.inf)
         unlimited = sim.neighbours._replace(limit=np.full(len(sim.neighbours.pairs), np.inf))
-        n, code, _, _ = run_cycles(state, sim._blocks, contacts, JointArrays.of(sim.model.joint), loop, state.copy(), unlimited)
+        n, code, _, _ = run_cycles(state, sim.blocks, contacts, JointConstants.of(sim.model.joint), settings, state.copy(), unlimited)
         best = min(best, (time.perf_counter() - start) / n)
-        assert code == kernels.RUNNING and n == cycles
+        assert code == loop.RUNNING and n == cycles
     return best
 
 
@@ -59,10 +64,10 @@ def main() -> None:
     grid, default = tilted_wall(4), tilted_wall(None)
     timings = {}
     for name, run_cycles, sim, cycles in [
-        ("numba 3D, 4 across", kernels.run_cycles, grid, args.cycles),
+        ("numba 3D, 4 across", cycle3d.run_cycles, grid, args.cycles),
         ("reference, 4 across", reference.run_cycles, grid, max(10, args.cycles // 100)),
-        ("planar, 4 across", planar.run_cycles, grid, args.cycles),
-        ("planar, 1 across", planar.run_cycles, default, args.cycles),
+        ("planar, 4 across", cycle_planar.run_cycles, grid, args.cycles),
+        ("planar, 1 across", cycle_planar.run_cycles, default, args.cycles),
     ]:
         time_engine(run_cycles, sim, 10, GRAVITY)  # compile / load the cache
         timings[name] = (time_engine(run_cycles, sim, cycles, GRAVITY), sim.contacts.count)

@@ -15,7 +15,7 @@ import time
 
 from drydem.analysis.tilt import TiltSettings, tilt_analysis
 from drydem.io.target import load_target
-from drydem.parameters import JointMaterial
+from drydem.model.parameters import JointMaterial
 
 GOALS_S = {(3e7, False): 3.0, (3e7, True): 0.5, (1e9, False): 20.0, (1e9, True): 4.0}
 

@@ -58,9 +58,9 @@ def tilted_gravity(theta_deg: float, turn_deg: float = 0.0) -> np.ndarray:
 
 
 def layout_blocks(courses: str) -> list[dd.Block]:
-    """The blocks of a brick layout (drydem.layout; top course first) of the paper's bricks, on a fixed base."""
-    from drydem.brief import PAPER_BRICK
-    from drydem.layout import parse_layout
+    """The blocks of a brick layout (drydem.masonry.layout; top course first) of the paper's bricks, on a fixed base."""
+    from drydem.masonry.brief import PAPER_BRICK
+    from drydem.masonry.layout import parse_layout
 
     return parse_layout(textwrap.dedent(courses), PAPER_BRICK).blocks(PAPER_BRICK)
 
@@ -68,6 +68,6 @@ def layout_blocks(courses: str) -> list[dd.Block]:
 @pytest.fixture(scope="session")
 def benchmark_wall() -> dd.Model:
     """The built-in perforated_wall: 8 x 27 bricks, running bond, 33 % voids, in-plane (fixed in y), kn = ks = 3e7."""
-    from drydem.walls import benchmark_wall
+    from wall_fixtures import benchmark_wall
 
     return benchmark_wall(kn=3e7)

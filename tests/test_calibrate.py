@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from drydem.analysis.calibrate import calibrate, mean_absolute_relative_error
+from drydem.parametric.calibrate import calibrate, mean_absolute_relative_error
 
 
 def test_finds_the_minimum_of_a_synthetic_error_curve():
@@ -37,7 +37,7 @@ def test_mean_absolute_relative_error_as_in_the_paper():
 
 
 def test_the_objective_counts_a_wall_that_cannot_stand_as_0_deg_and_no_verdict_as_no_angle():
-    from drydem.analysis.calibrate import wall_angle
+    from drydem.parametric.calibrate import wall_angle
 
     assert wall_angle({"stable_under_gravity": False, "collapse_angle_deg": None, "ended_by": "unstable under gravity"}) == 0.0
     assert wall_angle({"stable_under_gravity": True, "collapse_angle_deg": 18.3, "ended_by": "stop displacement"}) == 18.3

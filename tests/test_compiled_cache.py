@@ -11,19 +11,19 @@ import pytest
 import drydem
 from drydem import compiled_cache
 
-#: a brick on a fixed slab, in-plane (drydem.planar's kernel), on a table tilted 10 deg for 300
+#: a brick on a fixed slab, in-plane (drydem.engine.cycle_planar's kernel), on a table tilted 10 deg for 300
 #: cycles: it sticks (friction 0.5 > tan 10 deg) and shears the joint elastically; prints its
 #: displacement, m
 SHEARED_BRICK = """
 import numpy as np
 import drydem as dd
-from drydem import planar
+from drydem.engine import cycle_planar
 
 blocks = [dd.Block(name="slab", shape=dd.box([-0.1, 0.0, -0.02], [0.1, 0.012, 0.0]), fixed=True),
           dd.Block(name="brick", shape=dd.box([0.0, 0.0, 0.0], [0.025, 0.012, 0.0055]))]
 model = dd.build_model(blocks, density=1800.0, supports=dd.Supports(fix_y=True))
 sim = dd.Simulation(model)
-assert sim._run_cycles is planar.run_cycles
+assert sim.run_cycles is cycle_planar.run_cycles
 theta = np.radians(10.0)
 sim.cycle(300, gravity=dd.G * np.array([np.sin(theta), 0.0, -np.cos(theta)]))
 print(sim.state.position[1, 0] - model.block_centroid[1, 0])
@@ -42,12 +42,12 @@ def sheared_brick(package_parent, *, compiled):
 
 @pytest.mark.slow
 def test_editing_the_joint_law_reaches_the_cached_planar_kernel(tmp_path):
-    # halve ks in a copy's joints.py: numba alone would load planar.run_cycles from its cache
-    # (planar.py did not change) with the old shear_law inlined, and part from the same code
+    # halve ks in a copy's joints.py: numba alone would load cycle_planar.run_cycles from its cache
+    # (cycle_planar.py did not change) with the old shear_law inlined, and part from the same code
     # run as Python
     shutil.copytree(pathlib.Path(drydem.__file__).parent, tmp_path / "drydem")  # with its caches: the first run loads them
     before = sheared_brick(tmp_path, compiled=True)
-    joints = tmp_path / "drydem" / "joints.py"
+    joints = tmp_path / "drydem" / "engine" / "joints.py"
     law = joints.read_text()
     assert law.count("shear_scale = joint.ks * area") == 1
     joints.write_text(law.replace("shear_scale = joint.ks * area", "shear_scale = 0.5 * joint.ks * area"))
@@ -57,11 +57,13 @@ def test_editing_the_joint_law_reaches_the_cached_planar_kernel(tmp_path):
 
 
 def test_compiled_modules_are_keyed_on_what_they_import():
-    # the inlined joint law and rotations, the constants of polygon, the SubContacts type
-    planar = compiled_cache.dependencies("drydem.planar")
-    assert {"drydem.joints", "drydem.kernels", "drydem.motion", "drydem.rotation", "drydem.contacts"} <= planar
-    assert {"drydem.polygon", "drydem.rotation"} <= compiled_cache.dependencies("drydem.narrow")
-    assert "drydem.narrow" not in planar  # imported inside functions only: nothing compiled takes it
+    # the inlined joint law, damping, loop and rotations; the SubContacts type and the narrow
+    # phase's model-layer types
+    planar = compiled_cache.dependencies("drydem.engine.cycle_planar")
+    assert {"drydem.engine.joints", "drydem.engine.damping", "drydem.engine.loop", "drydem.model.rotation", "drydem.model.parameters"} <= planar
+    narrow = compiled_cache.dependencies("drydem.engine.narrow_phase")
+    assert {"drydem.engine.contacts", "drydem.model.geometry", "drydem.model.rotation"} <= narrow
+    assert "drydem.engine.narrow_phase" not in planar
 
 
 def test_cache_folders_are_where_numba_writes(tmp_path):
@@ -69,10 +71,14 @@ def test_cache_folders_are_where_numba_writes(tmp_path):
     # still there), in __pycache__ beside the sources or, with NUMBA_CACHE_DIR, under it, and
     # the stamp is written there on import
     names = [n for n in compiled_cache.compiled_modules() if compiled_cache.cache_folder(n) is not None]
-    assert {"drydem.joints", "drydem.kernels", "drydem.motion", "drydem.narrow", "drydem.planar", "drydem.refresh", "drydem.rotation"} <= set(names)
+    assert {
+        "drydem.engine.joints", "drydem.engine.damping", "drydem.engine.loop", "drydem.engine.cycle3d", "drydem.engine.inertia",
+        "drydem.engine.narrow_phase", "drydem.engine.broad_phase", "drydem.engine.cycle_planar", "drydem.engine.refresh",
+        "drydem.model.rotation", "drydem.model.boxes", "drydem.analysis.support",
+    } <= set(names)
     if not os.environ.get("NUMBA_CACHE_DIR"):
-        assert compiled_cache.cache_folder("drydem.narrow") == compiled_cache.module_file("drydem.narrow").parent / "__pycache__"
-    script = "from drydem import compiled_cache as c; print(c.cache_folder('drydem.narrow'))"
+        assert compiled_cache.cache_folder("drydem.engine.narrow_phase") == compiled_cache.module_file("drydem.engine.narrow_phase").parent / "__pycache__"
+    script = "from drydem import compiled_cache as c; print(c.cache_folder('drydem.engine.narrow_phase'))"
     env = os.environ | {"NUMBA_CACHE_DIR": str(tmp_path)}
     run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=600)
     assert run.returncode == 0, run.stderr[-3000:]

@@ -8,18 +8,22 @@ from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 import drydem as dd
-from drydem import contacts
-from drydem.polygon import SLIVER_FRACTION
+from drydem.engine import contacts
+from drydem.engine.narrow_phase import SLIVER_FRACTION, narrow_phase
+from drydem.model.boxes import bounds, overlapping_pairs
+from drydem.model.geometry import FlatGeometry
+from drydem.model.parameters import ContactDensity
+from oracles import contacts as oracle
 from conftest import BRICK, box_vertices, layout_blocks
 
 
 def detect_boxes(boxes, *, points, tolerance, rotation=np.eye(3)):
     shapes = [dd.convex_hull(box_vertices(lo, hi) @ rotation.T) for lo, hi in boxes]
     n = len(shapes)
-    candidates = contacts.broad_phase(*contacts.bounds(shapes), np.ones(n, bool), 0.5 * tolerance)
-    sub, _ = contacts.narrow_phase(
+    candidates = overlapping_pairs(*bounds(shapes), np.ones(n, bool), 0.5 * tolerance)
+    sub, _ = oracle.narrow_phase(
         dict(enumerate(shapes)), candidates, np.array([s.centroid for s in shapes]), np.repeat(np.eye(3)[None], n, 0),
-        tolerance=tolerance, density=contacts.Density(along=points, across=points),
+        tolerance=tolerance, density=ContactDensity(along=points, across=points),
     )
     return sub
 
@@ -72,7 +76,7 @@ def test_non_rectangular_overlap_areas_sum_to_the_polygon():
     rot = Rotation.from_euler("z", 30, degrees=True).as_matrix()
     slab = dd.box([-0.1, -0.1, -0.01], [0.1, 0.1, 0.0])
     brick = dd.convex_hull(box_vertices([-0.0125, -0.006, 0.0], [0.0125, 0.006, 0.0055]) @ rot.T)
-    fc, separation = contacts.face_contact(slab, brick, 0, 1, tolerance=1e-4, density=contacts.Density(along=4, across=4))
+    fc, separation = oracle.face_contact(slab, brick, 0, 1, tolerance=1e-4, density=ContactDensity(along=4, across=4))
     assert separation == pytest.approx(0.0, abs=1e-15)
     assert fc.areas.sum() == pytest.approx(BRICK[0] * BRICK[1], rel=1e-9)
     assert fc.ref == 0 and np.allclose(fc.normal, [0, 0, 1])
@@ -131,7 +135,7 @@ def test_broad_phase_matches_all_pairs_bounding_box_test():
     lo = rng.uniform(0, 10, (300, 3))
     shapes = [dd.box(l, l + rng.uniform(0.1, 1.5, 3)) for l in lo]
     movable = rng.random(300) < 0.8
-    found = {tuple(p) for p in contacts.broad_phase(*contacts.bounds(shapes), movable, 0.05)}
+    found = {tuple(p) for p in overlapping_pairs(*bounds(shapes), movable, 0.05)}
     lo_b = np.array([s.vertices.min(0) for s in shapes]) - 0.05
     hi_b = np.array([s.vertices.max(0) for s in shapes]) + 0.05
     expected = {
@@ -158,12 +162,12 @@ def test_redetection_keeps_shear_stress_of_the_same_pair():
 
 
 def test_compiled_merge_carries_shear_over_as_the_numpy_oracle(benchmark_wall):
-    """drydem.refresh.merge against subset + carry_over (scipy cKDTree) + concatenate: the
+    """drydem.engine.refresh.merge against subset + carry_over (scipy cKDTree) + concatenate: the
     benchmark wall tilted 15 deg for 300 cycles (shear everywhere, blocks moved since their
     contacts were made), half of the contacts re-made by the narrow phase."""
     from conftest import tilted_gravity
-    from drydem import refresh
-    from drydem.rotation import matrices
+    from drydem.engine import refresh
+    from drydem.model.rotation import matrices
 
     sim = dd.Simulation(benchmark_wall)
     sim.cycle_to_equilibrium()
@@ -172,11 +176,11 @@ def test_compiled_merge_carries_shear_over_as_the_numpy_oracle(benchmark_wall):
     rotation = matrices(state.quaternion)
     keep = np.random.default_rng(0).random(len(old.pairs)) < 0.5
     stale = old.pairs[~keep]
-    fresh, _ = contacts.narrow_phase_compiled(m.geometry, stale, state.position, rotation, tolerance=m.contact_tolerance, density=m.contact_density)
+    fresh, _ = narrow_phase(m.geometry, stale, state.position, rotation, tolerance=m.contact_tolerance, density=m.contact_density)
     fast = refresh.merge(old, keep, fresh, state.position, rotation)
     oracle_fresh = fresh.copy()
-    contacts.carry_over(contacts.subset(old, ~keep), oracle_fresh, state.position, rotation)
-    slow = contacts.concatenate(contacts.subset(old, keep), oracle_fresh)
+    oracle.carry_over(contacts.subset(old, ~keep), oracle_fresh, state.position, rotation)
+    slow = oracle.concatenate(contacts.subset(old, keep), oracle_fresh)
     for name in contacts.SubContacts._fields:
         np.testing.assert_allclose(getattr(fast, name), getattr(slow, name), rtol=0, atol=1e-12 * np.abs(getattr(slow, name)).max(), err_msg=name)
     assert np.abs(fast.shear_force[fast.start[keep.sum()]:]).max() > 0 and (~fast.intact).any()  # carried, some slipped
@@ -184,8 +188,8 @@ def test_compiled_merge_carries_shear_over_as_the_numpy_oracle(benchmark_wall):
 
 @pytest.mark.parametrize("everything", [False, True])
 def test_compiled_pair_matching_agrees_with_set_operations(everything):
-    """drydem.refresh.match_pairs against NumPy set operations on random neighbour lists."""
-    from drydem import refresh
+    """drydem.engine.refresh.match_pairs against NumPy set operations on random neighbour lists."""
+    from drydem.engine import refresh
 
     rng = np.random.default_rng(5)
     nb = 40
@@ -224,7 +228,7 @@ def smaller_face_area(shapes, ref, inc, normal):
 def compare_narrow_phases(shapes, candidates, tolerance, density):
     """The compiled narrow phase against the plain-Python one, field by field."""
     position, rotation = at_rest(shapes)
-    fast, fast_sep = contacts.narrow_phase_compiled(contacts_geometry(shapes), candidates, position, rotation, tolerance=tolerance, density=density)
+    fast, fast_sep = narrow_phase(FlatGeometry.of(shapes), candidates, position, rotation, tolerance=tolerance, density=density)
     return assert_as_the_python_narrow_phase(fast, fast_sep, shapes, candidates, tolerance, density)
 
 
@@ -232,7 +236,7 @@ def assert_as_the_python_narrow_phase(fast, fast_sep, shapes, candidates, tolera
     """The compiled narrow phase's sub-contacts ``fast`` and separations ``fast_sep`` (shapes at
     rest) against the plain-Python one's, field by field; returns the latter."""
     position, rotation = at_rest(shapes)
-    slow, slow_sep = contacts.narrow_phase(dict(enumerate(shapes)), candidates, position, rotation, tolerance=tolerance, density=density)
+    slow, slow_sep = oracle.narrow_phase(dict(enumerate(shapes)), candidates, position, rotation, tolerance=tolerance, density=density)
     np.testing.assert_allclose(fast_sep, slow_sep, rtol=0, atol=1e-12 * np.abs(position).max())
     np.testing.assert_array_equal(fast.pairs, slow.pairs)
     np.testing.assert_array_equal(fast.start, slow.start)
@@ -258,20 +262,14 @@ def assert_as_the_python_narrow_phase(fast, fast_sep, shapes, candidates, tolera
     return slow
 
 
-def contacts_geometry(shapes):
-    from drydem.narrow import Geometry
-
-    return Geometry.of(shapes)
-
-
 @pytest.mark.parametrize("seed", range(3))
 def test_compiled_narrow_phase_matches_the_python_one_on_random_clouds(seed):
     rng = np.random.default_rng(seed)
     boxes, tolerance = random_box_cloud(rng)
     rotation = Rotation.random(random_state=rng).as_matrix()
     shapes = [dd.convex_hull(box_vertices(lo, hi) @ rotation.T) for lo, hi in boxes.values()]
-    candidates = contacts.broad_phase(*contacts.bounds(shapes), np.ones(len(shapes), bool), 0.5 * tolerance)
-    sub = compare_narrow_phases(shapes, candidates, tolerance, contacts.Density(along=3, across=3))
+    candidates = overlapping_pairs(*bounds(shapes), np.ones(len(shapes), bool), 0.5 * tolerance)
+    sub = compare_narrow_phases(shapes, candidates, tolerance, ContactDensity(along=3, across=3))
     assert sub.count > 50
 
 
@@ -294,8 +292,8 @@ def test_compiled_narrow_phase_matches_on_a_wall_with_turned_and_rocked_bricks(a
         turn = np.eye(3) if b.fixed else Rotation.from_rotvec(rng.normal(scale=0.01, size=3)).as_matrix()
         c = b.shape.centroid
         shapes.append(dd.convex_hull((b.shape.vertices - c) @ turn.T + c))
-    candidates = contacts.broad_phase(*contacts.bounds(shapes), np.ones(len(shapes), bool), 2e-4)
-    sub = compare_narrow_phases(shapes, candidates, 2e-4, contacts.Density(along=along, across=across))
+    candidates = overlapping_pairs(*bounds(shapes), np.ones(len(shapes), bool), 2e-4)
+    sub = compare_narrow_phases(shapes, candidates, 2e-4, ContactDensity(along=along, across=across))
     assert sub.count > 0
 
 
@@ -328,12 +326,12 @@ import json, sys
 import numpy as np
 sys.path.insert(0, sys.argv[1])
 import drydem as dd
-from drydem import contacts
+from drydem.engine.narrow_phase import narrow_phase
 import test_contacts
 
 model = dd.build_model(eval(sys.argv[2], vars(test_contacts)), density=2400.0)
 position, rotation = test_contacts.at_rest(model.block_shape)
-fast, separation = contacts.narrow_phase_compiled(
+fast, separation = narrow_phase(
     model.geometry, np.array([[0, 1]]), position, rotation, tolerance=model.contact_tolerance, density=model.contact_density
 )
 np.savez(sys.argv[3], separation=separation, **fast._asdict())

@@ -10,8 +10,8 @@ from drydem.io.mesh import STL_TRIANGLE, read_mesh, write_mesh
 from drydem.io.target import load_target
 from drydem.io.vrml import read_vrml
 from drydem.io.vtk import write_vtu
-from drydem.state import State
-from drydem.walls import benchmark_wall
+from drydem.model.state import State
+from wall_fixtures import benchmark_wall
 
 #: two 20 x 12 x 10 mm boxes in millimetres, as Rhino writes them: an IndexedFaceSet under a
 #: Transform, and a Box under a Transform turned 90 deg about z (its 12 x 20 footprint becomes 20 x 12)

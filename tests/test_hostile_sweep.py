@@ -20,9 +20,9 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from drydem.analysis import sweep as sweep_module
-from drydem.analysis.calibrate import StiffnessSearch, calibrate_stiffness
-from drydem.analysis.sweep import (
+from drydem.parametric import sweep as sweep_module
+from drydem.parametric.calibrate import StiffnessSearch, calibrate_stiffness
+from drydem.parametric.sweep import (
     RunSpec, SweepError, _claim, _release, load_records, load_study, lock_path, pending, read_record, record_path, sweep, write_record,
 )
 from drydem.cli import main
@@ -312,7 +312,7 @@ def test_a_worker_ends_with_its_killed_parent(tmp_path, initializer):
     script.write_text(textwrap.dedent(f"""
         import multiprocessing, os, time
         from concurrent.futures import ProcessPoolExecutor
-        from drydem.analysis import sweep
+        from drydem.parametric import sweep
 
         if __name__ == "__main__":
             pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"),

@@ -1,12 +1,14 @@
 """The compiled cycles against their oracles on brick walls: the 3D numba kernel against the plain
-NumPy reference (drydem.reference), the planar kernel (drydem.planar) against the 3D one."""
+NumPy reference (oracles.cycle), the planar kernel (drydem.engine.cycle_planar) against the 3D one."""
 
 import numpy as np
 import pytest
 
 import drydem as dd
-from drydem import kernels, planar, reference
-from drydem.joints import JointArrays
+from drydem.engine import cycle3d
+from drydem.engine import cycle_planar
+from oracles import cycle as reference
+from drydem.engine.joints import JointConstants
 from conftest import layout_blocks, tilted_gravity
 
 
@@ -18,7 +20,7 @@ def copies(sim):
 def run_step(step, sim, state, sub, gravity, joint):
     nb = sim.model.n_blocks
     force, moment, rot = np.empty((nb, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3))
-    stats = step(state, sim._blocks, sub, joint, gravity, sim.timestep, 0.8, rot, force, moment, True)
+    stats = step(state, sim.blocks, sub, joint, gravity, sim.timestep, 0.8, rot, force, moment, True)
     return force, stats
 
 
@@ -64,9 +66,9 @@ def assert_same_cycle(step, oracle, sim, joint, gravity, components=(0, 1, 2)):
 
 @pytest.mark.parametrize("cohesion, tension", [(0.0, 0.0), (50.0, 20.0)])
 def test_one_step_gives_the_same_forces_and_motion(loaded_wall_3d, cohesion, tension):
-    joint = JointArrays.of(dd.JointMaterial(kn=3e7, ks=3e7, friction=0.5, cohesion=cohesion, tension=tension))
+    joint = JointConstants.of(dd.JointMaterial(kn=3e7, ks=3e7, friction=0.5, cohesion=cohesion, tension=tension))
     assert not loaded_wall_3d.model.in_plane and np.abs(loaded_wall_3d.state.angular_velocity[:, [0, 2]]).max() > 0
-    sub = assert_same_cycle(kernels.step, reference.step, loaded_wall_3d, joint, tilted_gravity(12.0, turn_deg=30.0))
+    sub = assert_same_cycle(cycle3d.step, reference.step, loaded_wall_3d, joint, tilted_gravity(12.0, turn_deg=30.0))
     assert (sub.normal_force == 0).any() and (sub.normal_force > 0).any()  # open and closed joints
 
 
@@ -74,8 +76,8 @@ def test_planar_step_gives_the_3d_kernels_forces_and_motion(loaded_wall):
     """An in-plane wall (the benchmark wall): one planar cycle against one 3D cycle from the same
     state, to round-off; the 3D kernel leaves y, rx and rz untouched there (they are held)."""
     assert loaded_wall.model.in_plane
-    joint = JointArrays.of(loaded_wall.model.joint)
-    sub = assert_same_cycle(planar.step, kernels.step, loaded_wall, joint, tilted_gravity(12.0), components=[0, 2])
+    joint = JointConstants.of(loaded_wall.model.joint)
+    sub = assert_same_cycle(cycle_planar.step, cycle3d.step, loaded_wall, joint, tilted_gravity(12.0), components=[0, 2])
     assert (sub.shear_force != 0).any() and (sub.normal_force == 0).any()
 
 
@@ -101,7 +103,7 @@ def test_many_cycles_with_redetection_stay_together():
     assert model.in_plane
     runs = {}
     for engine in ("numba", "numba-3d", "reference"):
-        sim = dd.Simulation(model, engine=engine)
+        sim = dd.Simulation(model, engine=reference.run_cycles if engine == "reference" else engine)
         sim.cycle(100)
         result = sim.cycle(400, gravity=tilted_gravity(30.0))
         runs[engine] = (sim, result)
@@ -123,21 +125,22 @@ def test_many_cycles_with_redetection_stay_together():
 
 
 def test_compiled_contact_stiffness_and_timestep_match_their_numpy_oracles(benchmark_wall):
-    from drydem import motion
+    from drydem.engine import inertia
+    from oracles.inertia import contact_stiffness_reference, critical_timestep_reference
 
     sim = dd.Simulation(benchmark_wall)
     m = benchmark_wall
-    fast = motion.contact_stiffness(sim.contacts, 3e7, 1e7, m.n_blocks)
-    slow = motion.contact_stiffness_reference(sim.contacts, 3e7, 1e7, m.n_blocks)
+    fast = inertia.contact_stiffness(sim.contacts, 3e7, 1e7, m.n_blocks)
+    slow = contact_stiffness_reference(sim.contacts, 3e7, 1e7, m.n_blocks)
     np.testing.assert_allclose(fast[0], slow[0], rtol=1e-12)
     np.testing.assert_allclose(fast[1], slow[1], rtol=0, atol=1e-12 * np.abs(slow[1]).max())
     args = (m.block_mass, m.block_inertia_whitening, m.block_movable, *fast)
-    assert motion.critical_timestep(*args) == pytest.approx(motion.critical_timestep_reference(*args), rel=1e-10)
+    assert inertia.critical_timestep(*args) == pytest.approx(critical_timestep_reference(*args), rel=1e-10)
 
 
-def test_closed_form_largest_eigenvalue_of_symmetric_3x3():
+def test_closed_formlargest_eigenvalue_of_symmetric_3x3():
     # Smith (1961) against LAPACK, including repeated and zero eigenvalues
-    from drydem.motion import _largest_eigenvalue
+    from drydem.engine.inertia import largest_eigenvalue
 
     rng = np.random.default_rng(7)
     cases = [np.diag([2.0, 2.0, 2.0]), np.diag([0.0, 0.0, 5.0]), np.diag([3.0, 1.0, 1.0])]
@@ -146,7 +149,7 @@ def test_closed_form_largest_eigenvalue_of_symmetric_3x3():
         cases.append(q @ np.diag(rng.uniform(0, 10, 3) ** rng.integers(1, 4)) @ q.T)
     for a in cases:
         a = 0.5 * (a + a.T)
-        assert _largest_eigenvalue(a) == pytest.approx(np.linalg.eigvalsh(a)[-1], rel=1e-9, abs=1e-12)
+        assert largest_eigenvalue(a) == pytest.approx(np.linalg.eigvalsh(a)[-1], rel=1e-9, abs=1e-12)
 
 
 def test_walls_held_in_y_are_in_plane_and_other_models_are_not():

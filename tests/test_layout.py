@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from drydem.brief import PAPER_BRICK
+from drydem.masonry.brief import PAPER_BRICK
 from drydem.errors import ModelError
-from drydem.layout import MAX_FACE_BRICKS, BrickSize, parse_layout
+from drydem.masonry.layout import MAX_FACE_BRICKS, BrickSize, parse_layout
 
 L, H, W = 0.025, 0.0055, 0.012  # the paper's brick (Section 2): length, height, width, m
 
@@ -65,13 +65,13 @@ def test_blocks_are_named_by_course_from_the_bottom():
 
 
 def test_the_example_wall_has_its_174_blocks_and_a_third_of_voids():
-    from drydem.walls import benchmark_wall
+    from wall_fixtures import benchmark_wall
 
     model = benchmark_wall()
     assert model.n_blocks == 174 and model.block_name[0] == "base"
     # four openings of 4 half bricks x 9 courses in a 16 x 27 grid (drydem/designs/perforated_wall.toml)
-    from drydem import designs
-    from drydem.walls import load_wall
+    from drydem.masonry import designs
+    from drydem.masonry.walls import load_wall
 
     assert load_wall(designs.find("perforated_wall")).layout.void_ratio == pytest.approx(4 * 2 * 9 / (8 * 27))
 

@@ -15,10 +15,10 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from drydem.analysis.sweep import load_study
+from drydem.parametric.sweep import load_study
 from drydem.cli import main
 from drydem.io.target import load_target
-from drydem.walls import is_wall_file
+from drydem.masonry.walls import is_wall_file
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 #: the fence languages this module runs

@@ -5,7 +5,7 @@ import math
 import pytest
 from click.testing import CliRunner
 
-from drydem.analysis.sweep import RunSpec, write_record
+from drydem.parametric.sweep import RunSpec, write_record
 from drydem.cli import main
 from drydem.report.study import DESIGNS, build_report
 

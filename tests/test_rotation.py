@@ -3,7 +3,7 @@
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from drydem.rotation import matrices, rotate_by_vector
+from drydem.model.rotation import matrices, rotate_by_vector
 
 
 def test_quaternion_matrices_match_scipy():
@@ -28,7 +28,7 @@ def test_finite_rotation_update_is_exact_for_large_angles():
 def test_small_rotations_by_series_are_exact_to_round_off():
     """Below SERIES_ANGLE the update uses Taylor series of cos and sin (to x^4, error < x^6/720):
     against scipy at angles from 1e-12 rad to just over the switch, to 1e-15."""
-    from drydem.rotation import SERIES_ANGLE
+    from drydem.model.rotation import SERIES_ANGLE
 
     rng = np.random.default_rng(3)
     for angle in np.concatenate([np.geomspace(1e-12, SERIES_ANGLE, 25), [SERIES_ANGLE * 1.01]]):
@@ -42,7 +42,7 @@ def test_small_rotations_by_series_are_exact_to_round_off():
 
 
 def test_rotation_vectors_undo_the_update():
-    from drydem.rotation import rotation_vectors
+    from drydem.model.rotation import rotation_vectors
 
     rng = np.random.default_rng(4)
     start = Rotation.random(10, random_state=rng).as_quat()[:, [3, 0, 1, 2]]
@@ -56,7 +56,7 @@ def test_rotation_vectors_undo_the_update():
 def test_rotation_about_y_of_in_plane_blocks_is_the_general_update():
     """The planar kernel's update of q = (w, 0, y, 0) against rotate_by_vector with phi = (0, phi_y, 0),
     across the series switch and up to several radians."""
-    from drydem.rotation import SERIES_ANGLE, rotate_about_y
+    from drydem.model.rotation import SERIES_ANGLE, rotate_about_y
 
     rng = np.random.default_rng(5)
     for angle in np.concatenate([[0.0], np.geomspace(1e-12, SERIES_ANGLE, 15), [SERIES_ANGLE * 1.01, 0.3, 2.5]]):

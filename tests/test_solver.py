@@ -9,7 +9,7 @@ from conftest import stack_model, tilted_gravity
 
 def test_non_convergence_is_reported_with_the_cycles_used():
     sim = dd.Simulation(stack_model([0.0055] * 3))
-    result = sim.cycle_to_equilibrium(solver=dd.SolverSettings(max_cycles=5))
+    result = sim.cycle_to_equilibrium(max_cycles=5)
     assert not result.converged and result.cycles == 5 and result.ratio > 1e-5
 
 
@@ -39,10 +39,10 @@ def test_a_timestep_above_the_critical_one_is_refused():
 def test_diverging_integration_stops_with_an_error_not_nan(monkeypatch):
     # the backstop behind the timestep bound: were the critical timestep overestimated 20 x,
     # the run must stop with DivergenceError and leave no NaN in the state
-    import drydem.solve
+    import drydem.engine.inertia
 
-    real = drydem.solve.critical_timestep
-    monkeypatch.setattr(drydem.solve, "critical_timestep", lambda *args: 20.0 * real(*args))
+    real = drydem.engine.inertia.critical_timestep
+    monkeypatch.setattr(drydem.engine.inertia, "critical_timestep", lambda *args: 20.0 * real(*args))
     sim = dd.Simulation(stack_model([0.0055] * 3, solver=dd.SolverSettings(damping=0.0)))
     with pytest.raises(dd.DivergenceError, match="diverged"):
         sim.cycle(10_000)
@@ -126,8 +126,8 @@ def test_a_move_loads_the_shear_springs_by_ks_area_displacement():
     """Simulation.move: a brick (25 x 12 mm footprint) at rest on the base moved 1e-7 m along x in
     one cycle: it is there, at rest, and the base pushes it back with ks A dx (3e-3 N with
     ks = 1e8 Pa/m, A = 3e-4 m2; below mu W = 0.0146 N, so stuck); the normal springs are unchanged."""
-    sim = dd.Simulation(stack_model([0.0055], supports=dd.Supports(fix_y=True)))
-    sim.cycle_to_equilibrium(solver=dd.SolverSettings(ratio=1e-9))
+    sim = dd.Simulation(stack_model([0.0055], supports=dd.Supports(fix_y=True), solver=dd.SolverSettings(ratio=1e-9)))
+    sim.cycle_to_equilibrium()
     before = sim.state.position.copy()
     displacement = np.zeros((2, 3))
     displacement[:, 0] = 1e-7  # the base is fixed: it does not move

@@ -1,4 +1,4 @@
-"""Load paths and the settlement the joints' elastic closure explains (drydem.support), and the
+"""Load paths and the settlement the joints' elastic closure explains (drydem.analysis.support), and the
 fall criterion built on them: a tall or soft wall settles, it does not fall."""
 
 import numpy as np
@@ -6,8 +6,8 @@ import pytest
 
 import drydem as dd
 from drydem.analysis.tilt import NO_EQUILIBRIUM_UNDER_GRAVITY, TiltSettings, tilt_analysis
-from drydem.rotation import matrices
-from drydem.support import elastic_settlement, load_paths
+from drydem.model.rotation import matrices
+from drydem.analysis.support import elastic_settlement, load_paths
 from conftest import BRICK, stack_model
 
 

@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from drydem.analysis.sweep import RunSpec, load_records, load_study, local_executor, pending, record_path, sweep
+from drydem.parametric.sweep import RunSpec, load_records, load_study, local_executor, pending, record_path, sweep
 from drydem.errors import ModelError
 
 #: two small walls (tilting in a second or two) as wall files beside the study

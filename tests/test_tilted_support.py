@@ -22,8 +22,7 @@ def settle(model, theta_deg, turn_deg=0.0, max_cycles=MAX_CYCLES):
     """Equilibrium under vertical gravity, then at the tilt; returns (converged, sim)."""
     sim = dd.Simulation(model)
     assert sim.cycle_to_equilibrium(gravity=tilted_gravity(0.0, turn_deg)).converged
-    solver = dd.SolverSettings(max_cycles=max_cycles)
-    result = sim.cycle_to_equilibrium(gravity=tilted_gravity(theta_deg, turn_deg), solver=solver)
+    result = sim.cycle_to_equilibrium(gravity=tilted_gravity(theta_deg, turn_deg), max_cycles=max_cycles)
     return result.converged, sim
 
 

@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from drydem import designs
-from drydem.brief import COMPETITION, brief_violations
+from drydem.masonry import designs
+from drydem.masonry.brief import COMPETITION, brief_violations
 from drydem.cli import main
 from drydem.errors import ModelError
 from drydem.io.target import load_target
-from drydem.walls import load_wall
+from drydem.masonry.walls import load_wall
 
 COMPETITION_WALLS = [f"WD{k}" for k in range(1, 8)]
 #: the teams, seed paper Table 2 (Savalle et al. 2022)
@@ -189,7 +189,7 @@ def test_the_brief_checker_reports_every_violation(tmp_path):
 def test_every_competition_wall_stands_under_its_own_weight_at_the_papers_stiffness(name):
     # the paper's walls stand at kn = 3e7 (Section 4, Table 3): so must the reconstructions;
     # the settlement is of the order of the joint closures, 27 joints x rho g h / kn ~ 1.2 mm
-    from drydem.solve import Simulation
+    from drydem.engine.simulation import Simulation
 
     model = load_target(name).model
     sim = Simulation(model)

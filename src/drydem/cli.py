@@ -12,12 +12,13 @@ from pathlib import Path
 import click
 import numpy as np
 
-from drydem import __version__, designs
+from drydem import __version__
+from drydem.masonry import designs
 from drydem.errors import DrydemError
 from drydem.io.target import Target, load_target
-from drydem.model import Model
-from drydem.parameters import CRITERIA
-from drydem.solve import Simulation
+from drydem.model.assembly import Model
+from drydem.model.parameters import CRITERIA
+from drydem.engine.simulation import Simulation
 
 #: the tilting analysis' checkpoint in its results folder, and the file it is written to first
 CHECKPOINT = "checkpoint.npz"
@@ -60,8 +61,8 @@ def main() -> None:
 def check(target: str, settle: bool, strict: bool, unit: str) -> None:
     """Validate TARGET (a built-in wall, a wall or model file, or a .wrl/.obj/.stl) and print
     its blocks, contacts and timestep."""
-    from drydem.brief import brief_violations
-    from drydem.support import unsupported
+    from drydem.masonry.brief import brief_violations
+    from drydem.analysis.support import unsupported
 
     found = _target(target, unit)
     model = found.model
@@ -153,7 +154,7 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, predict
     from tqdm import tqdm
 
     from drydem.analysis.tilt import NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY, TiltSettings, monitor_index, tilt_analysis
-    from drydem.io.checkpoint import load_checkpoint
+    from drydem.engine.checkpoint import load_checkpoint
     from drydem.io.results import PushoverWriter
     from drydem.io.vtk import VtkSeries
 
@@ -379,10 +380,10 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
     first run; two sweeps on one OUT share its runs."""
     from tqdm import tqdm
 
-    from drydem import studies
-    from drydem.analysis.sweep import load_study, pending
-    from drydem.io.output import writable_folder
-    from drydem.analysis.sweep import sweep as run_sweep
+    from drydem.masonry import studies
+    from drydem.parametric.sweep import load_study, pending
+    from drydem.files import writable_folder
+    from drydem.parametric.sweep import sweep as run_sweep
 
     path = Path(study_file) if Path(study_file).is_file() else studies.find(study_file)
     if path is None:
@@ -427,12 +428,12 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
 
 @contextmanager
 def _executor(workers: int | None, scheduler: str | None):
-    """Where runs go (drydem.analysis.sweep.open_workers): ``workers`` local processes, or a
+    """Where runs go (drydem.parametric.sweep.open_workers): ``workers`` local processes, or a
     Dask scheduler's cluster; a scheduler that is not an address or does not answer is an error
     naming it and what to check, within seconds."""
     from contextlib import ExitStack
 
-    from drydem.analysis.sweep import open_workers
+    from drydem.parametric.sweep import open_workers
 
     with ExitStack() as stack:
         try:
@@ -474,8 +475,8 @@ def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, workers
     """Find the kn that best reproduces the experimental collapse angles (paper Table 1) of
     DESIGNS, reusing and adding runs in RESULTS_DIR (the paper's post-diction, Section 4.4);
     every option is checked before anything runs."""
-    from drydem.analysis.calibrate import StiffnessSearch, calibrate_stiffness
-    from drydem.io.output import writable_folder
+    from drydem.parametric.calibrate import StiffnessSearch, calibrate_stiffness
+    from drydem.files import writable_folder
 
     search = StiffnessSearch(tuple(d.strip() for d in designs.split(",") if d.strip()), kn_min, kn_max, ks_ratio, increment)
     problems = search.problems(name=lambda field: "--" + field.replace("_", "-"))
@@ -509,7 +510,7 @@ def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, workers
 def list_designs() -> None:
     """List the built-in walls: WD1-WD7 (reconstructions of the seed paper's competition walls)
     and the examples, with their void ratio, block count and the competition-brief check."""
-    from drydem.brief import brief_violations
+    from drydem.masonry.brief import brief_violations
 
     click.echo(f"{'name':<16} {'title':<28} {'voids':>6} {'blocks':>6}  brief")
     for name in designs.names():
@@ -529,8 +530,8 @@ def show(target: str, out: Path | None, strict: bool, unit: str) -> None:
     """Draw TARGET as built (bricks, half bricks, headers, lintel, voids, the monitored block) to
     a PNG (or another format matplotlib writes, by the suffix), written whole or not at all."""
     from drydem.analysis.tilt import monitored_block
-    from drydem.brief import brief_violations
-    from drydem.io.output import replaced_atomically, writable
+    from drydem.masonry.brief import brief_violations
+    from drydem.files import replaced_atomically, writable
     from drydem.report.plots import figure_path, layout_figure
 
     found = _target(target, unit)
@@ -563,7 +564,7 @@ def export(target: str, output: Path, unit: str) -> None:
     solver, which only a .toml keeps). OUTPUT is written whole or not at all."""
     from drydem.io.mesh import write_mesh
     from drydem.io.model_file import save_model
-    from drydem.io.output import replaced_atomically, writable
+    from drydem.files import replaced_atomically, writable
     from drydem.io.vtk import write_vtu
 
     writers = {".toml": save_model, ".vtu": write_vtu, ".obj": write_mesh, ".stl": write_mesh}

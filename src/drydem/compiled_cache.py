@@ -2,9 +2,9 @@
 
 numba checks a cached function against its own file only (a hash of it, and the function's
 bytecode), but compiled code also takes functions inlined from other modules
-(:func:`drydem.joints.shear_law` in :func:`drydem.planar.run_cycles`), constants frozen from
-them (:data:`drydem.polygon.SLIVER_FRACTION` in :mod:`drydem.narrow`) and their types
-(:class:`drydem.contacts.SubContacts`). Edit one of those in an editable install and numba goes
+(:func:`drydem.engine.joints.shear_law` in :func:`drydem.engine.cycle_planar.run_cycles`), constants frozen from
+them (:data:`oracles.polygon.SLIVER_FRACTION` in :mod:`drydem.engine.narrow_phase`) and their types
+(:class:`drydem.engine.contacts.SubContacts`). Edit one of those in an editable install and numba goes
 on loading the old machine code.
 
 :func:`check` runs when drydem is imported, before any compiled function is loaded (numba

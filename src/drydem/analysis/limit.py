@@ -41,12 +41,12 @@ from scipy.optimize import linprog
 from scipy.sparse import coo_matrix, hstack, identity, vstack
 from scipy.spatial.transform import Rotation
 
-from drydem import contacts
+from drydem.engine.contacts import world_points
+from drydem.engine.tracker import ContactTracker
 from drydem.errors import DrydemError
-from drydem.model import Model
-from drydem.parameters import ContactSettings
-from drydem.solve import G, Simulation
-from drydem.state import State
+from drydem.model.assembly import Model
+from drydem.model.parameters import G, ContactSettings
+from drydem.model.state import State
 
 #: sides of the linearised friction pyramid for 3D contacts
 PYRAMID_SIDES = 16
@@ -169,13 +169,13 @@ def _assemble(model: Model, progress: Callable[[str], None]) -> _Problem:
     progress(f"finding the contacts of {model.n_blocks} blocks")
     corners = model.replace(contacts=ContactSettings(points_per_length=2, points_across=model.contacts.points_across,
                                                      tolerance=model.contacts.tolerance))
-    sim = Simulation(corners)
-    sub = sim.contacts
+    at_rest = State.at_rest(model.block_centroid)
+    sub = ContactTracker(corners, at_rest).contacts
     if sub.count == 0:
         raise LimitAnalysisError(f"{model.source}: no contacts: the blocks do not touch")
     progress(f"assembling the equilibrium matrix ({sub.count} contact points)")
     rotation = np.repeat(np.eye(3)[None], model.n_blocks, axis=0)
-    point, _, normal = contacts.world_points(sub, sim.state.position, rotation)
+    point, _, normal = world_points(sub, at_rest.position, rotation)
     # in-plane models (the paper's walls, Model.in_plane): every contact normal lies in the x-z
     # plane and only x, z and the rotation about y are in equilibrium (the others are held)
     in_plane = model.in_plane

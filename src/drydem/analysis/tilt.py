@@ -14,7 +14,7 @@ stop displacement), or equilibrium cannot be reached within the solver's ``max_c
 The collapse angle is the largest tilt at which the model was in equilibrium.
 
 Predictor: each step starts from the trend of the last two equilibria, extrapolated to the new
-tilt and applied as one cycle's rigid motion (:meth:`~drydem.solve.Simulation.move`; the joints
+tilt and applied as one cycle's rigid motion (:meth:`~drydem.engine.simulation.Simulation.move`; the joints
 follow it as in any cycle), so that dynamic relaxation only has the step's non-linearity left to
 remove: about half the cycles on the competition walls. Only an elastic trend is extrapolated:
 a slip or a local failure is not recovered when the load grows (friction keeps what it is
@@ -36,7 +36,7 @@ only steps of one increment are followed to the stop criteria.
 
 Blocks that fall out of the model (a rigid-body drop of more than ``lost_drop_heights`` of
 their own heights: the centroid's drop below where it was drawn, less the settlement the
-joints' elastic closure explains, :mod:`drydem.support`; e.g. a brick sliding out of a course)
+joints' elastic closure explains, :mod:`drydem.analysis.support`; e.g. a brick sliding out of a course)
 are taken out of the analysis and reported, so that a local failure does not hide the global
 collapse. A tall or soft wall's elastic settlement is not a fall.
 
@@ -53,22 +53,22 @@ import json
 import math
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from drydem.analysis.drift import drift_limit_angles
 from drydem.errors import ModelError
-from drydem.io.checkpoint import load_checkpoint, save_checkpoint
-from drydem.model import Model
-from drydem.motion import contact_stiffness
-from drydem.parameters import Range
-from drydem.contacts import SubContacts
-from drydem.rotation import matrices, rotation_vectors
-from drydem.solve import G, Simulation
-from drydem.state import State
-from drydem.support import elastic_settlement, load_paths
+from drydem.engine.checkpoint import load_checkpoint, save_checkpoint
+from drydem.model.assembly import Model
+from drydem.engine.inertia import contact_stiffness
+from drydem.model.parameters import G, Range
+from drydem.engine.contacts import SubContacts
+from drydem.model.rotation import matrices, rotation_vectors
+from drydem.engine.simulation import Simulation
+from drydem.model.state import State
+from drydem.analysis.support import elastic_settlement, load_paths
 
 LOADINGS = ("tilt", "multiplier")
 #: how a call of :meth:`_Run.equilibrate` ended
@@ -345,8 +345,8 @@ class _Run:
             )
 
         while True:
-            chunk = replace(solver, max_cycles=min(chunk_cycles or self.settings.chunk_cycles, solver.max_cycles - done))
-            result = self.sim.cycle_to_equilibrium(gravity=gravity, solver=chunk, stop=stop)
+            chunk = min(chunk_cycles or self.settings.chunk_cycles, solver.max_cycles - done)
+            result = self.sim.cycle_to_equilibrium(gravity=gravity, max_cycles=chunk, stop=stop)
             done += result.cycles
             dropped = self._dropped()
             lost = self._fallen(dropped)
@@ -376,7 +376,7 @@ class _Run:
     def _dropped(self) -> np.ndarray:
         """(nb,) bool: the block, still in the analysis, has a rigid-body drop beyond its
         lost-drop: its centroid is lower than where it was drawn by more than that plus the
-        settlement the joints' elastic closure explains (:mod:`drydem.support`; looked for only
+        settlement the joints' elastic closure explains (:mod:`drydem.analysis.support`; looked for only
         when some such block has dropped that far at all)."""
         position = self.sim.state.position
         drop = self.model.block_centroid[:, 2] - position[:, 2]

@@ -1,7 +1,7 @@
 """Blocks from surface meshes (OBJ, STL) and blocks to them.
 
 A block is a closed surface: every edge shared by exactly two faces (an open mesh names its
-free edge), no vertex inside the hull of the others (drydem.geometry.convex_hull names it),
+free edge), no vertex inside the hull of the others (drydem.model.geometry.convex_hull names it),
 and enclosing its convex hull's volume (this catches reflex vertices that lie on a hull
 face, such as an L-shaped prism's).
 
@@ -30,8 +30,8 @@ from pathlib import Path
 import numpy as np
 
 from drydem.errors import ModelError
-from drydem.geometry import convex_hull
-from drydem.model import Block, Model
+from drydem.model.geometry import convex_hull
+from drydem.model.assembly import Block, Model
 
 #: vertices closer than this fraction of the mesh's size are one vertex
 MERGE_FRACTION = 1e-9

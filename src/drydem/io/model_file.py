@@ -32,21 +32,20 @@ to the default); so are wrong types. Messages name the file, table, block and ke
 
 from __future__ import annotations
 
-import tomllib
-from contextlib import contextmanager
-from dataclasses import asdict, fields
+from dataclasses import asdict
 from pathlib import Path
 
 import json
 
 import numpy as np
 
-from drydem.errors import DrydemError, ModelError
-from drydem.geometry import box, convex_hull
-from drydem.model import Block, Model, build_model
-from drydem.parameters import DENSITY, ContactSettings, JointMaterial, SolverSettings, Supports, is_number
+from drydem.errors import ModelError
+from drydem.files import read_toml
+from drydem.model.geometry import box, convex_hull
+from drydem.model.assembly import Block, Model, build_model
+from drydem.model.parameters import DENSITY, is_number
+from drydem.model.tables import SECTIONS, errors_naming, no_unknown, parameters_from_dict
 
-SECTIONS = {"joint": JointMaterial, "contacts": ContactSettings, "supports": Supports, "solver": SolverSettings}
 BLOCK_KEYS = {"name", "fixed", "density", "box", "vertices"}
 
 
@@ -57,26 +56,9 @@ def load_model(path: str | Path) -> Model:
     return model_from_dict(data, source=str(path))
 
 
-def read_toml(path: Path) -> tuple[dict, str]:
-    """A TOML file's tables and its text (for line numbers); ModelError naming the file if it
-    cannot be read or parsed."""
-    if path.is_dir():
-        raise ModelError(f"{path}: is a directory, not a TOML file")
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ModelError(f"{path}: cannot read the file ({exc.strerror})") from None
-    except UnicodeDecodeError as exc:
-        raise ModelError(f"{path}: not a text file (byte {exc.start} is not UTF-8); a model, wall or study file is TOML text") from None
-    try:
-        return tomllib.loads(text), text
-    except tomllib.TOMLDecodeError as exc:
-        raise ModelError(f"{path}: not valid TOML: {exc}") from None
-
-
 def model_from_dict(data: dict, *, source: str = "<dict>") -> Model:
     """Build a model from the parsed TOML structure (see module docstring)."""
-    _no_unknown(data, {"material", "block", *SECTIONS}, source, "top level")
+    no_unknown(data, {"material", "block", *SECTIONS}, source, "top level")
     with errors_naming(source):
         params = parameters_from_dict(data, source)
         blocks = data.get("block")
@@ -85,52 +67,15 @@ def model_from_dict(data: dict, *, source: str = "<dict>") -> Model:
         return build_model([_block(b, i, source) for i, b in enumerate(blocks)], source=source, **params)
 
 
-def parameters_from_dict(data: dict, source: str) -> dict:
-    """The keyword arguments of :func:`build_model` other than the blocks, from the tables
-    ``[material]`` (density, kg/m3, default 1800), ``[joint]``, ``[contacts]``, ``[supports]``
-    and ``[solver]``; each table optional, unknown keys errors."""
-    params = {name: _section(data.get(name, {}), cls, name, source) for name, cls in SECTIONS.items()}
-    material = data.get("material", {})
-    _no_unknown(material, {"density"}, source, "[material]")
-    params["density"] = material.get("density", 1800.0)
-    return params
-
-
-@contextmanager
-def errors_naming(source: str):
-    """Re-raise a DrydemError with ``source`` in front of its message, if not there yet."""
-    try:
-        yield
-    except DrydemError as exc:
-        message = str(exc)
-        raise type(exc)(message if message.startswith(source) else f"{source}: {message}") from None
-
-
-def _no_unknown(table: dict, allowed: set[str], source: str, where: str) -> None:
-    if not isinstance(table, dict):
-        raise ModelError(f"{source}: {where} must be a table")
-    unknown = sorted(set(table) - allowed)
-    if unknown:
-        raise ModelError(f"{source}: unknown key(s) {unknown} in {where}; allowed: {sorted(allowed)}")
-
-
-def _section(table: dict, cls, name: str, source: str):
-    _no_unknown(table, {f.name for f in fields(cls)}, source, f"[{name}]")
-    try:
-        return cls(**table)
-    except TypeError as exc:
-        raise ModelError(f"{source}: [{name}]: {exc}") from None
-
-
 def _block(entry: dict, index: int, source: str) -> Block:
     name = entry.get("name", f"block{index}") if isinstance(entry, dict) else f"block{index}"
     where = f"[[block]] #{index} ({name!r})"
-    _no_unknown(entry, BLOCK_KEYS, source, where)
+    no_unknown(entry, BLOCK_KEYS, source, where)
     if ("box" in entry) == ("vertices" in entry):
         raise ModelError(f"{source}: {where} needs exactly one of 'box' or 'vertices'")
     if "box" in entry:
         spec = entry["box"]
-        _no_unknown(spec, {"min", "max"}, source, f"{where} box")
+        no_unknown(spec, {"min", "max"}, source, f"{where} box")
         if "min" not in spec or "max" not in spec:
             raise ModelError(f"{source}: {where} box needs 'min' and 'max'")
         shape = box(_point(spec["min"], f"{source}: {where} box min"), _point(spec["max"], f"{source}: {where} box max"),

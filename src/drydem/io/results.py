@@ -16,10 +16,10 @@ from pathlib import Path
 
 from drydem import __version__
 from drydem.errors import DrydemError
-from drydem.io.output import replaced_atomically, writable_folder
+from drydem.files import replaced_atomically, writable_folder
 from drydem.analysis.limit import LimitResult, LimitSettings
 from drydem.analysis.tilt import Record, TiltResult
-from drydem.model import Model
+from drydem.model.assembly import Model
 
 PUSHOVER_COLUMNS = ("tilt_deg", "load_multiplier", "ux_m", "uz_m", "drift", "cycles")
 
@@ -102,7 +102,7 @@ def prepare_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | Non
     not offer it) or ``overwrite`` is asked, which deletes the
     earlier run's ``outputs`` first, so no stale file (an old video, VTK frames) is left beside
     the new results; other files are kept. A path that is not a folder, or cannot be made or
-    written in, is refused with the reason (:func:`drydem.io.output.writable_folder`).
+    written in, is refused with the reason (:func:`drydem.files.writable_folder`).
     """
     present = sorted(p.name for p in writable_folder(folder).iterdir())
     if present and not resume:

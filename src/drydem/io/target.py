@@ -5,11 +5,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from drydem import designs
+from drydem.masonry import designs
 from drydem.errors import ModelError
-from drydem.io.model_file import model_from_dict, read_toml
-from drydem.model import Model, base_under, build_model
-from drydem.walls import Wall, is_wall_file, wall_from_dict
+from drydem.files import read_toml
+from drydem.io.model_file import model_from_dict
+from drydem.model.assembly import Model, base_under, build_model
+from drydem.masonry.walls import Wall, is_wall_file, wall_from_dict
 
 #: file suffixes read as geometry to import, each closed convex shape a block
 MESH_SUFFIXES = {".wrl": "VRML", ".vrml": "VRML", ".obj": "OBJ", ".stl": "STL"}
@@ -30,7 +31,7 @@ class Target:
 def load_target(target: str, *, unit_m: float = 1.0) -> Target:
     """Resolve ``target``: the name of a built-in wall (``drydem designs``), a wall file or a
     model file (.toml), or geometry to import (.wrl, .obj, .stl; coordinates times ``unit_m``
-    give metres). Imported blocks stand on a fixed base block (drydem.model.base_under) and
+    give metres). Imported blocks stand on a fixed base block (drydem.model.assembly.base_under) and
     get the default material and options. ModelError says what was tried."""
     path = Path(target)
     if not path.is_file():
@@ -57,7 +58,7 @@ def imported_model(path: Path, *, unit_m: float = 1.0) -> tuple[Model, list[str]
     """The blocks of a VRML, OBJ or STL file, density 1800 kg/m3, the default joint and
     options, no supports (``drydem export`` writes it as a model file to edit), and notes on
     what was assumed. Blocks the file marks fixed (drydem.io.mesh) are the supports; a file
-    with none gets a fixed base block under its blocks (drydem.model.base_under), and a note."""
+    with none gets a fixed base block under its blocks (drydem.model.assembly.base_under), and a note."""
     from drydem.io.mesh import read_mesh
     from drydem.io.vrml import read_vrml
 

@@ -27,7 +27,7 @@ from scipy.spatial.transform import Rotation
 
 from drydem.errors import ModelError
 from drydem.io.mesh import closed_convex_block
-from drydem.model import Block
+from drydem.model.assembly import Block
 
 GROUPING = {"Transform", "Group", "Anchor", "Collision"}
 #: nodes that carry no geometry: skipped wherever they are

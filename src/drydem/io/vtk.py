@@ -22,13 +22,12 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from drydem import contacts as contact_geometry
-from drydem.contacts import SubContacts
+from drydem.engine.contacts import SubContacts, world_points
 from drydem.errors import DrydemError
-from drydem.io.output import replaced_atomically
-from drydem.model import Model
-from drydem.rotation import matrices
-from drydem.state import State
+from drydem.files import replaced_atomically
+from drydem.model.assembly import Model
+from drydem.model.rotation import matrices
+from drydem.model.state import State
 
 OPEN, STUCK, SLIDING = 0, 1, 2
 
@@ -68,7 +67,7 @@ def write_contacts_vtu(model: Model, path: str | Path, state: State, sub: SubCon
     """Write the sub-contacts at ``state`` to ``path`` (.vtu): points with their forces and slip state."""
     import meshio
 
-    point, gap, _ = contact_geometry.world_points(sub, state.position, matrices(state.quaternion))
+    point, gap, _ = world_points(sub, state.position, matrices(state.quaternion))
     shear = np.linalg.norm(sub.shear_force, axis=1)
     joint = model.joint
     limit = joint.cohesion * sub.area * sub.intact + joint.friction * sub.normal_force

@@ -5,7 +5,7 @@ and the monitored displacement on every frame, the states past collapse at the e
 Frames are drawn by the renderer of ``mechanism.png`` (drydem.report.plots.draw_displacements),
 so pictures and videos agree. MP4 through imageio-ffmpeg (the ffmpeg binary ships in that
 package); GIF (Pillow) when MP4 cannot be written or is not asked for. The video file is
-checked before any frame is drawn, and written whole or not at all (drydem.io.output).
+checked before any frame is drawn, and written whole or not at all (drydem.files).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from drydem.errors import DrydemError
-from drydem.io.output import replaced_atomically, writable
+from drydem.files import replaced_atomically, writable
 from drydem.report.plots import pyplot, draw_displacements, xz_outline
 
 #: frame size: 1280 x 720 pixels (a multiple of 16, as H.264 wants)

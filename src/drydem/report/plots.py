@@ -12,8 +12,8 @@ import numpy as np
 from drydem.analysis.drift import EC8_DRIFT_LIMITS
 from drydem.analysis.tilt import TiltResult
 from drydem.errors import DrydemError
-from drydem.model import Model
-from drydem.state import State
+from drydem.model.assembly import Model
+from drydem.model.state import State
 
 
 def pyplot():
@@ -111,7 +111,7 @@ def mechanism_figure(model: Model, states: list[tuple[str, State, frozenset[str]
     return path
 
 
-#: colours of the layout drawing, by unit kind (drydem.layout)
+#: colours of the layout drawing, by unit kind (drydem.masonry.layout)
 KIND_COLOURS = {"brick": "#c8703c", "half": "#e0a070", "header": "#8c4a2a", "lintel": "#3c6ec8", "void": "white", "base": "0.6"}
 
 

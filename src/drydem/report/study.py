@@ -1,6 +1,6 @@
 """The report of a parametric study (``drydem report RESULTS_DIR``), in the style of the seed
 paper: its figures (3, 6, 9-13) and tables (2-4) from the study's run records, drydem's values
-beside the paper's (drydem.published), in Markdown and HTML with PNG figures.
+beside the paper's (drydem.masonry.published), in Markdown and HTML with PNG figures.
 
 A figure or table whose runs are missing says so instead of failing: a report can be built
 from a study still running. A corrupt record is left out, and the report names its file.
@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 
 from drydem.analysis.drift import EC8_DRIFT_LIMITS
-from drydem.analysis.sweep import RecordError, load_records
+from drydem.parametric.sweep import RecordError, load_records
 from drydem.errors import DrydemError
-from drydem.published import savalle2022
+from drydem.masonry.published import savalle2022
 from drydem.report.plots import pyplot
 
 DESIGNS = [f"WD{k}" for k in range(1, 8)]
@@ -61,9 +61,9 @@ class Runs:
         return _cell(summary.get("collapse_angle_deg"))
 
     def capacity(self, design: str, kn: float) -> float | None:
-        """The angle the objective of the calibration uses (:func:`drydem.analysis.calibrate.wall_angle`:
+        """The angle the objective of the calibration uses (:func:`drydem.parametric.calibrate.wall_angle`:
         0 for a wall that cannot stand, None for no verdict)."""
-        from drydem.analysis.calibrate import wall_angle
+        from drydem.parametric.calibrate import wall_angle
 
         run = self.tilt(design, kn)
         return None if run is None else wall_angle(run["summary"])

@@ -1,4 +1,4 @@
-"""Wall files: a brick layout (drydem.layout) with its bricks, material and analysis options.
+"""Wall files: a brick layout (drydem.masonry.layout) with its bricks, material and analysis options.
 
 A wall file is TOML::
 
@@ -13,7 +13,7 @@ A wall file is TOML::
     lintel_length_m = 0.075           # optional, default 3 brick lengths
     [layout]
     courses = \"\"\"
-    bBBBBBBBb                         # top course first (drydem.layout)
+    bBBBBBBBb                         # top course first (drydem.masonry.layout)
     ...
     \"\"\"
 
@@ -25,14 +25,15 @@ A TOML file with any of ``[wall]``, ``[brick]`` or ``[layout]`` is a wall file.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 from drydem.errors import ModelError
-from drydem.io.model_file import SECTIONS, _no_unknown, errors_naming, parameters_from_dict, read_toml
-from drydem.layout import BrickSize, Layout, parse_layout
-from drydem.model import Model, build_model
-from drydem.parameters import ContactSettings, JointMaterial, SolverSettings, Supports
+from drydem.files import read_toml
+from drydem.model.tables import SECTIONS, errors_naming, no_unknown, parameters_from_dict
+from drydem.masonry.layout import BrickSize, Layout, parse_layout
+from drydem.model.assembly import Model, build_model
+from drydem.model.parameters import ContactSettings, JointMaterial, SolverSettings, Supports
 
 WALL_KEYS = {"name", "title", "description"}
 LAYOUT_KEYS = {"courses"}
@@ -84,13 +85,13 @@ def load_wall(path: str | Path) -> Wall:
 def wall_from_dict(data: dict, *, source: str, text: str = "", default_name: str = "wall") -> Wall:
     """A wall from parsed TOML (it must have a ``[layout]``); ``text``, the file's text, lets
     layout errors give file line numbers."""
-    _no_unknown(data, {*WALL_TABLES, "material", *SECTIONS}, source, "top level")
+    no_unknown(data, {*WALL_TABLES, "material", *SECTIONS}, source, "top level")
     if "layout" not in data:
-        raise ModelError(f"{source}: a wall file needs a [layout] table with {COURSES_FORM} (drydem.layout)")
+        raise ModelError(f"{source}: a wall file needs a [layout] table with {COURSES_FORM} (drydem.masonry.layout)")
     meta, brick_table, layout_table = (data.get(key, {}) for key in ("wall", "brick", "layout"))
-    _no_unknown(meta, WALL_KEYS, source, "[wall]")
-    _no_unknown(layout_table, LAYOUT_KEYS, source, "[layout]")
-    _no_unknown(brick_table, {"length_m", "height_m", "width_m", "lintel_length_m"}, source, "[brick]")
+    no_unknown(meta, WALL_KEYS, source, "[wall]")
+    no_unknown(layout_table, LAYOUT_KEYS, source, "[layout]")
+    no_unknown(brick_table, {"length_m", "height_m", "width_m", "lintel_length_m"}, source, "[brick]")
     with errors_naming(source):
         name, title, description = _texts(meta, default_name)
         missing = sorted({"length_m", "height_m", "width_m"} - set(brick_table))
@@ -129,16 +130,3 @@ def _courses_line(text: str, courses: str) -> int | None:
         if text.startswith(courses, match.end()):
             return text.count("\n", 0, match.end()) + 1
     return None
-
-
-def benchmark_wall(*, kn: float = 3e7, points_per_length: int = 4, points_across: int | None = None) -> Model:
-    """The built-in ``perforated_wall`` (8 bricks x 27 courses, running bond, 33 % voids, four
-    lintels; in-plane, mu = 0.5) with kn = ks = ``kn`` and the given contact density: the wall
-    of the tests and ``benchmarks/``; not one of the paper's competition walls."""
-    from drydem import designs
-
-    wall = load_wall(designs.find("perforated_wall"))
-    return replace(
-        wall, joint=JointMaterial(kn=kn, ks=kn, friction=wall.joint.friction),
-        contacts=ContactSettings(points_per_length=points_per_length, points_across=points_across),
-    ).model()

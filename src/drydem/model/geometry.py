@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
@@ -183,3 +184,59 @@ def _mass_properties(vertices: np.ndarray, faces: tuple[np.ndarray, ...]) -> tup
     moment = np.einsum("t,tij->ij", vol / 20.0, np.einsum("tki,tkj->tij", t, t) + np.einsum("ti,tj->tij", s, s))
     second = moment - volume * np.outer(centroid_rel, centroid_rel)
     return volume, apex + centroid_rel, second
+
+
+def face_separations(ref: ConvexPolyhedron, other: ConvexPolyhedron) -> np.ndarray:
+    """Signed distance of ``other``'s deepest vertex from each face plane of ``ref``, m."""
+    offsets = np.einsum("fi,fi->f", ref.face_normals, ref.vertices[[f[0] for f in ref.faces]])
+    return (other.vertices @ ref.face_normals.T).min(0) - offsets
+
+
+def best_separation(a: ConvexPolyhedron, b: ConvexPolyhedron) -> tuple[float, bool, int]:
+    """(separation m, reference is a, reference face): the face of least penetration over both
+    blocks' face normals (separating-axis test restricted to face normals), ties to ``a``."""
+    sa, sb = face_separations(a, b), face_separations(b, a)
+    fa, fb = int(np.argmax(sa)), int(np.argmax(sb))
+    tie = 1e-9 * min(a.size, b.size)
+    if sa[fa] >= sb[fb] - tie:
+        return float(sa[fa]), True, fa
+    return float(sb[fb]), False, fb
+
+
+def penetration_depth(a: ConvexPolyhedron, b: ConvexPolyhedron) -> float:
+    """Least overlap of two convex blocks along their face normals, m (negative: separated)."""
+    return -best_separation(a, b)[0]
+
+
+class FlatGeometry(NamedTuple):
+    """Every block's polyhedron in its body frame, flattened for the compiled contact detection (nb blocks).
+
+    vertex (V, 3) m relative to the centroid, block b's rows vertex_start[b]:vertex_start[b+1];
+    face_vertex (I,) vertex numbers within the block, face f's entries face_start[f]:face_start[f+1];
+    block b's faces block_face_start[b]:block_face_start[b+1]; face_normal (F, 3) outward unit
+    normals; size (nb,) m, bounding-box diagonal.
+    """
+
+    vertex: np.ndarray
+    vertex_start: np.ndarray
+    face_vertex: np.ndarray
+    face_start: np.ndarray
+    block_face_start: np.ndarray
+    face_normal: np.ndarray
+    size: np.ndarray
+
+    @classmethod
+    def of(cls, shapes) -> FlatGeometry:
+        """From a sequence of :class:`ConvexPolyhedron` (in the body frame = as given)."""
+        vertex = np.concatenate([s.vertices - s.centroid for s in shapes])
+        vertex_start = np.concatenate([[0], np.cumsum([len(s.vertices) for s in shapes])])
+        faces = [f for s in shapes for f in s.faces]
+        return cls(
+            vertex=vertex,
+            vertex_start=vertex_start.astype(np.int64),
+            face_vertex=np.concatenate(faces).astype(np.int64),
+            face_start=np.concatenate([[0], np.cumsum([len(f) for f in faces])]).astype(np.int64),
+            block_face_start=np.concatenate([[0], np.cumsum([len(s.faces) for s in shapes])]).astype(np.int64),
+            face_normal=np.concatenate([s.face_normals for s in shapes]),
+            size=np.array([s.size for s in shapes]),
+        )

@@ -79,7 +79,7 @@ def rotate_by_vector(q: np.ndarray, phi_x: float, phi_y: float, phi_z: float) ->
 @numba.njit(cache=True, inline="always")
 def rotate_about_y(q: np.ndarray, phi_y: float) -> None:
     """:func:`rotate_by_vector` for q = (w, 0, y, 0) and phi = (0, phi_y, 0) (in-plane blocks,
-    drydem.planar): q <- (c w - s y, 0, c y + s w, 0) with c, s = cos, sin(phi_y / 2)."""
+    drydem.engine.cycle_planar): q <- (c w - s y, 0, c y + s w, 0) with c, s = cos, sin(phi_y / 2)."""
     cos_half, s = _half_angle(phi_y * phi_y)
     sin_half = s * phi_y
     w, y = q[0], q[2]

@@ -1,13 +1,15 @@
-"""Output files: refuse a path that cannot be written before any work, and write each file whole or not at all."""
+"""Files: read a TOML input with a message naming it; refuse an output path that cannot be written
+before any work, and write each file whole or not at all."""
 
 from __future__ import annotations
 
 import os
 import tempfile
+import tomllib
 from contextlib import contextmanager
 from pathlib import Path
 
-from drydem.errors import DrydemError
+from drydem.errors import DrydemError, ModelError
 
 
 def writable(path: str | Path) -> Path:
@@ -59,3 +61,20 @@ def replaced_atomically(path: str | Path):
         raise DrydemError(f"{path}: cannot write: {exc.strerror or exc}") from None
     finally:
         temporary.unlink(missing_ok=True)
+
+
+def read_toml(path: Path) -> tuple[dict, str]:
+    """A TOML file's tables and its text (for line numbers); ModelError naming the file if it
+    cannot be read or parsed."""
+    if path.is_dir():
+        raise ModelError(f"{path}: is a directory, not a TOML file")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read the file ({exc.strerror})") from None
+    except UnicodeDecodeError as exc:
+        raise ModelError(f"{path}: not a text file (byte {exc.start} is not UTF-8); a model, wall or study file is TOML text") from None
+    try:
+        return tomllib.loads(text), text
+    except tomllib.TOMLDecodeError as exc:
+        raise ModelError(f"{path}: not valid TOML: {exc}") from None

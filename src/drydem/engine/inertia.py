@@ -1,4 +1,4 @@
-"""Inertia for the explicit integration: critical timestep, mass scaling, local damping.
+"""Inertia for the explicit integration: the blocks' constants, the critical timestep, mass scaling.
 
 Critical timestep. The central-difference scheme is stable for dt < 2 / omega_max
 (omega_max the highest natural frequency). Block i is touched by springs of stiffness
@@ -27,17 +27,22 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from drydem.contacts import SubContacts
+from drydem.engine.contacts import SubContacts
+from drydem.errors import ModelError
+from drydem.model.assembly import Model
+from drydem.model.parameters import G
+from drydem.model.state import State
+from drydem.model.rotation import matrices
 
 
-class BlockArrays(NamedTuple):
+class BlockConstants(NamedTuple):
     """Per-block constants for the kernels (nb blocks).
 
     mass : (nb,) kg, true mass (gravity). inv_mass : (nb,) 1/kg, of the mass used for
     the motion (scaled or true). inertia_body, inv_inertia_body : (nb, 3, 3) kg m2 and its
     inverse, about the centroid in the body frame. free : (nb, 6) 1.0 where the degree of
     freedom (x, y, z, rx, ry, rz) moves, 0.0 where fixed. radius : (nb,) m, largest
-    distance from the centroid to a vertex.
+    distance from the centroid to a vertex. origin : (nb, 3) m, the centroids in the model file.
     """
 
     mass: np.ndarray
@@ -52,7 +57,7 @@ class BlockArrays(NamedTuple):
 def contact_stiffness(sub: SubContacts, kn: float, ks: float, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:
     """Per-block K_t (nb,) N/m and K_r (nb, 3, 3) N m of its sub-contact springs (body frame):
     K_t = sum_s k_s, K_r = trace(S) 1 - S with S = sum_s k_s r_s r_s^T, k_s = max(kn, ks) A_s.
-    Compiled (it runs at every re-detection); :func:`contact_stiffness_reference` is the oracle."""
+    Compiled (it runs at every re-detection); the tests hold it to a NumPy oracle."""
     return _contact_stiffness(sub.pairs, sub.start, sub.point_ref_body, sub.point_inc_body, sub.area, max(kn, ks), n_blocks)
 
 
@@ -78,27 +83,11 @@ def _contact_stiffness(pairs, start, point_ref_body, point_inc_body, area, k_per
     return k_t, k_r
 
 
-def contact_stiffness_reference(sub: SubContacts, kn: float, ks: float, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:
-    """The same as :func:`contact_stiffness`, with NumPy weighted bincounts."""
-    k = max(kn, ks) * sub.area
-    k_t = np.bincount(sub.block_ref, k, n_blocks) + np.bincount(sub.block_inc, k, n_blocks)
-    second = np.zeros((n_blocks, 3, 3))
-    for block, arm in ((sub.block_ref, sub.point_ref_body), (sub.block_inc, sub.point_inc_body)):
-        for a in range(3):
-            for b in range(a, 3):
-                moment = np.bincount(block, k * arm[:, a] * arm[:, b], n_blocks)
-                second[:, a, b] += moment
-                if a != b:
-                    second[:, b, a] += moment
-    k_r = np.trace(second, axis1=1, axis2=2)[:, None, None] * np.eye(3) - second
-    return k_t, k_r
-
-
 def critical_timestep(mass: np.ndarray, whitening: np.ndarray, movable: np.ndarray, k_t: np.ndarray, k_r: np.ndarray) -> float:
     """2 / omega_max with omega_i^2 = 2 (K_t / m + lambda_max(I^-1 K_r)), s (inf if nothing is
     sprung); ``whitening`` is L^-1 for the inertias I = L L^T (Model.block_inertia_whitening), so
     that lambda(I^-1 K_r) = lambda(L^-1 K_r L^-T), a symmetric 3 x 3 eigenproblem, solved in
-    closed form (compiled; :func:`critical_timestep_reference` uses LAPACK)."""
+    closed form (compiled; the tests hold it to LAPACK's eigvalsh)."""
     omega_sq = _largest_omega_sq(mass, whitening, movable, k_t, k_r)
     return np.inf if omega_sq <= 0 else float(2.0 / np.sqrt(omega_sq))
 
@@ -118,12 +107,12 @@ def _largest_omega_sq(mass, whitening, movable, k_t, k_r):
         for i in range(3):
             for j in range(3):
                 a[i, j] = wk[i, 0] * w[j, 0] + wk[i, 1] * w[j, 1] + wk[i, 2] * w[j, 2]
-        largest = max(largest, 2.0 * (k_t[b] / mass[b] + _largest_eigenvalue(a)))
+        largest = max(largest, 2.0 * (k_t[b] / mass[b] + largest_eigenvalue(a)))
     return largest
 
 
 @numba.njit(cache=True, inline="always")
-def _largest_eigenvalue(a):
+def largest_eigenvalue(a):
     """Largest eigenvalue of a symmetric 3 x 3 matrix, trigonometric closed form (Smith 1961,
     "Eigenvalues of a symmetric 3 x 3 matrix", Comm. ACM 4(4), 168)."""
     off = a[0, 1] ** 2 + a[0, 2] ** 2 + a[1, 2] ** 2
@@ -138,15 +127,6 @@ def _largest_eigenvalue(a):
     det = b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) + b02 * (b01 * b12 - b11 * b02)
     r = min(max(det / 2.0, -1.0), 1.0)
     return q + 2.0 * p * np.cos(np.arccos(r) / 3.0)
-
-
-def critical_timestep_reference(mass, whitening, movable, k_t, k_r) -> float:
-    """The same as :func:`critical_timestep`, with numpy.linalg.eigvalsh."""
-    rotational = np.linalg.eigvalsh(whitening @ k_r @ whitening.transpose(0, 2, 1))[:, -1]
-    omega_sq = (2.0 * (k_t / mass + rotational))[movable]
-    if omega_sq.size == 0 or omega_sq.max() <= 0:
-        return np.inf
-    return float(2.0 / np.sqrt(omega_sq.max()))
 
 
 def scaled_inertia(
@@ -164,11 +144,59 @@ def scaled_inertia(
     return m, inertia
 
 
-@numba.njit(cache=True, inline="always")
-def local_damping(force: float, velocity: float, alpha: float) -> float:
-    """Damped force F - alpha |F| sign(v) of one degree of freedom (paper Eq. 4; Cundall 1987)."""
-    if velocity > 0.0:
-        return force - alpha * abs(force)
-    if velocity < 0.0:
-        return force + alpha * abs(force)
-    return force
+def timestep_and_blocks(
+    model: Model, contacts: SubContacts, active: np.ndarray, *, fixed_timestep: float | None, scaled_timestep: float | None
+) -> tuple[float, BlockConstants]:
+    """The timestep (s) and the blocks' constants with ``contacts``, blocks not ``active`` held.
+
+    The timestep is ``fixed_timestep`` (ModelError if above the critical one), else
+    ``solver.timestep_safety`` times the critical one (:func:`critical_timestep`), or the free
+    flight one where nothing is sprung. With mass scaling, the masses and inertias are the
+    fictitious ones (:func:`scaled_inertia`) for ``scaled_timestep`` (s; None: for this timestep,
+    which is then the one to keep).
+    """
+    solver = model.solver
+    k_t, k_r = contact_stiffness(contacts, model.joint.kn, model.joint.ks, model.n_blocks)
+    movable = model.block_movable & active
+    critical = critical_timestep(model.block_mass, model.block_inertia_whitening, movable, k_t, k_r)
+    if fixed_timestep is not None:
+        if fixed_timestep > critical:
+            raise ModelError(
+                f"{model.source}: timestep {fixed_timestep:.3g} s exceeds the critical timestep "
+                f"{critical:.3g} s (kn = {model.joint.kn:.3g} Pa/m); the run would blow up"
+            )
+        dt = fixed_timestep
+    else:
+        dt = solver.timestep_safety * critical if np.isfinite(critical) else free_flight_timestep(model.contact_tolerance)
+    mass, inertia = model.block_mass, model.block_inertia
+    if solver.mass_scaling:
+        dt = dt if scaled_timestep is None else scaled_timestep
+        mass, inertia = scaled_inertia(mass, inertia, k_t, k_r, dt, solver.timestep_safety)
+    return float(dt), BlockConstants(
+        mass=model.block_mass,
+        inv_mass=np.where(movable, 1.0 / mass, 0.0),
+        inertia_body=inertia,
+        inv_inertia_body=np.linalg.inv(inertia) if solver.mass_scaling else model.block_inertia_inverse,
+        free=(~model.block_fixed & movable[:, None]).astype(float),
+        radius=model.block_radius,
+        origin=model.block_centroid,
+    )
+
+
+def free_flight_timestep(tolerance: float) -> float:
+    """Timestep with no springs, s: a tenth of the time to fall through the contact ``tolerance`` (m)."""
+    return 0.1 * float(np.sqrt(2.0 * tolerance / G))
+
+
+def keep_kinetic_energy(state: State, old: BlockConstants, new: BlockConstants) -> None:
+    """Rescale ``state``'s velocities in place when fictitious masses change from ``old`` to
+    ``new``, so that each block keeps its kinetic energy (a change of fictitious inertia must not
+    create or destroy energy)."""
+    old_mass = np.divide(1.0, old.inv_mass, out=np.zeros_like(old.inv_mass), where=old.inv_mass > 0)
+    mass = np.divide(1.0, new.inv_mass, out=np.zeros_like(new.inv_mass), where=new.inv_mass > 0)
+    state.velocity[:] *= np.sqrt(np.divide(old_mass, mass, out=np.ones_like(mass), where=mass > 0))[:, None]
+    rot = matrices(state.quaternion)
+    omega_body = np.einsum("nji,nj->ni", rot, state.angular_velocity)
+    before = np.einsum("ni,nij,nj->n", omega_body, old.inertia_body, omega_body)
+    after = np.einsum("ni,nij,nj->n", omega_body, new.inertia_body, omega_body)
+    state.angular_velocity[:] *= np.sqrt(np.divide(before, after, out=np.ones_like(after), where=after > 0))[:, None]

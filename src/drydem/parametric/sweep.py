@@ -53,7 +53,8 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 from drydem.errors import DrydemError, ModelError
-from drydem.io.model_file import _no_unknown, read_toml
+from drydem.files import read_toml
+from drydem.model.tables import no_unknown
 
 ANALYSES = {"tilt": ("fixed", "adaptive"), "limit": ("associative", "non-associative")}
 DEFAULT_PROTOCOL = {"tilt": "adaptive", "limit": "associative"}
@@ -111,10 +112,10 @@ def load_study(path: str | Path) -> Study:
     path = Path(path)
     data, _ = read_toml(path)
     source = str(path)
-    _no_unknown(data, {"study", "defaults", "grid"}, source, "top level")
+    no_unknown(data, {"study", "defaults", "grid"}, source, "top level")
     meta, defaults = data.get("study", {}), data.get("defaults", {})
-    _no_unknown(meta, {"name", "description"}, source, "[study]")
-    _no_unknown(defaults, DEFAULT_KEYS, source, "[defaults]")
+    no_unknown(meta, {"name", "description"}, source, "[study]")
+    no_unknown(defaults, DEFAULT_KEYS, source, "[defaults]")
     grids = data.get("grid")
     if not isinstance(grids, list) or not grids:
         raise ModelError(f"{source}: no [[grid]] entries")
@@ -125,7 +126,7 @@ def load_study(path: str | Path) -> Study:
         name = grid.get("name", "?") if isinstance(grid, dict) else "?"
         where = f"{source}: [[grid]] #{k} ({name!r})"
         try:
-            _no_unknown(grid, GRID_KEYS, where, "the grid")
+            no_unknown(grid, GRID_KEYS, where, "the grid")
             runs += _grid_runs(defaults | grid, path.parent, where, models, problems)
         except ModelError as exc:
             problems.append(str(exc))

@@ -1,6 +1,6 @@
 """The explicit cycle of in-plane models, compiled: 3 degrees of freedom per block.
 
-An in-plane model (:attr:`drydem.model.Model.in_plane`, the paper's walls: blocks held in y,
+An in-plane model (:attr:`drydem.model.assembly.Model.in_plane`, the paper's walls: blocks held in y,
 prisms across y symmetric about one plane) moves in the x-z plane: every force lies in it and
 every rotation is about y. Its blocks' quaternions stay (cos phi/2, 0, sin phi/2, 0), so
 
@@ -8,10 +8,10 @@ every rotation is about y. Its blocks' quaternions stay (cos phi/2, 0, sin phi/2
 
 angular velocities are omega (0, w, 0), the world inertia about y is the body's I_yy (a
 y-prism has no products of inertia with y), and the gyroscopic term omega x I omega vanishes.
-The cycle is :mod:`drydem.kernels`' one (same joint law, damping, exact rotation update,
+The cycle is :mod:`drydem.engine.cycle3d`' one (same joint law, damping, exact rotation update,
 equilibrium and re-detection loop) with those simplifications: about half its cost per
 sub-contact, a fifth per cycle with one point across the width (benchmarks/bench_step.py).
-It reads and writes the same :class:`~drydem.state.State` and :class:`~drydem.contacts.SubContacts`
+It reads and writes the same :class:`~drydem.model.state.State` and :class:`~drydem.engine.contacts.SubContacts`
 (shear forces as vectors with y = 0), so everything else (detection, snapshots, output) is
 shared; the 3D kernel is its oracle in the tests.
 """
@@ -21,10 +21,10 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from drydem.joints import normal_law, shear_law
-from drydem.kernels import FASTMATH, cycle_loop
-from drydem.motion import local_damping
-from drydem.rotation import rotate_about_y
+from drydem.engine.damping import local_damping
+from drydem.engine.joints import normal_law, shear_law
+from drydem.engine.loop import FASTMATH, cycle_loop
+from drydem.model.rotation import rotate_about_y
 
 #: below this turn of a contact normal in one cycle (rad), 1 / cos t = 1 + t^2 / 2 + 5 t^4 / 24 and
 #: tan^2 t = t^2 + 2 t^4 / 3 (the next terms, 61 t^6 / 720 and 17 t^6 / 45, are below 1e-18)
@@ -42,7 +42,7 @@ def _cos_sin(q):
 
 @numba.njit(cache=True, fastmath=FASTMATH)
 def contact_forces(state, sub, joint, dt, force, moment):
-    """Every sub-contact's forces (as :func:`drydem.kernels.contact_forces`), in the x-z plane:
+    """Every sub-contact's forces (as :func:`drydem.engine.cycle3d.contact_forces`), in the x-z plane:
     forces summed into ``force[:, 0]``, ``force[:, 2]`` (N) and moments about y into
     ``moment[:, 1]`` (N m). A point's arm r = R_b p and the centroid offset d give the gap
     (d + r) . n - offset and the relative velocity v_b - v_a - w_a x d + (w_b - w_a) x r, with
@@ -112,7 +112,7 @@ def contact_forces(state, sub, joint, dt, force, moment):
 @numba.njit(cache=True, fastmath=FASTMATH)
 def integrate(state, blocks, force, moment, damping, dt):
     """Damped velocities, positions and rotations of x, z and the rotation about y (as
-    :func:`drydem.kernels.integrate`, which returns the same two measures)."""
+    :func:`drydem.engine.cycle3d.integrate`, which returns the same two measures)."""
     max_unbalanced_sq = 0.0
     max_speed = 0.0
     for i in range(state.position.shape[0]):
@@ -140,7 +140,7 @@ def integrate(state, blocks, force, moment, damping, dt):
 
 @numba.njit(cache=True)
 def energies(state, blocks):
-    """:func:`drydem.kernels.energies` in the plane: 1/2 (m v^2 + I_yy w^2) and sum m |x - x_origin|."""
+    """:func:`drydem.engine.cycle3d.energies` in the plane: 1/2 (m v^2 + I_yy w^2) and sum m |x - x_origin|."""
     kinetic = 0.0
     travel = 0.0
     for i in range(state.position.shape[0]):
@@ -155,7 +155,7 @@ def energies(state, blocks):
 @numba.njit(cache=True)
 def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, measure):
     """One cycle of an in-plane model (``rot`` unused: the signature is
-    :func:`drydem.kernels.step`'s, so that both share the cycling loop)."""
+    :func:`drydem.engine.cycle3d.step`'s, so that both share the cycling loop)."""
     for i in range(state.position.shape[0]):
         force[i, 0] = blocks.mass[i] * gravity[0]
         force[i, 2] = blocks.mass[i] * gravity[2]
@@ -168,5 +168,5 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
 
 @numba.njit(cache=True)
 def run_cycles(state, blocks, sub, joint, loop, broad_state, neighbours):
-    """:func:`drydem.kernels.cycle_loop` around the planar :func:`step`."""
+    """:func:`drydem.engine.cycle3d.cycle_loop` around the planar :func:`step`."""
     return cycle_loop(step, state, blocks, sub, joint, loop, broad_state, neighbours)

@@ -1,18 +1,9 @@
-"""Planar convex polygons as (k, 2) arrays of counter-clockwise vertices (m)."""
+"""Planar convex polygons as (k, 2) arrays of counter-clockwise vertices (m): the geometry of the
+plain-Python narrow phase (:mod:`oracles.contacts`)."""
 
 from __future__ import annotations
 
 import numpy as np
-
-#: A sub-contact whose area is at most this fraction of the smaller of its contact's two faces
-#: is a sliver, dropped by both narrow phases. Slivers come where a contact polygon grazes a grid
-#: cell (turned or rocked blocks): 1e-16 m2 beside cells of 1e-8 m2, their very existence
-#: decided by round-off. Relative to the face, not to the overlap, so the rule is the same for a
-#: full joint and a thin rocking strip. 1e-9 of a face is a strip as wide as the geometric
-#: tolerance (1e-9 of the block size, within which vertices are merged, :func:`without_collinear`)
-#: along the face; it carries 1e-9 of the joint's stiffness, and it is still about a million
-#: times the round-off of an area (eps L^2 for a face of size L), so both phases drop the same cells.
-SLIVER_FRACTION = 1e-9
 
 
 def signed_area(poly: np.ndarray) -> float:

@@ -1,9 +1,9 @@
 """Checkpoints of a running analysis: everything needed to go on after a crash or a kill.
 
-One ``.npz`` file holds a :class:`drydem.solve.Snapshot` (block state, contacts with their
+One ``.npz`` file holds a :class:`drydem.engine.simulation.Snapshot` (block state, contacts with their
 shear history, neighbour list, blocks still in the analysis) and the analysis' own progress
 (arrays and scalars by name). It is written to a temporary file and renamed
-(:func:`drydem.io.output.replaced_atomically`), so a kill while writing leaves the previous
+(:func:`drydem.files.replaced_atomically`), so a kill while writing leaves the previous
 checkpoint intact.
 """
 
@@ -14,11 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
-from drydem.contacts import NeighbourList, SubContacts
+from drydem.engine.contacts import NeighbourList, SubContacts
+from drydem.engine.simulation import Snapshot
 from drydem.errors import DrydemError
-from drydem.io.output import replaced_atomically
-from drydem.solve import Snapshot
-from drydem.state import State
+from drydem.files import replaced_atomically
+from drydem.model.state import State
 
 _PARTS = {"state": State, "contacts": SubContacts, "neighbours": NeighbourList, "broad_state": State}
 

@@ -1,12 +1,16 @@
-"""Contact geometry compiled with numba: bounding boxes, sort and sweep, and the narrow phase
-of :mod:`drydem.contacts` for many block pairs at once.
+"""The narrow phase, compiled with numba: the sub-contacts of many candidate block pairs at once.
 
-Same algorithm as :func:`drydem.contacts.face_contact` (its plain-Python reference, which the
-tests hold this one to): reference face of least penetration (separating axis over face
+Two convex blocks touch where a face of one (the *reference* face) lies within the contact
+tolerance of the other block. The contact polygon is discretised into sub-contacts as 3DEC's
+contact points: a tensor grid whose spacing puts ``points_per_length`` points along the full
+length of the smaller face, ends included, each point carrying its trapezoid share of the area
+(the areas sum to the polygon's area); in-plane models need only 1 point across the width.
+
+The algorithm (the tests hold it to a plain-Python oracle written one pair at a time): reference face of least penetration (separating axis over face
 normals, ties to the first block), most opposed incident face, Sutherland-Hodgman overlap in
 the reference plane, sub-contact grid (bilinear on quadrilaterals, clipped cells otherwise,
 trapezoid areas), gaps along the normal, points beyond the tolerance or with a sliver's area
-(:data:`drydem.polygon.SLIVER_FRACTION`) dropped. Geometry comes flattened (:class:`Geometry`),
+(:data:`SLIVER_FRACTION`) dropped. Geometry comes flattened (:class:`drydem.model.geometry.FlatGeometry`),
 so one call handles every stale pair of a re-detection. Polygon buffers are sized from the
 model's largest face and grow where round-off needs it; no input writes past one.
 """
@@ -19,42 +23,20 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from drydem.polygon import SLIVER_FRACTION
-from drydem.rotation import mat_t_vec
+from drydem.engine.contacts import SubContacts
+from drydem.model.geometry import FlatGeometry
+from drydem.model.parameters import ContactDensity
+from drydem.model.rotation import mat_t_vec
 
-
-class Geometry(NamedTuple):
-    """Every block's polyhedron in its body frame, flattened (nb blocks).
-
-    vertex (V, 3) m relative to the centroid, block b's rows vertex_start[b]:vertex_start[b+1];
-    face_vertex (I,) vertex numbers within the block, face f's entries face_start[f]:face_start[f+1];
-    block b's faces block_face_start[b]:block_face_start[b+1]; face_normal (F, 3) outward unit
-    normals; size (nb,) m, bounding-box diagonal.
-    """
-
-    vertex: np.ndarray
-    vertex_start: np.ndarray
-    face_vertex: np.ndarray
-    face_start: np.ndarray
-    block_face_start: np.ndarray
-    face_normal: np.ndarray
-    size: np.ndarray
-
-    @classmethod
-    def of(cls, shapes) -> Geometry:
-        """From a sequence of :class:`drydem.geometry.ConvexPolyhedron` (in the body frame = as given)."""
-        vertex = np.concatenate([s.vertices - s.centroid for s in shapes])
-        vertex_start = np.concatenate([[0], np.cumsum([len(s.vertices) for s in shapes])])
-        faces = [f for s in shapes for f in s.faces]
-        return cls(
-            vertex=vertex,
-            vertex_start=vertex_start.astype(np.int64),
-            face_vertex=np.concatenate(faces).astype(np.int64),
-            face_start=np.concatenate([[0], np.cumsum([len(f) for f in faces])]).astype(np.int64),
-            block_face_start=np.concatenate([[0], np.cumsum([len(s.faces) for s in shapes])]).astype(np.int64),
-            face_normal=np.concatenate([s.face_normals for s in shapes]),
-            size=np.array([s.size for s in shapes]),
-        )
+#: A sub-contact whose area is at most this fraction of the smaller of its contact's two faces
+#: is a sliver, dropped by both narrow phases. Slivers come where a contact polygon grazes a grid
+#: cell (turned or rocked blocks): 1e-16 m2 beside cells of 1e-8 m2, their very existence
+#: decided by round-off. Relative to the face, not to the overlap, so the rule is the same for a
+#: full joint and a thin rocking strip. 1e-9 of a face is a strip as wide as the geometric
+#: tolerance (1e-9 of the block size, within which vertices are merged, :func:`_without_collinear`)
+#: along the face; it carries 1e-9 of the joint's stiffness, and it is still about a million
+#: times the round-off of an area (eps L^2 for a face of size L), so both phases drop the same cells.
+SLIVER_FRACTION = 1e-9
 
 
 class Found(NamedTuple):
@@ -82,7 +64,7 @@ class Found(NamedTuple):
 @numba.njit(cache=True)
 def max_points(along, across):
     """Upper bound on the points of one contact: at most n intervals, so n + 1 points, per
-    direction (:func:`drydem.contacts._intervals`)."""
+    direction (:func:`_intervals`)."""
     n = max(along, across) + 1
     return n * n
 
@@ -239,7 +221,7 @@ def _without_collinear(poly, count, tol):
 
 @numba.njit(cache=True)
 def _intervals(length, dx, dy, face_a, na, face_b, nb, n):
-    """As contacts._intervals: 0 for n = 1, else the fewest intervals of spacing <= extent / (n - 1), at most n."""
+    """As _intervals of the plain-Python oracle (tests/oracles/contacts.py): 0 for n = 1, else the fewest intervals of spacing <= extent / (n - 1), at most n."""
     if n == 1:
         return 0
     extent = np.inf
@@ -270,7 +252,7 @@ def _count(dx, dy, across_u, across_v, along, across):
 
 @numba.njit(cache=True)
 def _bilinear(quad, face_a, na, face_b, nb, along, across, au, av, out_uv, out_area):
-    """As contacts._bilinear_grid; returns the number of nodes written."""
+    """As _bilinear_grid of the plain-Python oracle (tests/oracles/contacts.py); returns the number of nodes written."""
     axes_nodes = []
     axes_weights = []
     for a0, a1, b0, b1 in ((0, 1, 3, 2), (0, 3, 1, 2)):
@@ -318,7 +300,7 @@ def _inside(poly, count, x, y, tol):
 
 @numba.njit(cache=True)
 def _clipped(overlap, count, face_a, na, face_b, nb, along, across, au, av, tol, sliver, out_uv, out_area):
-    """As contacts._clipped_grid; returns the number of nodes written."""
+    """As _clipped_grid of the plain-Python oracle (tests/oracles/contacts.py); returns the number of nodes written."""
     lo = np.array([np.inf, np.inf])
     hi = np.array([-np.inf, -np.inf])
     for i in range(count):
@@ -359,7 +341,7 @@ def _clipped(overlap, count, face_a, na, face_b, nb, along, across, au, av, tol,
 
 
 @numba.njit(cache=True)
-def narrow_phase(geom, position, rotation, candidates, tolerance, along, across, across_axis, found):
+def find_sub_contacts(geom, position, rotation, candidates, tolerance, along, across, across_axis, found):
     """Fill ``found`` (a :class:`Found` with room for the candidates and :func:`max_points`
     points each) for every candidate pair (i < j)."""
     m = found.gaps.shape[1]
@@ -461,7 +443,7 @@ def narrow_phase(geom, position, rotation, candidates, tolerance, along, across,
 
 @numba.njit(cache=True)
 def assemble(found, position, rotation):
-    """The arrays of :class:`drydem.contacts.SubContacts` (in its field order) from the pairs of
+    """The arrays of :class:`drydem.engine.contacts.SubContacts` (in its field order) from the pairs of
     ``found`` with points, in order: each contact's normal and plane offset, and its material
     points, in the two blocks' body frames (the incident point lies on the incident face, ``gap``
     along the normal from the reference one); shear and normal forces zero, intact."""
@@ -502,41 +484,17 @@ def assemble(found, position, rotation):
     return (pairs, normal_body, offset, start, point_ref_body, point_inc_body, area, np.zeros((ns, 3)), np.zeros(ns), np.ones(ns, np.bool_))
 
 
-@numba.njit(cache=True)
-def bounding_boxes(geom, position, rotation):
-    """(nb, 3) lower and upper corners of every block's axis-aligned bounding box, world, m."""
-    nb = position.shape[0]
-    lo = np.full((nb, 3), np.inf)
-    hi = np.full((nb, 3), -np.inf)
-    for b in range(nb):
-        r, x = rotation[b], position[b]
-        for i in range(geom.vertex_start[b], geom.vertex_start[b + 1]):
-            p = geom.vertex[i]
-            for k in range(3):
-                w = x[k] + r[k, 0] * p[0] + r[k, 1] * p[1] + r[k, 2] * p[2]
-                lo[b, k] = min(lo[b, k], w)
-                hi[b, k] = max(hi[b, k], w)
-    return lo, hi
-
-
-@numba.njit(cache=True)
-def sweep(lo, hi, movable, margin):
-    """Pairs (i < j) whose boxes grown by ``margin`` overlap, at least one movable: sort and
-    sweep along x (Baraff 1992; Cohen et al. 1995, I-COLLIDE), then y and z."""
-    order = np.argsort(lo[:, 0], kind="mergesort")
-    found = []
-    for a in range(order.shape[0]):
-        i = order[a]
-        for c in range(a + 1, order.shape[0]):
-            j = order[c]
-            if lo[j, 0] - margin > hi[i, 0] + margin:
-                break
-            if not (movable[i] or movable[j]):
-                continue
-            if lo[j, 1] - margin <= hi[i, 1] + margin and hi[j, 1] + margin >= lo[i, 1] - margin and \
-                    lo[j, 2] - margin <= hi[i, 2] + margin and hi[j, 2] + margin >= lo[i, 2] - margin:
-                found.append((min(i, j), max(i, j)))
-    pairs = np.empty((len(found), 2), np.int64)
-    for k in range(len(found)):
-        pairs[k, 0], pairs[k, 1] = found[k]
-    return pairs
+def narrow_phase(
+    geometry: FlatGeometry, candidates: np.ndarray, position: np.ndarray, rotation: np.ndarray, *, tolerance: float,
+    density: ContactDensity,
+) -> tuple[SubContacts, np.ndarray]:
+    """Sub-contacts of the candidate block pairs (k, 2) at centroids ``position`` (nb, 3) m and
+    rotations (nb, 3, 3), in one compiled call (:func:`find_sub_contacts`), and each pair's
+    separation along its best face normal (k,) m (a lower bound on their distance when positive).
+    Shear forces start at zero (:func:`drydem.engine.refresh.merge` carries them over)."""
+    found = Found.empty(len(candidates), max_points(density.along, density.across))
+    find_sub_contacts(
+        geometry, position, rotation, np.ascontiguousarray(candidates, dtype=np.int64), tolerance, density.along, density.across,
+        np.asarray(density.across_axis, dtype=float), found,
+    )
+    return SubContacts(*assemble(found, position, rotation)), found.separation

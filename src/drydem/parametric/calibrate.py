@@ -20,9 +20,9 @@ from concurrent.futures import Executor
 from dataclasses import dataclass
 from pathlib import Path
 
-from drydem.analysis.sweep import RecordError, RunSpec, SweepOutcome, read_record, record_path, sweep
+from drydem.parametric.sweep import RecordError, RunSpec, SweepOutcome, read_record, record_path, sweep
 from drydem.errors import DrydemError, ModelError
-from drydem.parameters import JOINT_STIFFNESS, Range
+from drydem.model.parameters import JOINT_STIFFNESS, Range
 
 GOLDEN = (math.sqrt(5) - 1) / 2
 #: ks / kn: any positive ratio (the stiffnesses it gives are checked against JOINT_STIFFNESS)
@@ -80,7 +80,7 @@ def mean_absolute_relative_error(computed: dict[str, float], experiment: dict[st
 
 def experimental_angles() -> dict[str, float]:
     """The experimental collapse angles (deg) of the seed paper's walls (its Table 1)."""
-    from drydem.published import savalle2022
+    from drydem.masonry.published import savalle2022
 
     return savalle2022()["table1_experiment"]["collapse_angle_deg"]
 

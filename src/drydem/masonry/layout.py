@@ -37,9 +37,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from drydem.errors import ModelError
-from drydem.geometry import box
-from drydem.model import Block, base_under
-from drydem.parameters import Range
+from drydem.model.geometry import box
+from drydem.model.assembly import Block, base_under
+from drydem.model.parameters import Range
 
 #: token -> (kind, cells); the lintel's cells depend on the brick size (None here)
 TOKENS: dict[str, tuple[str, int | None]] = {
@@ -173,7 +173,7 @@ class Layout:
         return outlines
 
     def blocks(self, brick: BrickSize) -> list[Block]:
-        """A fixed block "base" under the wall (drydem.model.base_under), then one block per
+        """A fixed block "base" under the wall (drydem.model.assembly.base_under), then one block per
         solid unit, named as :meth:`block_names` says."""
         bricks = [Block(name=name, shape=box(*unit_box(u, brick), name=f"block {name!r}"))
                   for name, u in zip(self.block_names(), self.solid_units)]

@@ -1,4 +1,5 @@
-"""Contact detection: broad phase, face-to-face narrow phase, sub-contact generation.
+"""The narrow phase and the shear carry-over in plain Python, one pair at a time: the tests' oracles
+of :mod:`drydem.engine.narrow_phase` and :func:`drydem.engine.refresh.merge`.
 
 Two convex blocks touch where a face of one (the *reference* face) lies within
 the contact tolerance of the other block. The reference face is the one of
@@ -11,7 +12,7 @@ The polygon is discretised into sub-contacts as 3DEC's contact points: a
 tensor grid whose spacing puts ``points_per_length`` points along the full
 length of the smaller face, ends included, each point carrying its trapezoid
 share of the area (the areas sum to the polygon's area); see :func:`_grid`.
-In-plane models need only 1 point across the width, on the mid-plane (:class:`Density`).
+In-plane models need only 1 point across the width, on the mid-plane (:class:`drydem.model.parameters.ContactDensity`).
 Each sub-contact is a pair of material points (one on each block, the incident one on the incident face
 straight above the reference one) and the reference normal, all stored in the
 blocks' body frames, so rocking opens or closes them as the blocks turn.
@@ -21,125 +22,23 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from drydem import polygon
-from drydem.geometry import ConvexPolyhedron
-
-
-class SubContacts(NamedTuple):
-    """Struct-of-arrays of the contacts (face pairs, nc) and their sub-contacts (ns), CSR-style:
-    the sub-contacts of contact k are ``start[k]:start[k + 1]``. A NamedTuple, so the numba
-    kernels take it as it is; the state arrays are updated in place.
-
-    Per contact (fixed between detections): pairs (nc, 2) int64, reference and incident block;
-    normal_body (nc, 3), unit normal of the reference face in the reference block's body frame,
-    pointing towards the incident block; offset (nc,) m, that face's plane n . x = offset in the
-    same frame; start (nc + 1,) int64.
-    Per sub-contact: point_ref_body, point_inc_body (ns, 3) m, the two material points relative
-    to each block's centroid in its body frame; area (ns,) m2. State: shear_force (ns, 3) N,
-    world frame, force on the incident block; normal_force (ns,) N, compression positive;
-    intact (ns,) bool, cohesion and tension still available.
-    """
-
-    pairs: np.ndarray
-    normal_body: np.ndarray
-    offset: np.ndarray
-    start: np.ndarray
-    point_ref_body: np.ndarray
-    point_inc_body: np.ndarray
-    area: np.ndarray
-    shear_force: np.ndarray
-    normal_force: np.ndarray
-    intact: np.ndarray
-
-    @property
-    def count(self) -> int:
-        return len(self.area)
-
-    @property
-    def contact(self) -> np.ndarray:
-        """(ns,) index of each sub-contact's contact."""
-        return np.repeat(np.arange(len(self.pairs)), np.diff(self.start))
-
-    @property
-    def block_ref(self) -> np.ndarray:
-        return self.pairs[self.contact, 0]
-
-    @property
-    def block_inc(self) -> np.ndarray:
-        return self.pairs[self.contact, 1]
-
-    def copy(self) -> SubContacts:
-        return SubContacts(*(a.copy() for a in self))
-
-    def pair_keys(self, n_blocks: int) -> np.ndarray:
-        """(nc,) unordered block-pair key of each contact (see :func:`pair_keys`)."""
-        return pair_keys(self.pairs, n_blocks)
-
-    @classmethod
-    def empty(cls) -> SubContacts:
-        v, s = np.zeros((0, 3)), np.zeros(0)
-        return cls(np.zeros((0, 2), np.int64), v, s, np.zeros(1, np.int64), v, v.copy(), s.copy(), v.copy(), s.copy(), np.zeros(0, bool))
-
-
-class NeighbourList(NamedTuple):
-    """The block pairs watched for re-detection (a Verlet list), each with the state of its two
-    blocks when its sub-contacts were last made: pairs (nn, 2) int64 (i < j); position
-    (nn, 2, 3) m, the two centroids; quaternion (nn, 2, 4), the two orientations; limit (nn,)
-    m, the relative motion after which the pair must be looked at again (half the tolerance
-    for touching pairs; for separated ones, their separation less half the tolerance)."""
-
-    pairs: np.ndarray
-    position: np.ndarray
-    quaternion: np.ndarray
-    limit: np.ndarray
-
-    def copy(self) -> NeighbourList:
-        return NeighbourList(*(a.copy() for a in self))
-
-    @classmethod
-    def empty(cls) -> NeighbourList:
-        return cls(np.zeros((0, 2), np.int64), np.zeros((0, 2, 3)), np.zeros((0, 2, 4)), np.zeros(0))
-
-
-def pair_keys(pairs: np.ndarray, n_blocks: int) -> np.ndarray:
-    """Unordered key min(i, j) * n_blocks + max(i, j) of block pairs (n, 2)."""
-    return np.minimum(pairs[:, 0], pairs[:, 1]) * n_blocks + np.maximum(pairs[:, 0], pairs[:, 1])
-
-
-def subset(sub: SubContacts, keep: np.ndarray) -> SubContacts:
-    """The contacts where ``keep`` (nc,) is true, with their sub-contacts and state."""
-    rows = np.repeat(keep, np.diff(sub.start))
-    counts = np.diff(sub.start)[keep]
-    return SubContacts(
-        pairs=sub.pairs[keep], normal_body=sub.normal_body[keep], offset=sub.offset[keep],
-        start=np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
-        point_ref_body=sub.point_ref_body[rows], point_inc_body=sub.point_inc_body[rows], area=sub.area[rows],
-        shear_force=sub.shear_force[rows], normal_force=sub.normal_force[rows], intact=sub.intact[rows],
-    )
+from drydem.engine.contacts import SubContacts, world_points
+from drydem.engine.narrow_phase import SLIVER_FRACTION, Found, assemble
+from drydem.model.geometry import ConvexPolyhedron, best_separation
+from drydem.model.parameters import ContactDensity
+from oracles import polygon
 
 
 def concatenate(first: SubContacts, second: SubContacts) -> SubContacts:
     """Both sets of contacts in one SubContacts (``first``'s contacts first); with :func:`subset`
-    and :func:`carry_over`, the NumPy oracle of :func:`drydem.refresh.merge`."""
+    and :func:`carry_over`, the NumPy oracle of :func:`drydem.engine.refresh.merge`."""
     start = np.concatenate([first.start, second.start[1:] + first.start[-1]])
     joined = {name: np.concatenate([getattr(first, name), getattr(second, name)]) for name in SubContacts._fields if name != "start"}
     return SubContacts(start=start, **joined)
-
-
-@dataclass(frozen=True)
-class Density:
-    """Sub-contact density: ``along`` points over a full face length in each in-plane direction
-    (ends included), except ``across`` points in the direction of the world unit vector
-    ``across_axis`` when it lies in the face (in-plane walls: 1 across the width is exact)."""
-
-    along: int
-    across: int
-    across_axis: tuple[float, float, float] = (0.0, 1.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -152,48 +51,12 @@ class _FaceContact:
     normal: np.ndarray  # (3,) reference outward normal, world
 
 
-def bounds(polyhedra: list[ConvexPolyhedron]) -> tuple[np.ndarray, np.ndarray]:
-    """(n, 3) lower and upper corners of the blocks' axis-aligned bounding boxes, m."""
-    return np.array([p.vertices.min(0) for p in polyhedra]), np.array([p.vertices.max(0) for p in polyhedra])
-
-
-def broad_phase(lower: np.ndarray, upper: np.ndarray, movable: np.ndarray, margin: float) -> np.ndarray:
-    """Candidate pairs (i < j), sorted, whose bounding boxes ``lower``/``upper`` (n, 3), grown by
-    ``margin`` m, overlap; pairs of two immovable blocks are left out (sort and sweep along x,
-    compiled: :func:`drydem.narrow.sweep`)."""
-    from drydem import narrow
-
-    pairs = narrow.sweep(np.ascontiguousarray(lower), np.ascontiguousarray(upper), np.ascontiguousarray(movable), float(margin))
-    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
-
-
-def penetration_depth(a: ConvexPolyhedron, b: ConvexPolyhedron) -> float:
-    """Least overlap of two convex blocks along their face normals, m (negative: separated)."""
-    return -_best_separation(a, b)[0]
-
-
-def _separations(ref: ConvexPolyhedron, other: ConvexPolyhedron) -> np.ndarray:
-    """Signed distance of ``other``'s deepest vertex from each face plane of ``ref``, m."""
-    offsets = np.einsum("fi,fi->f", ref.face_normals, ref.vertices[[f[0] for f in ref.faces]])
-    return (other.vertices @ ref.face_normals.T).min(0) - offsets
-
-
-def _best_separation(a: ConvexPolyhedron, b: ConvexPolyhedron) -> tuple[float, bool, int]:
-    """(separation, reference is a, reference face): face of least penetration, ties to ``a``."""
-    sa, sb = _separations(a, b), _separations(b, a)
-    fa, fb = int(np.argmax(sa)), int(np.argmax(sb))
-    tie = 1e-9 * min(a.size, b.size)
-    if sa[fa] >= sb[fb] - tie:
-        return float(sa[fa]), True, fa
-    return float(sb[fb]), False, fb
-
-
 def face_contact(
-    a: ConvexPolyhedron, b: ConvexPolyhedron, ia: int, ib: int, *, tolerance: float, density: Density
+    a: ConvexPolyhedron, b: ConvexPolyhedron, ia: int, ib: int, *, tolerance: float, density: ContactDensity
 ) -> tuple[_FaceContact | None, float]:
     """Sub-contact points between blocks ``ia`` and ``ib`` (None if they do not touch), and their
     separation along the best face normal, m (a lower bound on their distance when positive)."""
-    separation, ref_is_a, f_ref = _best_separation(a, b)
+    separation, ref_is_a, f_ref = best_separation(a, b)
     if separation > tolerance:
         return None, separation
     ref, inc, i_ref, i_inc = (a, b, ia, ib) if ref_is_a else (b, a, ib, ia)
@@ -216,7 +79,7 @@ def face_contact(
     if len(overlap) < 3 or polygon.signed_area(overlap) <= 1e-8 * small**2:
         return None, separation
     counts = _PointCounts(density, basis @ np.asarray(density.across_axis))
-    sliver = polygon.SLIVER_FRACTION * min(polygon.signed_area(ref_poly), polygon.signed_area(inc_poly))
+    sliver = SLIVER_FRACTION * min(polygon.signed_area(ref_poly), polygon.signed_area(inc_poly))
     uv, areas = _grid(overlap, ref_poly, inc_poly, counts, 1e-9 * small, sliver)
     points = origin + uv @ basis
     # distance from each point, along n, to the incident face plane
@@ -230,7 +93,7 @@ def face_contact(
 class _PointCounts:
     """Points over a full face length along a grid direction (2D, in the reference plane)."""
 
-    def __init__(self, density: Density, across_2d: np.ndarray):
+    def __init__(self, density: ContactDensity, across_2d: np.ndarray):
         self.along, self.across, self.across_2d = density.along, density.across, across_2d
 
     def __call__(self, direction: np.ndarray) -> int:
@@ -251,7 +114,7 @@ def _grid(
     cells are clipped to the polygon (nodes outside move to their cell's centroid). n = 1 in
     both directions: one node at the polygon's centroid.
 
-    A node of at most ``sliver`` m2 is a sliver (:data:`drydem.polygon.SLIVER_FRACTION`), which
+    A node of at most ``sliver`` m2 is a sliver (:data:`oracles.SLIVER_FRACTION`), which
     :func:`face_contact` drops; a clipped cell that small is left out here already (it may have
     no area to take a centroid of).
     """
@@ -271,7 +134,7 @@ def _intervals(length: float, direction: np.ndarray, face_a: np.ndarray, face_b:
     of a quadrilateral overlap can be longer than the faces' extent along the bilinear grid's
     direction (the mean of two opposite sides): a little where the blocks are turned a little
     (n intervals), much where the quadrilateral is skewed. The cap at n bounds a contact's points
-    (:func:`drydem.narrow.max_points`) and leaves the first case as it was."""
+    (:func:`drydem.engine.narrow_phase.max_points`) and leaves the first case as it was."""
     if n == 1:
         return 0
     extent = min(np.ptp(face_a @ direction), np.ptp(face_b @ direction))
@@ -345,60 +208,33 @@ def narrow_phase(
     rotation: np.ndarray,
     *,
     tolerance: float,
-    density: Density,
+    density: ContactDensity,
 ) -> tuple[SubContacts, np.ndarray]:
     """Sub-contacts of the candidate block pairs (k, 2), from the blocks' world geometry
     ``shapes`` (by block index, at centroids ``position`` (nb, 3) and rotations (nb, 3, 3)).
     Shear forces start at zero (see :func:`carry_over`). Also returns each candidate pair's
     separation (k,), m (see :func:`face_contact`).
 
-    Plain Python, one pair at a time: the reference for :func:`narrow_phase_compiled`.
+    Plain Python, one pair at a time: the oracle of :func:`drydem.engine.narrow_phase.narrow_phase`.
     """
-    from drydem import narrow
-
     faces = []
     separations = np.empty(len(candidates))
     for k, (ia, ib) in enumerate(candidates):
         fc, separations[k] = face_contact(shapes[ia], shapes[ib], int(ia), int(ib), tolerance=tolerance, density=density)
         if fc is not None:
             faces.append(fc)
-    found = narrow.Found.empty(len(faces), max([len(fc.areas) for fc in faces], default=0))
+    found = Found.empty(len(faces), max([len(fc.areas) for fc in faces], default=0))
     for k, fc in enumerate(faces):
         n = len(fc.areas)
         found.count[k], found.ref[k], found.inc[k], found.normal[k] = n, fc.ref, fc.inc, fc.normal
         found.points[k, :n], found.gaps[k, :n], found.areas[k, :n] = fc.points, fc.gaps, fc.areas
-    return SubContacts(*narrow.assemble(found, position, rotation)), separations
-
-
-def narrow_phase_compiled(
-    geometry, candidates: np.ndarray, position: np.ndarray, rotation: np.ndarray, *, tolerance: float, density: Density
-) -> tuple[SubContacts, np.ndarray]:
-    """:func:`narrow_phase` for all candidates in one numba call (:mod:`drydem.narrow`), from the
-    model's flattened body geometry (:class:`drydem.narrow.Geometry`)."""
-    from drydem import narrow
-
-    found = narrow.Found.empty(len(candidates), narrow.max_points(density.along, density.across))
-    narrow.narrow_phase(
-        geometry, position, rotation, np.ascontiguousarray(candidates, dtype=np.int64), tolerance, density.along, density.across,
-        np.asarray(density.across_axis, dtype=float), found,
-    )
-    return SubContacts(*narrow.assemble(found, position, rotation)), found.separation
-
-
-def world_points(sub: SubContacts, position: np.ndarray, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """World incident points, gaps (m, distance from the reference plane along the normal,
-    negative when penetrating) and normals of every sub-contact."""
-    ref, inc = sub.block_ref, sub.block_inc
-    x_inc = position[inc] + np.einsum("nij,nj->ni", rotation[inc], sub.point_inc_body)
-    normal = np.einsum("nij,nj->ni", rotation[ref], sub.normal_body[sub.contact])
-    gap = np.einsum("ni,ni->n", x_inc - position[ref], normal) - sub.offset[sub.contact]
-    return x_inc, gap, normal
+    return SubContacts(*assemble(found, position, rotation)), separations
 
 
 def carry_over(old: SubContacts, new: SubContacts, position: np.ndarray, rotation: np.ndarray) -> None:
     """Copy shear stress (N/m2) and intact flags from ``old`` to the nearest ``new`` sub-contact
     of the same block pair, projected on the new tangent plane (the oracle of
-    :func:`drydem.refresh.merge`, which the simulation uses; this one looks among the 8 nearest
+    :func:`drydem.engine.refresh.merge`, which the simulation uses; this one looks among the 8 nearest
     old points only).
 
     Shear force is stored as the force on the incident block, so it changes sign where the two

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from drydem.contacts import SubContacts, world_points
+from drydem.engine.contacts import SubContacts, world_points
 
 #: a contact carries its upper block when its normal is within 60 deg of the vertical
 SUPPORT_COSINE = 0.5

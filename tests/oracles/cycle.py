@@ -1,4 +1,4 @@
-"""The cycle of :mod:`drydem.kernels` written again in vectorised NumPy: the tests' oracle.
+"""The cycle of :mod:`drydem.engine.cycle3d` written again in vectorised NumPy: the tests' oracle.
 
 Same arguments, same physics, same results to round-off; written independently (one row
 per sub-contact, the gap from both material points rather than the plane offset, array
@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from drydem.kernels import cycle_loop
+from drydem.engine.cycle3d import cycle_loop
 
 
 def _apply(rot: np.ndarray, vec: np.ndarray) -> np.ndarray:
@@ -33,7 +33,7 @@ def _damped(force: np.ndarray, velocity: np.ndarray, alpha: float) -> np.ndarray
 
 
 def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, measure):
-    """One cycle; see :func:`drydem.kernels.step` (it always measures the energies)."""
+    """One cycle; see :func:`drydem.engine.cycle3d.step` (it always measures the energies)."""
     pos, vel, omega = state.position, state.velocity, state.angular_velocity
     rot[:] = Rotation.from_quat(state.quaternion[:, [1, 2, 3, 0]]).as_matrix()
     force[:] = blocks.mass[:, None] * np.asarray(gravity)
@@ -103,5 +103,5 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
 
 
 def run_cycles(state, blocks, sub, joint, loop, broad_state, neighbours):
-    """The shared cycling loop (:func:`drydem.kernels.cycle_loop`, in Python) around this :func:`step`."""
+    """The shared cycling loop (:func:`drydem.engine.cycle3d.cycle_loop`, in Python) around this :func:`step`."""
     return cycle_loop.py_func(step, state, blocks, sub, joint, loop, broad_state, neighbours)

@@ -21,10 +21,10 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from drydem.parameters import JointMaterial
+from drydem.model.parameters import JointMaterial
 
 
-class JointArrays(NamedTuple):
+class JointConstants(NamedTuple):
     """The joint material as plain floats for the kernels (units as in :class:`JointMaterial`)."""
 
     kn: float
@@ -34,7 +34,7 @@ class JointArrays(NamedTuple):
     tension: float
 
     @classmethod
-    def of(cls, joint: JointMaterial) -> JointArrays:
+    def of(cls, joint: JointMaterial) -> JointConstants:
         return cls(float(joint.kn), float(joint.ks), float(joint.friction), float(joint.cohesion), float(joint.tension))
 
 

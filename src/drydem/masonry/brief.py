@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from drydem.layout import BrickSize
-from drydem.walls import Wall
+from drydem.masonry.layout import BrickSize
+from drydem.masonry.walls import Wall
 
 #: the seed paper's brick, Section 2
 PAPER_BRICK = BrickSize(length_m=0.025, height_m=0.0055, width_m=0.012)

@@ -2,7 +2,7 @@
 
 Build one with :func:`build_model` from :class:`Block` descriptions (the model file
 loader, :mod:`drydem.io.model_file`, does exactly that). Everything that changes during
-a run lives in :class:`drydem.state.State` and :class:`drydem.contacts.SubContacts`.
+a run lives in :class:`drydem.model.state.State` and the engine's contacts (:mod:`drydem.engine`).
 """
 
 from __future__ import annotations
@@ -13,11 +13,11 @@ from functools import cached_property
 
 import numpy as np
 
-from drydem import contacts
 from drydem.errors import ModelError
-from drydem.geometry import ConvexPolyhedron, box
-from drydem.parameters import DENSITY, ContactSettings, JointMaterial, SolverSettings, Supports
-from drydem.rotation import matrices
+from drydem.model.boxes import bounds, overlapping_pairs
+from drydem.model.geometry import ConvexPolyhedron, FlatGeometry, box, penetration_depth
+from drydem.model.parameters import DENSITY, ContactDensity, ContactSettings, JointMaterial, SolverSettings, Supports
+from drydem.model.rotation import matrices
 
 #: default contact tolerance as a fraction of the thinnest movable block (m/m)
 TOLERANCE_FRACTION = 0.05
@@ -68,7 +68,7 @@ class Model:
     in_plane : the paper's walls: every movable block is held in y and every block is a prism
     across y (faces parallel or normal to y) symmetric about one plane y = y0. Forces then stay
     in the x-z plane and the blocks only move in it (x, z, rotation about y): rx and rz are held
-    too (symmetry keeps them at zero anyway), and :mod:`drydem.planar` cycles such a model with
+    too (symmetry keeps them at zero anyway), and :mod:`drydem.engine.cycle_planar` cycles such a model with
     3 degrees of freedom per block.
     """
 
@@ -102,11 +102,9 @@ class Model:
         return ~self.block_fixed.all(axis=1)
 
     @cached_property
-    def geometry(self):
-        """The blocks' body geometry flattened for the compiled narrow phase (:class:`drydem.narrow.Geometry`)."""
-        from drydem.narrow import Geometry
-
-        return Geometry.of(self.block_shape)
+    def geometry(self) -> FlatGeometry:
+        """The blocks' body geometry flattened for the compiled contact detection (computed once)."""
+        return FlatGeometry.of(self.block_shape)
 
     @cached_property
     def block_inertia_inverse(self) -> np.ndarray:
@@ -119,13 +117,13 @@ class Model:
         return np.linalg.inv(np.linalg.cholesky(self.block_inertia))
 
     @property
-    def contact_density(self) -> contacts.Density:
+    def contact_density(self) -> ContactDensity:
         """Sub-contact density resolved from ``contacts`` and ``supports`` (see ContactSettings)."""
         along = self.contacts.points_per_length
         across = self.contacts.points_across
         if across is None:
             across = 1 if self.in_plane else min(2, along) if self.supports.fix_y else along
-        return contacts.Density(along=along, across=across)
+        return ContactDensity(along=along, across=across)
 
     @property
     def total_mass(self) -> float:
@@ -140,7 +138,7 @@ class Model:
 
     def world_vertices(self, block: int, position: np.ndarray, quaternion: np.ndarray) -> np.ndarray:
         """The vertices of ``block`` at centroid ``position`` (3,) m and orientation
-        ``quaternion`` (4,) (body -> world, drydem.state): x = R(q) (v - c0) + position."""
+        ``quaternion`` (4,) (body -> world, drydem.model.state): x = R(q) (v - c0) + position."""
         shape = self.block_shape[block]
         return (shape.vertices - shape.centroid) @ matrices(quaternion[None])[0].T + position
 
@@ -191,7 +189,7 @@ def build_model(
 ) -> Model:
     """Validate the blocks and freeze them into a :class:`Model`.
 
-    Raises ModelError for duplicate names, densities out of :data:`drydem.parameters.DENSITY`,
+    Raises ModelError for duplicate names, densities out of :data:`drydem.model.parameters.DENSITY`,
     no movable block, a contact tolerance above half the thinnest movable block, or two blocks
     overlapping deeper than 1 % of the contact tolerance (naming both and the depth).
     """
@@ -266,8 +264,8 @@ def _thickness(shape: ConvexPolyhedron) -> float:
 def _check_overlaps(model: Model) -> None:
     limit = OVERLAP_FRACTION * model.contact_tolerance
     shapes = list(model.block_shape)
-    for i, j in contacts.broad_phase(*contacts.bounds(shapes), model.block_movable, 0.0):
-        depth = contacts.penetration_depth(shapes[i], shapes[j])
+    for i, j in overlapping_pairs(*bounds(shapes), model.block_movable, 0.0):
+        depth = penetration_depth(shapes[i], shapes[j])
         if depth > limit:
             raise ModelError(
                 f"{model.source}: blocks {model.block_name[i]!r} and {model.block_name[j]!r} overlap by "

@@ -16,6 +16,9 @@ from dataclasses import dataclass, fields
 
 from drydem.errors import ModelError
 
+#: standard gravity, m/s2
+G = 9.81
+
 
 def is_number(value) -> bool:
     """A finite int or float, and not a boolean (``True`` is an int in Python, not a number here)."""
@@ -119,12 +122,12 @@ class ContactSettings:
         ends included (2 = corners only, 3DEC's vertex sub-contacts; 1 = one point at
         the centroid of the contact polygon).
     points_across : sub-contacts across the wall, along y; ``None`` = 1 for in-plane models
-        (:attr:`drydem.model.Model.in_plane`: the contact forces are uniform across the width,
+        (:attr:`drydem.model.assembly.Model.in_plane`: the contact forces are uniform across the width,
         so one point on the mid-plane with the whole width's area is exact), 2 for other
         models with every block fixed in y, else points_per_length.
     tolerance : m, gap below which faces are in contact; ``None`` = 5 % of the
         thinnest free block; a given one may be at most half the thinnest free block
-        (:data:`drydem.model.MAX_TOLERANCE_FRACTION`).
+        (:data:`drydem.model.assembly.MAX_TOLERANCE_FRACTION`).
         Contacts are re-detected whenever neighbouring blocks have moved half of it relative
         to each other.
     """
@@ -206,3 +209,14 @@ class SolverSettings:
         _check("solver", "ratio", self.ratio, RATIO)
         _check("solver", "max_velocity", self.max_velocity, MAX_VELOCITY)
         _check("solver", "max_cycles", self.max_cycles, MAX_CYCLES)
+
+
+@dataclass(frozen=True)
+class ContactDensity:
+    """Sub-contact density resolved for a model (:attr:`drydem.model.assembly.Model.contact_density`): ``along`` points over a full face length in each in-plane direction
+    (ends included), except ``across`` points in the direction of the world unit vector
+    ``across_axis`` when it lies in the face (in-plane walls: 1 across the width is exact)."""
+
+    along: int
+    across: int
+    across_axis: tuple[float, float, float] = (0.0, 1.0, 0.0)

@@ -1,0 +1,118 @@
+"""Contacts as struct-of-arrays: face-to-face contacts, their sub-contacts and the neighbour list.
+
+Two convex blocks touch where a face of one (the *reference* face) lies within the contact
+tolerance of the other block (:mod:`drydem.engine.narrow_phase` finds them). The contact
+polygon is discretised into sub-contacts as 3DEC's contact points; each sub-contact is a pair
+of material points (one on each block, the incident one on the incident face straight above
+the reference one) and the reference normal, all stored in the blocks' body frames, so rocking
+opens or closes them as the blocks turn.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+
+class SubContacts(NamedTuple):
+    """Struct-of-arrays of the contacts (face pairs, nc) and their sub-contacts (ns), CSR-style:
+    the sub-contacts of contact k are ``start[k]:start[k + 1]``. A NamedTuple, so the numba
+    kernels take it as it is; the state arrays are updated in place.
+
+    Per contact (fixed between detections): pairs (nc, 2) int64, reference and incident block;
+    normal_body (nc, 3), unit normal of the reference face in the reference block's body frame,
+    pointing towards the incident block; offset (nc,) m, that face's plane n . x = offset in the
+    same frame; start (nc + 1,) int64.
+    Per sub-contact: point_ref_body, point_inc_body (ns, 3) m, the two material points relative
+    to each block's centroid in its body frame; area (ns,) m2. State: shear_force (ns, 3) N,
+    world frame, force on the incident block; normal_force (ns,) N, compression positive;
+    intact (ns,) bool, cohesion and tension still available.
+    """
+
+    pairs: np.ndarray
+    normal_body: np.ndarray
+    offset: np.ndarray
+    start: np.ndarray
+    point_ref_body: np.ndarray
+    point_inc_body: np.ndarray
+    area: np.ndarray
+    shear_force: np.ndarray
+    normal_force: np.ndarray
+    intact: np.ndarray
+
+    @property
+    def count(self) -> int:
+        return len(self.area)
+
+    @property
+    def contact(self) -> np.ndarray:
+        """(ns,) index of each sub-contact's contact."""
+        return np.repeat(np.arange(len(self.pairs)), np.diff(self.start))
+
+    @property
+    def block_ref(self) -> np.ndarray:
+        return self.pairs[self.contact, 0]
+
+    @property
+    def block_inc(self) -> np.ndarray:
+        return self.pairs[self.contact, 1]
+
+    def copy(self) -> SubContacts:
+        return SubContacts(*(a.copy() for a in self))
+
+    def pair_keys(self, n_blocks: int) -> np.ndarray:
+        """(nc,) unordered block-pair key of each contact (see :func:`pair_keys`)."""
+        return pair_keys(self.pairs, n_blocks)
+
+    @classmethod
+    def empty(cls) -> SubContacts:
+        v, s = np.zeros((0, 3)), np.zeros(0)
+        return cls(np.zeros((0, 2), np.int64), v, s, np.zeros(1, np.int64), v, v.copy(), s.copy(), v.copy(), s.copy(), np.zeros(0, bool))
+
+
+class NeighbourList(NamedTuple):
+    """The block pairs watched for re-detection (a Verlet list), each with the state of its two
+    blocks when its sub-contacts were last made: pairs (nn, 2) int64 (i < j); position
+    (nn, 2, 3) m, the two centroids; quaternion (nn, 2, 4), the two orientations; limit (nn,)
+    m, the relative motion after which the pair must be looked at again (half the tolerance
+    for touching pairs; for separated ones, their separation less half the tolerance)."""
+
+    pairs: np.ndarray
+    position: np.ndarray
+    quaternion: np.ndarray
+    limit: np.ndarray
+
+    def copy(self) -> NeighbourList:
+        return NeighbourList(*(a.copy() for a in self))
+
+    @classmethod
+    def empty(cls) -> NeighbourList:
+        return cls(np.zeros((0, 2), np.int64), np.zeros((0, 2, 3)), np.zeros((0, 2, 4)), np.zeros(0))
+
+
+def pair_keys(pairs: np.ndarray, n_blocks: int) -> np.ndarray:
+    """Unordered key min(i, j) * n_blocks + max(i, j) of block pairs (n, 2)."""
+    return np.minimum(pairs[:, 0], pairs[:, 1]) * n_blocks + np.maximum(pairs[:, 0], pairs[:, 1])
+
+
+def subset(sub: SubContacts, keep: np.ndarray) -> SubContacts:
+    """The contacts where ``keep`` (nc,) is true, with their sub-contacts and state."""
+    rows = np.repeat(keep, np.diff(sub.start))
+    counts = np.diff(sub.start)[keep]
+    return SubContacts(
+        pairs=sub.pairs[keep], normal_body=sub.normal_body[keep], offset=sub.offset[keep],
+        start=np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
+        point_ref_body=sub.point_ref_body[rows], point_inc_body=sub.point_inc_body[rows], area=sub.area[rows],
+        shear_force=sub.shear_force[rows], normal_force=sub.normal_force[rows], intact=sub.intact[rows],
+    )
+
+
+def world_points(sub: SubContacts, position: np.ndarray, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """World incident points, gaps (m, distance from the reference plane along the normal,
+    negative when penetrating) and normals of every sub-contact."""
+    ref, inc = sub.block_ref, sub.block_inc
+    x_inc = position[inc] + np.einsum("nij,nj->ni", rotation[inc], sub.point_inc_body)
+    normal = np.einsum("nij,nj->ni", rotation[ref], sub.normal_body[sub.contact])
+    gap = np.einsum("ni,ni->n", x_inc - position[ref], normal) - sub.offset[sub.contact]
+    return x_inc, gap, normal

@@ -1,0 +1,196 @@
+"""The explicit cycle of a 3D model (six degrees of freedom per block), compiled with numba.
+
+One cycle (paper Eq. 2 and 4; Itasca 3DEC's calculation cycle) reads like the physics:
+
+1. rotation matrices of the blocks at time t;
+2. body forces: gravity m g at every centroid;
+3. sub-contact kinematics (gap, shear increment over the last step from v(t - dt/2))
+   and the joint law -> forces on both blocks, applied at the incident material point;
+4. per degree of freedom: local damping, velocity v(t + dt/2) = v(t - dt/2) + F_d / m dt,
+   angular velocity in the world frame with the gyroscopic term
+   I_w d(omega)/dt = M_d - omega x I_w omega (I_w = R I_body R^T);
+5. positions x(t + dt) = x(t) + v dt and exact rotations q <- exp(omega dt / 2) q.
+
+``run_cycles`` repeats it until the equilibrium criterion holds, the blocks have moved
+far enough to need new contacts, the integration diverges, or ``max_cycles`` is reached.
+:mod:`oracles.cycle` implements the same ``step`` in vectorised NumPy, as the oracle
+the tests hold this one to, and shares the loop (:func:`drydem.engine.loop.cycle_loop`).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from drydem.engine.damping import local_damping
+from drydem.engine.joints import normal_law, shear_law
+from drydem.engine.loop import FASTMATH, cycle_loop
+from drydem.model.rotation import mat_t_vec, mat_vec, quaternion_to_matrix, rotate_by_vector
+
+
+
+@numba.njit(cache=True, inline="always")
+def _world_tensor_apply(r, tensor, v0, v1, v2):
+    """R T R^T v: a body-frame tensor ``tensor`` (inertia or its inverse) applied in the world frame."""
+    b0, b1, b2 = mat_t_vec(r, v0, v1, v2)
+    t0, t1, t2 = mat_vec(tensor, b0, b1, b2)
+    return mat_vec(r, t0, t1, t2)
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def contact_forces(state, rot, sub, joint, dt, force, moment):
+    """Step 3: update every sub-contact's forces and add them to ``force`` and ``moment`` (N, N m).
+
+    Per contact (blocks a = reference, b = incident, normal n = R_a n_body, d = vector from
+    a's centroid to b's): each sub-contact's incident arm r = R_b p_inc gives
+    gap = (d + r) . n - offset (every reference point lies on the plane n . x = offset), and
+    relative velocity v_b - v_a - w_a x d + (w_b - w_a) x r. The forces F act at x_b on b
+    and -F on a; the contact's sums are scattered once: moment on b sum r x F, on a
+    -(d x sum F + sum r x F).
+    """
+    pos, vel, omega = state.position, state.velocity, state.angular_velocity
+    for c in range(sub.pairs.shape[0]):
+        a, b = sub.pairs[c, 0], sub.pairs[c, 1]
+        nx, ny, nz = mat_vec(rot[a], sub.normal_body[c, 0], sub.normal_body[c, 1], sub.normal_body[c, 2])
+        dx, dy, dz = pos[b, 0] - pos[a, 0], pos[b, 1] - pos[a, 1], pos[b, 2] - pos[a, 2]
+        base_gap = dx * nx + dy * ny + dz * nz - sub.offset[c]
+        wa, wb = omega[a], omega[b]
+        v0x = vel[b, 0] - vel[a, 0] - (wa[1] * dz - wa[2] * dy)
+        v0y = vel[b, 1] - vel[a, 1] - (wa[2] * dx - wa[0] * dz)
+        v0z = vel[b, 2] - vel[a, 2] - (wa[0] * dy - wa[1] * dx)
+        dwx, dwy, dwz = wb[0] - wa[0], wb[1] - wa[1], wb[2] - wa[2]
+        rb = rot[b]
+        fx_sum = fy_sum = fz_sum = 0.0
+        mx_sum = my_sum = mz_sum = 0.0
+        for s in range(sub.start[c], sub.start[c + 1]):
+            p = sub.point_inc_body[s]
+            rx, ry, rz = mat_vec(rb, p[0], p[1], p[2])
+            fn, carries = normal_law(-(base_gap + rx * nx + ry * ny + rz * nz), sub.area[s], sub.intact[s], joint)
+            fs = sub.shear_force[s]
+            if not carries:
+                sub.normal_force[s] = 0.0
+                fs[0] = fs[1] = fs[2] = 0.0
+                sub.intact[s] = False
+                continue
+            # relative velocity of b with respect to a at x_b, tangential part times dt
+            vx = v0x + dwy * rz - dwz * ry
+            vy = v0y + dwz * rx - dwx * rz
+            vz = v0z + dwx * ry - dwy * rx
+            vn = vx * nx + vy * ny + vz * nz
+            dux, duy, duz = (vx - vn * nx) * dt, (vy - vn * ny) * dt, (vz - vn * nz) * dt
+            # previous shear force rotated into the current tangent plane, magnitude kept
+            sx, sy, sz = fs[0], fs[1], fs[2]
+            fsn = sx * nx + sy * ny + sz * nz
+            if fsn != 0.0:
+                old_sq = sx * sx + sy * sy + sz * sz
+                new_sq = old_sq - fsn * fsn  # |F_s - (F_s . n) n|^2
+                scale = np.sqrt(old_sq / new_sq) if new_sq > 0.0 else 0.0
+                sx, sy, sz = (sx - fsn * nx) * scale, (sy - fsn * ny) * scale, (sz - fsn * nz) * scale
+            sx, sy, sz, intact = shear_law(fn, dux, duy, duz, sx, sy, sz, sub.area[s], sub.intact[s], joint)
+            sub.normal_force[s] = fn
+            fs[0], fs[1], fs[2] = sx, sy, sz
+            sub.intact[s] = intact
+            fx, fy, fz = fn * nx + sx, fn * ny + sy, fn * nz + sz
+            fx_sum += fx
+            fy_sum += fy
+            fz_sum += fz
+            mx_sum += ry * fz - rz * fy
+            my_sum += rz * fx - rx * fz
+            mz_sum += rx * fy - ry * fx
+        force[b, 0] += fx_sum
+        force[b, 1] += fy_sum
+        force[b, 2] += fz_sum
+        moment[b, 0] += mx_sum
+        moment[b, 1] += my_sum
+        moment[b, 2] += mz_sum
+        force[a, 0] -= fx_sum
+        force[a, 1] -= fy_sum
+        force[a, 2] -= fz_sum
+        moment[a, 0] -= dy * fz_sum - dz * fy_sum + mx_sum
+        moment[a, 1] -= dz * fx_sum - dx * fz_sum + my_sum
+        moment[a, 2] -= dx * fy_sum - dy * fx_sum + mz_sum
+
+
+@numba.njit(cache=True)
+def integrate(state, rot, blocks, force, moment, damping, dt):
+    """Steps 4-5: damped velocities, positions and rotations. Returns (max unbalanced force
+    or moment / radius over the free degrees of freedom, N; max block point speed, m/s)."""
+    max_unbalanced = 0.0
+    max_speed = 0.0
+    for i in range(state.position.shape[0]):
+        free = blocks.free[i]
+        if free.max() == 0.0:
+            continue
+        r = rot[i]
+        f2 = 0.0
+        m2 = 0.0
+        for k in range(3):
+            f = force[i, k] * free[k]
+            f2 += f * f
+            state.velocity[i, k] += local_damping(f, state.velocity[i, k], damping) * blocks.inv_mass[i] * dt
+            m = moment[i, k] * free[3 + k]
+            m2 += m * m
+            moment[i, k] = local_damping(m, state.angular_velocity[i, k], damping)
+        # world inertia I_w = R I_body R^T applied to omega, and the gyroscopic moment omega x I_w omega
+        w = state.angular_velocity[i]
+        lx, ly, lz = _world_tensor_apply(r, blocks.inertia_body[i], w[0], w[1], w[2])
+        tx = moment[i, 0] - (w[1] * lz - w[2] * ly)
+        ty = moment[i, 1] - (w[2] * lx - w[0] * lz)
+        tz = moment[i, 2] - (w[0] * ly - w[1] * lx)
+        ax, ay, az = _world_tensor_apply(r, blocks.inv_inertia_body[i], tx, ty, tz)
+        w[0] += ax * dt * free[3]
+        w[1] += ay * dt * free[4]
+        w[2] += az * dt * free[5]
+        for k in range(3):
+            state.velocity[i, k] *= free[k]
+            state.position[i, k] += state.velocity[i, k] * dt
+        rotate_by_vector(state.quaternion[i], w[0] * dt, w[1] * dt, w[2] * dt)
+        v = state.velocity[i]
+        speed = np.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * blocks.radius[i]
+        if not speed < np.inf:  # NaN counts as infinitely fast
+            speed = np.inf
+        max_speed = max(max_speed, speed)
+        max_unbalanced = max(max_unbalanced, np.sqrt(f2), np.sqrt(m2) / blocks.radius[i])
+    return max_unbalanced, max_speed
+
+
+@numba.njit(cache=True)
+def energies(state, rot, blocks):
+    """The measures of the divergence test, over the moving blocks: kinetic energy with the
+    masses used for the motion, J (rotations with the world inertia R I_body R^T, R from the
+    start of the cycle), and sum m |x - x_origin|, kg m. A pass of its own, every
+    ENERGY_CHECK_EVERY cycles: inside :func:`integrate`, even a branch never taken cost a third
+    of it."""
+    kinetic = 0.0
+    travel = 0.0
+    for i in range(state.position.shape[0]):
+        if blocks.free[i].max() == 0.0:
+            continue
+        v, w, r = state.velocity[i], state.angular_velocity[i], rot[i]
+        lx, ly, lz = _world_tensor_apply(r, blocks.inertia_body[i], w[0], w[1], w[2])
+        kinetic += 0.5 * (w[0] * lx + w[1] * ly + w[2] * lz + (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) / blocks.inv_mass[i])
+        o, p = blocks.origin[i], state.position[i]
+        travel += blocks.mass[i] * np.sqrt((p[0] - o[0]) ** 2 + (p[1] - o[1]) ** 2 + (p[2] - o[2]) ** 2)
+    return kinetic, travel
+
+
+@numba.njit(cache=True)
+def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, measure):
+    """One cycle, steps 1-5 (``rot``, ``force``, ``moment`` are scratch arrays).
+
+    Returns what :func:`integrate` returns (kinetic energy and travel if ``measure``)."""
+    for i in range(state.position.shape[0]):
+        quaternion_to_matrix(state.quaternion[i], rot[i])
+        for k in range(3):
+            force[i, k] = blocks.mass[i] * gravity[k]
+            moment[i, k] = 0.0
+    contact_forces(state, rot, sub, joint, dt, force, moment)
+    unbalanced, speed = integrate(state, rot, blocks, force, moment, damping, dt)
+    kinetic, travel = energies(state, rot, blocks) if measure else (0.0, 0.0)
+    return unbalanced, speed, kinetic, travel
+
+
+@numba.njit(cache=True)
+def run_cycles(state, blocks, sub, joint, loop, broad_state, neighbours):
+    """:func:`cycle_loop` around the 3D :func:`step`."""
+    return cycle_loop(step, state, blocks, sub, joint, loop, broad_state, neighbours)

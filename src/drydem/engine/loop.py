@@ -1,0 +1,190 @@
+"""The cycling loop shared by the compiled cycles (:mod:`drydem.engine.cycle3d`,
+:mod:`drydem.engine.cycle_planar`) and the NumPy oracle: what one call is to do
+(:class:`LoopSettings`), when it ends (equilibrium, re-detection, divergence, max cycles), and
+the Verlet-list test that says when contacts must be re-detected.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+#: kinetic energy above this many times the work gravity can have done means a blow-up
+DIVERGENCE_FACTOR = 10.0
+#: the energy test of divergence runs every this many cycles (a NaN is caught at every cycle)
+ENERGY_CHECK_EVERY = 16
+#: run_cycles exit codes
+RUNNING, CONVERGED, REDETECT, DIVERGED = 0, 1, 2, 3
+#: criterion codes
+RATIO, VELOCITY = 0, 1
+#: LLVM fast-math flags for the contact loops: reassociation and fused multiply-add, but
+#: NaN and infinity keep their meaning (the divergence guard relies on them)
+FASTMATH = {"contract", "reassoc", "arcp", "nsz"}
+
+
+@numba.njit(cache=True, inline="always")
+def _relative_quaternion(q, q0):
+    """q (x) q0^-1 for unit quaternions: the rotation since detection."""
+    return (
+        q[0] * q0[0] + q[1] * q0[1] + q[2] * q0[2] + q[3] * q0[3],
+        -q[0] * q0[1] + q[1] * q0[0] - q[2] * q0[3] + q[3] * q0[2],
+        -q[0] * q0[2] + q[1] * q0[3] + q[2] * q0[0] - q[3] * q0[1],
+        -q[0] * q0[3] - q[1] * q0[2] + q[2] * q0[1] + q[3] * q0[0],
+    )
+
+
+@numba.njit(cache=True, inline="always")
+def _angle_bound(cos_half):
+    """Upper bound 2 tan(theta / 2) >= theta of a rotation angle from |cos(theta / 2)|
+    (tight to O(theta^3); no arccos in the per-cycle test)."""
+    c = min(cos_half, 1.0)
+    if c <= 0.5:
+        return np.pi
+    return 2.0 * np.sqrt(1.0 - c * c) / c
+
+
+@numba.njit(cache=True, inline="always")
+def _pair_motion(state, neighbours, k, radius):
+    """Bound on the displacement of any point of block i relative to block j since the pair's
+    snapshot (i, j = neighbours.pairs[k]), m:
+
+        |dx_i - dx_j - (Q_j - 1)(c_i0 - c_j0)| + theta_ij max(r_i, r_j)
+
+    with Q the rotations since the snapshot and theta_ij the angle of Q_i Q_j^T. Blocks moving
+    together as one rigid body give zero.
+    """
+    i, j = neighbours.pairs[k, 0], neighbours.pairs[k, 1]
+    ci0, cj0 = neighbours.position[k, 0], neighbours.position[k, 1]
+    wi, xi, yi, zi = _relative_quaternion(state.quaternion[i], neighbours.quaternion[k, 0])
+    w, ux, uy, uz = _relative_quaternion(state.quaternion[j], neighbours.quaternion[k, 1])
+    # (Q_j - 1) v with v = c_i0 - c_j0, by v' = v + 2 w (u x v) + 2 u x (u x v)
+    vx, vy, vz = ci0[0] - cj0[0], ci0[1] - cj0[1], ci0[2] - cj0[2]
+    cx, cy, cz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    qx = 2.0 * w * cx + 2.0 * (uy * cz - uz * cy)
+    qy = 2.0 * w * cy + 2.0 * (uz * cx - ux * cz)
+    qz = 2.0 * w * cz + 2.0 * (ux * cy - uy * cx)
+    dx = state.position[i, 0] - ci0[0] - state.position[j, 0] + cj0[0] - qx
+    dy = state.position[i, 1] - ci0[1] - state.position[j, 1] + cj0[1] - qy
+    dz = state.position[i, 2] - ci0[2] - state.position[j, 2] + cj0[2] - qz
+    cos_half = abs(wi * w + xi * ux + yi * uy + zi * uz)
+    return np.sqrt(dx * dx + dy * dy + dz * dz) + _angle_bound(cos_half) * max(radius[i], radius[j])
+
+
+@numba.njit(cache=True)
+def pair_motions(state, neighbours, radius, out):
+    """:func:`_pair_motion` of every neighbour pair into ``out`` (nn,), m."""
+    for k in range(neighbours.pairs.shape[0]):
+        out[k] = _pair_motion(state, neighbours, k, radius)
+
+
+@numba.njit(cache=True)
+def detection_slack(state, broad_state, neighbours, radius, absolute_limit, slack):
+    """How far (m) each block's points may still move before a re-detection may be needed, into
+    ``slack`` (nb,); returns the smallest: <= 0, re-detect now (a Verlet-list test).
+
+    Absolute: a block point moved more than ``absolute_limit`` (|dx| + theta r) since the
+    State ``broad_state`` of the last broad phase, so a block outside the neighbour list may
+    have come close. Relative: a neighbour pair moved more than its ``neighbours.limit``
+    relative to each other since its snapshot (:func:`_pair_motion`), so its contact may have
+    changed; half of what is left goes to each of its blocks. Angles are bounded by
+    2 tan(theta / 2).
+    """
+    for i in range(state.position.shape[0]):
+        w, _, _, _ = _relative_quaternion(state.quaternion[i], broad_state.quaternion[i])
+        d = state.position[i] - broad_state.position[i]
+        slack[i] = absolute_limit - np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) - _angle_bound(abs(w)) * radius[i]
+    for k in range(neighbours.pairs.shape[0]):
+        left = 0.5 * (neighbours.limit[k] - _pair_motion(state, neighbours, k, radius))
+        i, j = neighbours.pairs[k, 0], neighbours.pairs[k, 1]
+        slack[i] = min(slack[i], left)
+        slack[j] = min(slack[j], left)
+    return slack.min() if slack.shape[0] else np.inf
+
+
+@numba.njit(cache=True)
+def accumulate_motion(state, lever, dt, moved, slack):
+    """Add to ``moved`` (nb,) a bound on how far each block's points moved this cycle, m, and
+    say whether one has used up its ``slack`` (:func:`detection_slack`).
+
+    The bound, 1.25 (|v|_1 + |omega|_1 lever) dt with lever = 4 r_max, covers what one cycle adds
+    to :func:`_pair_motion` from either of the pair's blocks: the translation, the turn of the
+    centroid offset (at most 2 r_max plus the neighbour margin) and the relative angle times
+    max(r_i, r_j); the 1.25 covers the angle bound 2 tan(theta / 2), and L1 norms bound the
+    Euclidean ones without square roots. A block far from the others uses up only its own slack.
+    """
+    used_up = False
+    for i in range(moved.shape[0]):
+        v, w = state.velocity[i], state.angular_velocity[i]
+        moved[i] += 1.25 * (abs(v[0]) + abs(v[1]) + abs(v[2]) + (abs(w[0]) + abs(w[1]) + abs(w[2])) * lever) * dt
+        used_up |= moved[i] >= slack[i]
+    return used_up
+
+
+class LoopSettings(NamedTuple):
+    """What one call of a kernel's ``run_cycles`` is to do (:func:`cycle_loop`).
+
+    gravity : (3,) m/s2. dt : timestep, s. damping : local damping coefficient. max_cycles :
+    cycles at most. criterion, limit : RATIO (max unbalanced force / force_scale < limit) or
+    VELOCITY (max block point speed < limit, m/s). force_scale : N. travel_slack : kg m, of the
+    divergence test. absolute_limit : m, of :func:`detection_slack`.
+    """
+
+    gravity: np.ndarray
+    dt: float
+    damping: float
+    max_cycles: int
+    criterion: int
+    limit: float
+    force_scale: float
+    travel_slack: float
+    absolute_limit: float
+
+
+@numba.njit(cache=True, inline="always")
+def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neighbours):
+    """The cycling loop around ``step_function`` (a kernel's ``step``), shared by every engine,
+    with the :class:`LoopSettings` ``loop``.
+
+    It cycles until converged, re-detection needed, diverged or ``loop.max_cycles``, and returns
+    (cycles run, exit code, unbalanced-force ratio and max point speed of the last cycle) as
+    plain numbers: boxing a NamedTuple on return calls Python, and a pending Ctrl-C raised
+    there crashes numba. ``broad_state`` and ``neighbours`` go to :func:`detection_slack`, which
+    runs only once a block may have used up its slack (:func:`accumulate_motion`).
+
+    Divergence: a NaN, or more kinetic energy than gravity can have supplied. Damping only
+    removes energy, so the kinetic energy stays below the work of gravity, at most
+    |g| sum m |x - x_origin|; above DIVERGENCE_FACTOR times that (plus ``travel_slack``, kg m,
+    for the settling at the start) the integration has blown up. A block falling freely for
+    any time does not trigger it. The energies are measured every ENERGY_CHECK_EVERY cycles
+    (they cost a third of the motion update); a blow-up takes far longer to matter.
+
+    Each compiled kernel has a cached ``run_cycles`` of its own into which this loop is inlined
+    with its ``step``: a numba function passed as an argument is a new type in every process,
+    so a loop compiled for it (or a closure over it) would never be served from numba's cache
+    and would cost seconds at every start. :mod:`oracles.cycle` runs its Python form.
+    """
+    gravity, dt, damping, criterion, limit = loop.gravity, loop.dt, loop.damping, loop.criterion, loop.limit
+    nb = state.position.shape[0]
+    rot = np.empty((nb, 3, 3))
+    force = np.empty((nb, 3))
+    moment = np.empty((nb, 3))
+    ratio, speed = np.inf, np.inf
+    g = np.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
+    lever = 4.0 * blocks.radius.max()
+    slack = np.full(nb, -1.0)  # unknown: look at the first cycle
+    moved = np.zeros(nb)
+    for cycle in range(loop.max_cycles):
+        measure = cycle % ENERGY_CHECK_EVERY == 0
+        unbalanced, speed, kinetic, travel = step_function(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, measure)
+        ratio = unbalanced / loop.force_scale
+        if not (speed < np.inf and (not measure or kinetic <= DIVERGENCE_FACTOR * g * (travel + loop.travel_slack))):
+            return cycle + 1, DIVERGED, ratio, speed
+        if (criterion == RATIO and ratio < limit) or (criterion == VELOCITY and speed < limit):
+            return cycle + 1, CONVERGED, ratio, speed
+        if accumulate_motion(state, lever, dt, moved, slack):
+            moved[:] = 0.0
+            if detection_slack(state, broad_state, neighbours, blocks.radius, loop.absolute_limit, slack) <= 0.0:
+                return cycle + 1, REDETECT, ratio, speed
+    return loop.max_cycles, RUNNING, ratio, speed

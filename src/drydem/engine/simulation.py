@@ -1,0 +1,275 @@
+"""Cycling a model: explicit dynamic relaxation to equilibrium, with contact tracking.
+
+A :class:`Simulation` holds a frozen :class:`~drydem.model.assembly.Model`, the mutable
+:class:`~drydem.model.state.State`, a :class:`~drydem.engine.tracker.ContactTracker` (the
+contacts, re-detected as the blocks move) and the blocks' constants for the compiled cycle
+(:func:`drydem.engine.inertia.timestep_and_blocks`: each detection recomputes the timestep or,
+with mass scaling, the fictitious masses at the first timestep).
+
+Equilibrium (3DEC's ``solve``): cycle until
+
+* ``ratio``: max over free blocks of the unbalanced force (or moment / block radius)
+  divided by the mean weight of the free blocks is below ``SolverSettings.ratio``, or
+* ``velocity``: the fastest block point (|v| + |omega| r) is slower than
+  ``SolverSettings.max_velocity`` (the paper's 1e-13 m/s).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from drydem.engine import cycle3d, cycle_planar, diagnostics, loop
+from drydem.engine.contacts import NeighbourList, SubContacts
+from drydem.engine.inertia import BlockConstants, keep_kinetic_energy, timestep_and_blocks
+from drydem.engine.joints import JointConstants
+from drydem.engine.tracker import ContactTracker
+from drydem.errors import DivergenceError, ModelError
+from drydem.model.assembly import Model
+from drydem.model.parameters import MAX_CYCLES, G
+from drydem.model.state import State
+
+#: "numba": compiled, the planar cycle for in-plane models (drydem.engine.cycle_planar), else the
+#: 3D one; "numba-3d": the compiled 3D cycle for every model
+ENGINES = ("numba", "numba-3d")
+#: cycles run in one call of the kernel loop between progress reports
+CHUNK = 5_000
+#: 1/kg: blocks this heavy keep their velocities through a cycle's forces (Simulation.move)
+IMMOVABLE_INVERSE_MASS = 1e-300
+
+
+class StepStats(NamedTuple):
+    """What the last cycle measured: unbalanced-force ratio and maximum block point speed (m/s)."""
+
+    ratio: float
+    max_speed: float
+
+
+@dataclass(frozen=True)
+class EquilibriumResult:
+    """Outcome of :meth:`Simulation.cycle_to_equilibrium`.
+
+    converged : the criterion was met. cycles : cycles run. criterion : "ratio" or "velocity".
+    ratio : unbalanced-force ratio at the last cycle. max_speed : m/s, fastest block point at
+    the last cycle. detections : contact detections during the call.
+    """
+
+    converged: bool
+    cycles: int
+    criterion: str
+    ratio: float
+    max_speed: float
+    detections: int
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """A saved point of a :class:`Simulation`: state, contacts with their shear history,
+    neighbour list, the state at the last broad phase, the blocks still in the analysis, cycles
+    run, the timestep kept by mass scaling (s)."""
+
+    state: State
+    contacts: SubContacts
+    neighbours: NeighbourList
+    broad_state: State
+    active: np.ndarray
+    cycles: int
+    scaled_timestep: float | None
+
+
+class Simulation:
+    """A model being cycled, from ``state`` (default: at rest as drawn).
+
+    ``engine`` is one of ENGINES ("numba", the default, is the fastest) or a function with the
+    signature of :func:`drydem.engine.cycle3d.run_cycles` (the tests pass the NumPy oracle).
+    ``timestep`` (s) overrides the automatic one; it must not exceed the critical timestep.
+
+    Public arrays: ``state``; ``contacts``, ``neighbours`` and ``active`` (the blocks still in the
+    analysis) of the ``tracker``; ``blocks``, the constants the cycle runs with
+    (:class:`~drydem.engine.inertia.BlockConstants`); ``timestep`` (s); ``run_cycles``, the
+    cycle function; ``cycles`` run so far.
+    """
+
+    def __init__(self, model: Model, *, state: State | None = None, engine: str | Callable = "numba", timestep: float | None = None):
+        self.model = model
+        self.state = state.copy() if state is not None else State.at_rest(model.block_centroid)
+        self.run_cycles = _cycle_function(model, engine)
+        self.tracker = ContactTracker(model, self.state)
+        self.blocks: BlockConstants | None = None
+        self.cycles = 0
+        self._fixed_timestep = timestep
+        self._scaled_timestep: float | None = None
+        self._update_inertia()
+
+    @property
+    def contacts(self) -> SubContacts:
+        return self.tracker.contacts
+
+    @property
+    def neighbours(self) -> NeighbourList:
+        return self.tracker.neighbours
+
+    @property
+    def active(self) -> np.ndarray:
+        return self.tracker.active
+
+    @property
+    def detections(self) -> int:
+        return self.tracker.detections
+
+    def detect_contacts(self) -> None:
+        """Re-detect every contact at the current state (shear stress carried over)."""
+        self.tracker.detect(self.state, everything=True)
+        self._update_inertia()
+
+    def _update_inertia(self) -> None:
+        """The timestep and block constants for the current contacts; with mass scaling, the
+        velocities keep each block's kinetic energy through the change of fictitious masses."""
+        dt, blocks = timestep_and_blocks(
+            self.model, self.tracker.contacts, self.tracker.active, fixed_timestep=self._fixed_timestep, scaled_timestep=self._scaled_timestep
+        )
+        if self.model.solver.mass_scaling:
+            self._scaled_timestep = dt
+            if self.blocks is not None:
+                keep_kinetic_energy(self.state, self.blocks, blocks)
+        self.timestep, self.blocks = dt, blocks
+
+    def remove_blocks(self, blocks) -> None:
+        """Take blocks out of the analysis (e.g. bricks that fell out of the wall): they stop
+        moving, lose their contacts and no longer count for equilibrium."""
+        self.tracker.remove(blocks)
+        self.state.velocity[~self.active] = 0.0
+        self.state.angular_velocity[~self.active] = 0.0
+        self._update_inertia()
+
+    def snapshot(self) -> Snapshot:
+        """Everything needed to resume cycling from now (see :meth:`restore`)."""
+        t = self.tracker
+        return Snapshot(
+            state=self.state.copy(), contacts=t.contacts.copy(), neighbours=t.neighbours.copy(), broad_state=t.broad_state.copy(),
+            active=t.active.copy(), cycles=self.cycles, scaled_timestep=self._scaled_timestep,
+        )
+
+    def restore(self, snapshot: Snapshot) -> None:
+        """Go back to a :meth:`snapshot` (its arrays are copied, so it can be restored again)."""
+        self.state = snapshot.state.copy()
+        t = self.tracker
+        t.contacts, t.neighbours = snapshot.contacts.copy(), snapshot.neighbours.copy()
+        t.broad_state, t.active = snapshot.broad_state.copy(), snapshot.active.copy()
+        self.cycles = snapshot.cycles
+        self._scaled_timestep = snapshot.scaled_timestep
+        self._update_inertia()
+
+    # -- cycling --------------------------------------------------------------------------
+    def move(self, displacement: np.ndarray, rotation: np.ndarray, *, gravity=(0.0, 0.0, -G)) -> None:
+        """Move every free block by ``displacement`` (nb, 3) m and the rotation vector ``rotation``
+        (nb, 3) rad (world frame) within one cycle, and leave it at rest there.
+
+        The joints follow as in any cycle: the shear springs take the tangential relative
+        displacement (Mohr-Coulomb capping them), the normal ones the gaps. The move is a cycle
+        with the velocities displacement / dt and rotation / dt in which the blocks are too
+        heavy (IMMOVABLE_INVERSE_MASS) for the joint forces to change them. A predictor for the
+        next load step (:mod:`drydem.analysis.tilt`): dynamic relaxation then starts near the new
+        equilibrium. Fixed degrees of freedom do not move, whatever is asked of them.
+        """
+        blocks = self.blocks
+        self.state.velocity[:] = np.asarray(displacement, dtype=float) * blocks.free[:, :3] / self.timestep
+        self.state.angular_velocity[:] = np.asarray(rotation, dtype=float) * blocks.free[:, 3:] / self.timestep
+        heavy = blocks._replace(
+            inv_mass=np.where(blocks.inv_mass > 0, IMMOVABLE_INVERSE_MASS, 0.0), inv_inertia_body=np.zeros_like(blocks.inv_inertia_body)
+        )
+        # its kinetic energy is not the dynamics', so not a divergence (a NaN still is)
+        self._run(gravity, 1, criterion=loop.RATIO, limit=-1.0, criterion_name="none", travel_slack=np.inf, blocks=heavy)
+        self.state.velocity[:] = 0.0
+        self.state.angular_velocity[:] = 0.0
+
+    def cycle(self, n: int, *, gravity=(0.0, 0.0, -G)) -> EquilibriumResult:
+        """Run exactly ``n`` cycles (re-detecting contacts as needed), no equilibrium test."""
+        return self._run(gravity, n, criterion=loop.RATIO, limit=-1.0, criterion_name="none")
+
+    def cycle_to_equilibrium(
+        self, *, gravity=(0.0, 0.0, -G), max_cycles: int | None = None, progress: Callable[[int, StepStats], None] | None = None,
+        stop: Callable[[], bool] | None = None,
+    ) -> EquilibriumResult:
+        """Cycle until at rest by the model's criterion (see module docstring), at most
+        ``max_cycles`` (default the solver's); non-convergence is returned, not hidden.
+
+        ``progress(cycles, stats)`` is called every few thousand cycles. ``stop()`` is asked
+        whenever the compiled loop hands back (at every re-detection, so every few cycles
+        while blocks move fast, and at least every CHUNK cycles): True ends the call there,
+        unconverged. Raises DivergenceError if the integration blows up.
+        """
+        solver = self.model.solver
+        if max_cycles is None:
+            max_cycles = solver.max_cycles
+        MAX_CYCLES.check(max_cycles, f"{self.model.source}: cycle_to_equilibrium max_cycles")
+        criterion, limit = (loop.RATIO, solver.ratio) if solver.criterion == "ratio" else (loop.VELOCITY, solver.max_velocity)
+        return self._run(
+            gravity, max_cycles, criterion=criterion, limit=limit, criterion_name=solver.criterion, progress=progress, stop=stop
+        )
+
+    def _run(
+        self, gravity, max_cycles: int, *, criterion: int, limit: float, criterion_name: str, progress=None,
+        travel_slack: float | None = None, blocks: BlockConstants | None = None, stop: Callable[[], bool] | None = None,
+    ) -> EquilibriumResult:
+        m = self.model
+        g = np.asarray(gravity, dtype=float)
+        if g.shape != (3,) or not np.all(np.isfinite(g)):
+            raise ModelError(f"gravity must be a finite [gx, gy, gz] in m/s2, got {gravity!r}")
+        moving = m.block_movable & self.active
+        weight = float(np.linalg.norm(g)) * float(m.block_mass[moving].sum()) / max(int(moving.sum()), 1)
+        if criterion_name == "ratio" and weight == 0.0:
+            raise ModelError("the 'ratio' criterion needs gravity (it divides by the mean weight); use 'velocity'")
+        joint = JointConstants.of(m.joint)
+        if travel_slack is None:
+            travel_slack = m.total_mass * m.contact_tolerance
+        done, detections = 0, 0
+        code, stats = loop.RUNNING, StepStats(np.inf, np.inf)
+        while done < max_cycles:
+            settings = loop.LoopSettings(
+                g, self.timestep, m.solver.damping, min(CHUNK, max_cycles - done), criterion, limit, max(weight, 1e-300),
+                travel_slack, self.tracker.absolute_limit,
+            )
+            tracker = self.tracker
+            n, code, ratio, speed = self.run_cycles(self.state, blocks or self.blocks, tracker.contacts, joint, settings, tracker.broad_state, tracker.neighbours)
+            stats = StepStats(ratio, speed)
+            done += n
+            self.cycles += n
+            if progress is not None:
+                progress(done, stats)
+            if code == loop.DIVERGED:
+                raise DivergenceError(
+                    f"{m.source}: the integration diverged after {self.cycles} cycles (more kinetic energy than gravity "
+                    f"can have supplied; timestep {self.timestep:.3g} s): "
+                    "reduce the timestep (solver.timestep_safety) or check the stiffness and masses"
+                )
+            if code == loop.CONVERGED:
+                break
+            if code == loop.REDETECT:
+                self.tracker.detect(self.state)
+                self._update_inertia()
+                detections += 1
+            if stop is not None and stop():
+                break
+        return EquilibriumResult(code == loop.CONVERGED, done, criterion_name, float(stats.ratio), float(stats.max_speed), detections)
+
+    # -- diagnostics ----------------------------------------------------------------------
+    def energy(self, *, gravity=(0.0, 0.0, -G)) -> dict[str, float]:
+        """Kinetic, gravitational and elastic energy, J (:func:`drydem.engine.diagnostics.energies`)."""
+        return diagnostics.energies(self.model, self.state, self.contacts, self.timestep, np.asarray(gravity, dtype=float))
+
+    def reactions(self, block: int) -> np.ndarray:
+        """Total contact force (N, world frame) that the other blocks exert on ``block``."""
+        return diagnostics.reactions(self.state, self.contacts, block)
+
+
+def _cycle_function(model: Model, engine: str | Callable) -> Callable:
+    """The run_cycles function of ``engine`` for ``model`` (see :class:`Simulation`)."""
+    if callable(engine):
+        return engine
+    if engine not in ENGINES:
+        raise ModelError(f"engine = {engine!r}: must be one of {list(ENGINES)} or a run_cycles function")
+    return cycle_planar.run_cycles if engine == "numba" and model.in_plane else cycle3d.run_cycles

@@ -1,0 +1,1 @@
+"""Parametric studies over many runs: sweeps (``drydem sweep``) and calibration (``drydem calibrate``)."""
