@@ -168,5 +168,5 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
 
 @numba.njit(cache=True)
 def run_cycles(state, blocks, sub, joint, loop, broad_state, neighbours):
-    """:func:`drydem.engine.cycle3d.cycle_loop` around the planar :func:`step`."""
+    """:func:`drydem.engine.loop.cycle_loop` around the planar :func:`step`."""
     return cycle_loop(step, state, blocks, sub, joint, loop, broad_state, neighbours)

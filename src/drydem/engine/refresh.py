@@ -1,12 +1,12 @@
 """Contact re-detection bookkeeping, compiled: which contacts are kept, and the merge of the kept
 ones with the re-detected ones, shear history carried over.
 
-A re-detection (:meth:`drydem.engine.simulation.Simulation._detect`) keeps the contacts of the block pairs
+A re-detection (:meth:`drydem.engine.tracker.ContactTracker.detect`) keeps the contacts of the block pairs
 that have hardly moved relative to each other and makes the others again with the narrow
 phase. The new sub-contacts inherit the shear stress (N/m2) and the intact flag of the nearest
 old sub-contact of the same block pair, projected on the new tangent plane; the shear force is
 stored as the force on the incident block, so it changes sign where the blocks swapped roles.
-A sub-contact whose pair had none starts with no shear. :func:`drydem.engine.contacts.carry_over`
+A sub-contact whose pair had none starts with no shear. The plain-Python carry_over of tests/oracles/contacts.py
 (scipy's cKDTree over the world points) is the oracle of the tests.
 
 In flows (blocks rocking and sliding near collapse) re-detections come every few tens of cycles,
