@@ -341,25 +341,93 @@ def _clipped(overlap, count, face_a, na, face_b, nb, along, across, au, av, tol,
 
 
 @numba.njit(cache=True)
+def _largest(start):
+    """The largest count in a CSR ``start`` array (faces' vertices, blocks' vertices or faces)."""
+    largest = 0
+    for i in range(start.shape[0] - 1):
+        largest = max(largest, start[i + 1] - start[i])
+    return largest
+
+
+@numba.njit(cache=True, inline="always")
+def _most_opposed(normals, count, n):
+    """The face of the first ``count`` ``normals`` most opposed to ``n``, and the cosine between them."""
+    face, cosine = 0, np.inf
+    for f in range(count):
+        along_n = normals[f, 0] * n[0] + normals[f, 1] * n[1] + normals[f, 2] * n[2]
+        if along_n < cosine:
+            face, cosine = f, along_n
+    return face, cosine
+
+
+@numba.njit(cache=True)
+def _face_frame(geom, block, face, verts, n, u, v):
+    """The reference face's in-plane frame: ``u`` along its longest edge, ``v`` = n x u (written
+    into ``u``, ``v``); returns the origin, the face's first vertex."""
+    g0 = geom.block_face_start[block] + face
+    first, count = geom.face_start[g0], geom.face_start[g0 + 1] - geom.face_start[g0]
+    best = -1.0
+    for i in range(count):
+        p0, p1 = verts[geom.face_vertex[first + i]], verts[geom.face_vertex[first + (i + 1) % count]]
+        e0, e1, e2 = p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]
+        length = e0 * e0 + e1 * e1 + e2 * e2
+        if length > best:
+            best, scale = length, 1.0 / math.sqrt(length)
+            u[0], u[1], u[2] = e0 * scale, e1 * scale, e2 * scale
+    v[0], v[1], v[2] = n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0]
+    return verts[geom.face_vertex[first]]
+
+
+@numba.njit(cache=True)
+def _grid(overlap, n_overlap, corners, face_a, na, face_b, nb, along, across, au, av, tol, sliver, uv, area):
+    """The sub-contact nodes of the overlap polygon into ``uv`` and ``area`` (one at its centroid,
+    a bilinear grid on a quadrilateral, clipped cells otherwise); returns their number and the
+    ``corners`` buffer (grown if the overlap outgrew it)."""
+    if along == 1 and across == 1:
+        uv[0, 0], uv[0, 1] = _centroid(overlap, n_overlap)
+        area[0] = _area(overlap, n_overlap)
+        return 1, corners
+    if corners.shape[0] < n_overlap:
+        corners = np.empty((overlap.shape[0], 2))
+    corners[:n_overlap] = overlap[:n_overlap]
+    if _without_collinear(corners, n_overlap, tol) == 4:
+        return _bilinear(corners, face_a, na, face_b, nb, along, across, au, av, uv, area), corners
+    return _clipped(overlap, n_overlap, face_a, na, face_b, nb, along, across, au, av, tol, sliver, uv, area), corners
+
+
+@numba.njit(cache=True)
+def _keep_points(found, k, nodes, uv, area, origin, u, v, n_inc, plane, cos_ni, tolerance, sliver):
+    """The nodes in world coordinates with their gaps along the reference normal to the incident
+    face's plane (n_inc . x = plane), those within ``tolerance`` and above a sliver's area into
+    ``found``'s row ``k``; returns how many."""
+    kept = 0
+    for i in range(nodes):
+        p0 = origin[0] + uv[i, 0] * u[0] + uv[i, 1] * v[0]
+        p1 = origin[1] + uv[i, 0] * u[1] + uv[i, 1] * v[1]
+        p2 = origin[2] + uv[i, 0] * u[2] + uv[i, 1] * v[2]
+        gap = (plane - (n_inc[0] * p0 + n_inc[1] * p1 + n_inc[2] * p2)) / cos_ni
+        if gap <= tolerance and area[i] > sliver:
+            found.points[k, kept, 0], found.points[k, kept, 1], found.points[k, kept, 2] = p0, p1, p2
+            found.gaps[k, kept] = gap
+            found.areas[k, kept] = area[i]
+            kept += 1
+    return kept
+
+
+@numba.njit(cache=True)
 def find_sub_contacts(geom, position, rotation, candidates, tolerance, along, across, across_axis, found):
     """Fill ``found`` (a :class:`Found` with room for the candidates and :func:`max_points`
     points each) for every candidate pair (i < j)."""
     m = found.gaps.shape[1]
     if found.count.shape[0] < candidates.shape[0] or m < max_points(along, across):
         raise ValueError("found has too little room for the candidates' points")
-    uv = np.empty((m, 2))
-    area = np.empty(m)
+    uv, area = np.empty((m, 2)), np.empty(m)
     # polygons: a face as large as the largest, an overlap of two (at most both faces' vertices)
-    largest = 0
-    for f in range(geom.face_start.shape[0] - 1):
-        largest = max(largest, geom.face_start[f + 1] - geom.face_start[f])
+    largest = _largest(geom.face_start)
     face_a, face_b = np.empty((largest, 2)), np.empty((largest, 2))
     overlap, corners = np.empty((2 * largest, 2)), np.empty((2 * largest, 2))
     # the two blocks' world geometry, in buffers for the largest block (no allocation per pair)
-    largest_v = largest_f = 0
-    for b in range(geom.size.shape[0]):
-        largest_v = max(largest_v, geom.vertex_start[b + 1] - geom.vertex_start[b])
-        largest_f = max(largest_f, geom.block_face_start[b + 1] - geom.block_face_start[b])
+    largest_v, largest_f = _largest(geom.vertex_start), _largest(geom.block_face_start)
     va, vb = np.empty((largest_v, 3)), np.empty((largest_v, 3))
     na, nb = np.empty((largest_f, 3)), np.empty((largest_f, 3))
     u, v = np.empty(3), np.empty(3)
@@ -379,64 +447,23 @@ def find_sub_contacts(geom, position, rotation, candidates, tolerance, along, ac
         if separation > tolerance:
             continue
         n = nr[f_ref]
-        f_inc, most_opposed = 0, np.inf
-        for f in range(nfi):
-            along_n = ni[f, 0] * n[0] + ni[f, 1] * n[1] + ni[f, 2] * n[2]
-            if along_n < most_opposed:
-                f_inc, most_opposed = f, along_n
-        n_inc = ni[f_inc]
-        cos_ni = n_inc[0] * n[0] + n_inc[1] * n[1] + n_inc[2] * n[2]
+        f_inc, cos_ni = _most_opposed(ni, nfi, n)
         if cos_ni >= -1e-6:
             continue
-        # in-plane frame: origin at the reference face's first vertex, u along its longest edge
-        g0 = geom.block_face_start[ref] + f_ref
-        first, count_ref = geom.face_start[g0], geom.face_start[g0 + 1] - geom.face_start[g0]
-        origin = vr[geom.face_vertex[first]]
-        best = -1.0
-        for i in range(count_ref):
-            p0, p1 = vr[geom.face_vertex[first + i]], vr[geom.face_vertex[first + (i + 1) % count_ref]]
-            e0, e1, e2 = p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]
-            length = e0 * e0 + e1 * e1 + e2 * e2
-            if length > best:
-                best, scale = length, 1.0 / math.sqrt(length)
-                u[0], u[1], u[2] = e0 * scale, e1 * scale, e2 * scale
-        v[0], v[1], v[2] = n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0]
+        origin = _face_frame(geom, ref, f_ref, vr, n, u, v)
         n_ref_2d = _face_2d(geom, ref, f_ref, vr, origin, u, v, face_a)
         n_inc_2d = _face_2d(geom, inc, f_inc, vi, origin, u, v, face_b)
         overlap, n_overlap = _clip(face_b, n_inc_2d, face_a, n_ref_2d, overlap)
         if n_overlap < 3 or _area(overlap, n_overlap) <= 1e-8 * small * small:
             continue
-        tol = 1e-9 * small
         sliver = SLIVER_FRACTION * min(_area(face_a, n_ref_2d), _area(face_b, n_inc_2d))
         au = across_axis[0] * u[0] + across_axis[1] * u[1] + across_axis[2] * u[2]
         av = across_axis[0] * v[0] + across_axis[1] * v[1] + across_axis[2] * v[2]
-        if along == 1 and across == 1:
-            uv[0, 0], uv[0, 1] = _centroid(overlap, n_overlap)
-            area[0] = _area(overlap, n_overlap)
-            nodes = 1
-        else:
-            if corners.shape[0] < n_overlap:
-                corners = np.empty((overlap.shape[0], 2))
-            corners[:n_overlap] = overlap[:n_overlap]
-            n_corners = _without_collinear(corners, n_overlap, tol)
-            if n_corners == 4:
-                nodes = _bilinear(corners, face_a, n_ref_2d, face_b, n_inc_2d, along, across, au, av, uv, area)
-            else:
-                nodes = _clipped(overlap, n_overlap, face_a, n_ref_2d, face_b, n_inc_2d, along, across, au, av, tol, sliver, uv, area)
+        nodes, corners = _grid(overlap, n_overlap, corners, face_a, n_ref_2d, face_b, n_inc_2d, along, across, au, av, 1e-9 * small, sliver, uv, area)
+        n_inc = ni[f_inc]
         inc_first = vi[geom.face_vertex[geom.face_start[geom.block_face_start[inc] + f_inc]]]
         plane = n_inc[0] * inc_first[0] + n_inc[1] * inc_first[1] + n_inc[2] * inc_first[2]
-        kept = 0
-        for i in range(nodes):
-            p0 = origin[0] + uv[i, 0] * u[0] + uv[i, 1] * v[0]
-            p1 = origin[1] + uv[i, 0] * u[1] + uv[i, 1] * v[1]
-            p2 = origin[2] + uv[i, 0] * u[2] + uv[i, 1] * v[2]
-            gap = (plane - (n_inc[0] * p0 + n_inc[1] * p1 + n_inc[2] * p2)) / cos_ni
-            if gap <= tolerance and area[i] > sliver:
-                found.points[k, kept, 0], found.points[k, kept, 1], found.points[k, kept, 2] = p0, p1, p2
-                found.gaps[k, kept] = gap
-                found.areas[k, kept] = area[i]
-                kept += 1
-        found.count[k] = kept
+        found.count[k] = _keep_points(found, k, nodes, uv, area, origin, u, v, n_inc, plane, cos_ni, tolerance, sliver)
         found.ref[k], found.inc[k] = ref, inc
         found.normal[k] = n
 
