@@ -99,10 +99,10 @@ def test_the_predictor_extrapolates_an_elastic_trend_and_not_a_jump():
     # equilibria at 1.0, 1.1 and 1.2 deg (made up): the block moved 1 um per step, so the
     # step to 1.3 deg starts 1 um further; after a 10 um jump (a slip, 10x the trend per degree)
     # the next step starts where the jump left it: friction would keep what it is given
-    from drydem.analysis.tilt import _Run
+    from drydem.analysis.tilt import TiltRun
 
     model = stack_model([0.0055], supports=dd.Supports(fix_y=True))
-    run = _Run(model, TiltSettings(), on_progress=None)
+    run = TiltRun(model, TiltSettings(), on_progress=None)
     run.sim.cycle_to_equilibrium()
     start = run.sim.state.copy()
 
@@ -124,11 +124,11 @@ def test_the_predictor_extrapolates_an_elastic_trend_and_not_a_jump():
 def test_the_predictor_moves_at_most_its_cap_in_elastic_closures():
     # a brick on its base closes its joint by m g / (kn A) under its own weight (9.7e-7 m here);
     # an elastic trend of 1 mm per step is extrapolated by predictor_cap_closures of those only
-    from drydem.analysis.tilt import _Run
+    from drydem.analysis.tilt import TiltRun
 
     model = stack_model([0.0055], supports=dd.Supports(fix_y=True))
     closure = model.block_mass[1] * dd.G / (model.joint.kn * BRICK[0] * BRICK[1])
-    run = _Run(model, TiltSettings(), on_progress=None)
+    run = TiltRun(model, TiltSettings(), on_progress=None)
     assert run.elastic_closure == pytest.approx(closure, rel=1e-9)
     run.sim.cycle_to_equilibrium()
     start = run.sim.state.copy()
@@ -233,7 +233,7 @@ def test_one_point_across_an_in_plane_wall_gives_the_same_collapse_as_four():
 def test_a_coarse_adaptive_trial_is_given_up_once_its_motion_is_not_elastic():
     # the last two equilibria moved 1 mm per degree: a 1.6 deg trial expects 1.6 mm, and is
     # abandoned past 4 x 1.6 mm (TiltSettings.trial_growth), or at once if a block falls out
-    from drydem.analysis.tilt import Record, _trial_limit
+    from drydem.analysis.tilt import Record, trial_limit
 
     class Run:
         lost: list = []
@@ -244,7 +244,7 @@ def test_a_coarse_adaptive_trial_is_given_up_once_its_motion_is_not_elastic():
 
     run = Run()
     records = [Record(8.0, 0.008, 0.0, 0.0, 100), Record(10.0, 0.010, 0.0, 0.0, 100)]
-    give_up = _trial_limit(run, records, 1.6, TiltSettings(adaptive=True))
+    give_up = trial_limit(run, records, 1.6, TiltSettings(adaptive=True))
     run.ux = 0.010 + 6.3e-3
     assert not give_up()
     run.ux = 0.010 + 6.5e-3

@@ -1,0 +1,87 @@
+"""Checkpoints of a tilting analysis: what it saves at every equilibrium (:func:`save`), what a
+checkpoint must match to be resumed (:func:`fingerprint`, :func:`check_fingerprint`), and the
+resume itself (:func:`resume`)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+
+from drydem.analysis.tilt.run import TiltRun
+from drydem.analysis.tilt.settings import Record, TiltSettings
+from drydem.engine.checkpoint import load_checkpoint, save_checkpoint
+from drydem.errors import ModelError
+from drydem.model.assembly import Model
+from drydem.model.state import State
+
+
+def fingerprint(model: Model, settings: TiltSettings) -> dict[str, str]:
+    """What a checkpoint must match to be resumed, by name: the model's source, blocks (a hash
+    of their geometry, densities and fixities), every parameter of its tables and every tilt
+    setting (values as repr strings)."""
+    blocks = hashlib.sha1()
+    for shape in model.block_shape:
+        blocks.update(np.ascontiguousarray(shape.vertices).tobytes())
+    blocks.update(model.block_density.tobytes() + model.block_fixed.tobytes())
+    items = {"model": model.source, "blocks": f"{model.n_blocks} blocks, geometry {blocks.hexdigest()[:12]}"}
+    for table in ("joint", "contacts", "supports", "solver"):
+        items |= {f"[{table}] {k}": v for k, v in asdict(getattr(model, table)).items()}
+    items |= {f"tilt setting {k}": v for k, v in asdict(settings).items()}
+    return {k: repr(v) for k, v in items.items()}
+
+
+def check_fingerprint(checkpoint: Path, saved: dict, fingerprint: dict[str, str]) -> None:
+    """ModelError naming every setting in which ``checkpoint`` differs from this run."""
+    try:
+        before = json.loads(str(saved["fingerprint"]))
+    except (KeyError, ValueError):
+        before = None
+    if not isinstance(before, dict):
+        raise ModelError(f"{checkpoint}: written by another version of drydem (no settings to compare); start again without --resume")
+    differ = [f"{k}: {before.get(k, 'absent')} in the checkpoint, {v} now" for k, v in fingerprint.items() if before.get(k) != v]
+    if differ:
+        raise ModelError(f"{checkpoint}: the checkpoint is of another model or protocol ({'; '.join(differ)}); not resuming")
+
+
+def progress(records: list[Record], run: TiltRun, theta: float, step: float) -> dict:
+    """The protocol's position, for a checkpoint (with the equilibria before the last one, for
+    the predictor)."""
+    nb = run.model.n_blocks
+    previous = run.equilibria[:-1]
+    return {
+        "previous_theta_deg": np.array([th for th, _ in previous], dtype=float),
+        "previous_position": np.array([s.position for _, s in previous]).reshape(-1, nb, 3),
+        "previous_quaternion": np.array([s.quaternion for _, s in previous]).reshape(-1, nb, 4),
+        "records": np.array([[r.tilt_deg, r.ux_m, r.uz_m, r.drift, r.cycles] for r in records]),
+        "lost_blocks": np.array([name for name, _ in run.lost], dtype=str),
+        "lost_tilt_deg": np.array([t for _, t in run.lost], dtype=float),
+        "theta_deg": theta,
+        "step_deg": step,
+    }
+
+
+def save(checkpoint: Path, run: TiltRun, records: list[Record], theta: float, step: float, fingerprint: dict[str, str]) -> None:
+    """Save ``run`` at its equilibrium at ``theta`` (deg), with ``records``, the ``step`` (deg)
+    to take next and the run's ``fingerprint``, to ``checkpoint``."""
+    saved = progress(records, run, theta, step) | {"fingerprint": json.dumps(fingerprint)}
+    save_checkpoint(checkpoint, run.sim.snapshot(), saved)
+
+
+def resume(run: TiltRun, checkpoint: Path, fingerprint: dict[str, str], records: list[Record]) -> tuple[float, float]:
+    """Restore ``run`` and ``records`` from ``checkpoint``; returns the tilt (deg) of its last
+    equilibrium and the step (deg) to take next. ModelError if it is of another model or protocol."""
+    snapshot, saved = load_checkpoint(checkpoint)
+    check_fingerprint(checkpoint, saved, fingerprint)
+    run.sim.restore(snapshot)
+    records += [Record(*row[:4], int(row[4])) for row in saved["records"].tolist()]
+    run.lost = list(zip(saved["lost_blocks"].tolist(), saved["lost_tilt_deg"].tolist()))
+    rest = np.zeros((run.model.n_blocks, 3))
+    for th, x, q in zip(saved["previous_theta_deg"], saved["previous_position"], saved["previous_quaternion"]):
+        run.remember(float(th), State(x, q, rest.copy(), rest.copy()))
+    theta = float(saved["theta_deg"])
+    run.remember(theta)
+    return theta, float(saved["step_deg"])

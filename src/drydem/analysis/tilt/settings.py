@@ -1,0 +1,197 @@
+"""What the tilting analysis is given and gives back: its settings (:class:`TiltSettings`,
+checked against :data:`SETTING_RANGES`), the outcome names, the states it reports
+(:class:`Record`, :class:`Frame`, :class:`TiltResult`), and the block it monitors and the wall
+height its drift is measured against."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from drydem.analysis.drift import drift_limit_angles
+from drydem.engine.contacts import SubContacts
+from drydem.errors import ModelError
+from drydem.model.assembly import Model
+from drydem.model.parameters import G, Range
+from drydem.model.state import State
+
+LOADINGS = ("tilt", "multiplier")
+#: how a call of :meth:`~drydem.analysis.tilt.run.TiltRun.equilibrate` ended
+EQUILIBRIUM, FELL, MONITOR_FELL, STOP_DISPLACEMENT, GAVE_UP, MAX_CYCLES = (
+    "equilibrium", "fell", "monitored block fell", "stop displacement", "gave up", "max cycles",
+)
+#: why an analysis ended (TiltResult.ended_by): a collapse (MONITOR_FELL, STOP_DISPLACEMENT),
+#: or one of these, none of which is a collapse
+UNSTABLE_UNDER_GRAVITY = "unstable under gravity"
+NO_EQUILIBRIUM_UNDER_GRAVITY = "no equilibrium under gravity within max_cycles"
+NO_EQUILIBRIUM = "no equilibrium within max_cycles"
+MAXIMUM_ANGLE = "maximum angle"
+
+
+#: the allowed values of TiltSettings' numbers (a tilt of 90 deg or more is no tilting table)
+SETTING_RANGES = {
+    "increment_deg": Range(0.0, 90.0, low_open=True, high_open=True, unit="deg"),
+    "refinements": Range(0, 12, integer=True),
+    "stop_displacement_m": Range(0.0, 100.0, low_open=True, unit="m"),
+    "max_angle_deg": Range(0.0, 90.0, low_open=True, high_open=True, unit="deg"),
+    "lost_drop_heights": Range(0.0, None, low_open=True),
+    "chunk_cycles": Range(1, None, integer=True),
+    "trial_growth": Range(1.0, None, low_open=True),
+    "trial_floor_m": Range(0.0, None, low_open=True, unit="m"),
+    "predictor_growth": Range(1.0, None),
+    "predictor_cap_closures": Range(0.0, None, low_open=True),
+}
+
+
+@dataclass(frozen=True, kw_only=True)
+class TiltSettings:
+    """Protocol parameters (CLI options of ``drydem tilt``).
+
+    increment_deg : tilt step, deg (paper: 0.1). adaptive : coarse steps and bisection.
+    refinements : adaptive steps start at increment_deg * 2**refinements. stop_displacement_m :
+    horizontal displacement of the monitored point that ends the analysis, m (paper: 0.10).
+    loading : "tilt" or "multiplier". monitor : block name (default: the block whose top is
+    highest, nearest the middle of the wall). max_angle_deg : the analysis ends there, deg.
+    lost_drop_heights : a block whose centroid dropped more than this many times its own
+    height is taken out. chunk_cycles : cycles between checks of the monitored point.
+    trial_growth, trial_floor_m : a coarse adaptive trial is abandoned as failed once the
+    monitored point has moved more than trial_growth times the displacement the last two
+    equilibria predict for it, and at least trial_floor_m (m), or once a block has fallen out.
+    predictor : start each step from the last two equilibria extrapolated
+    (:mod:`drydem.analysis.tilt`), unless the last step moved predictor_growth times more per
+    degree than the one before; the move capped at predictor_cap_closures elastic closures of
+    the joints (:mod:`drydem.analysis.tilt`).
+    """
+
+    increment_deg: float = 0.1
+    adaptive: bool = False
+    refinements: int = 4
+    stop_displacement_m: float = 0.10
+    loading: str = "tilt"
+    monitor: str | None = None
+    max_angle_deg: float = 80.0
+    lost_drop_heights: float = 2.0
+    chunk_cycles: int = 2000
+    trial_growth: float = 4.0
+    trial_floor_m: float = 5e-4
+    predictor: bool = True
+    predictor_growth: float = 2.0
+    predictor_cap_closures: float = 150.0
+
+    def __post_init__(self):
+        for name, allowed in SETTING_RANGES.items():
+            allowed.check(getattr(self, name), f"tilt setting {name}")
+        if self.loading not in LOADINGS:
+            raise ModelError(f"tilt setting loading = {self.loading!r}: must be one of {LOADINGS}")
+        if self.monitor is not None and not isinstance(self.monitor, str):
+            raise ModelError(f"tilt setting monitor = {self.monitor!r}: must be a block name")
+        if self.increment_deg > self.max_angle_deg:
+            raise ModelError(
+                f"tilt setting increment_deg = {self.increment_deg!r} exceeds max_angle_deg = {self.max_angle_deg!r}: "
+                "no step would be taken"
+            )
+
+    def gravity(self, theta_deg: float) -> np.ndarray:
+        """Gravity vector (m/s2) at tilt (or tilt-equivalent) ``theta_deg``."""
+        t = math.radians(theta_deg)
+        if self.loading == "tilt":
+            return G * np.array([math.sin(t), 0.0, -math.cos(t)])
+        return G * np.array([math.tan(t), 0.0, -1.0])
+
+    def first_step(self) -> float:
+        """The first stage 2 step, deg: one increment, or 2**refinements of them if adaptive."""
+        return self.increment_deg * (2**self.refinements if self.adaptive else 1)
+
+
+@dataclass(frozen=True)
+class Record:
+    """One equilibrium state of the pushover curve: tilt (deg), monitored displacement (m),
+    drift (ux / wall height) and the cycles this step took."""
+
+    tilt_deg: float
+    ux_m: float
+    uz_m: float
+    drift: float
+    cycles: int
+
+    @property
+    def load_multiplier(self) -> float:
+        return math.tan(math.radians(self.tilt_deg))
+
+
+@dataclass(frozen=True)
+class Frame:
+    """A state of the analysis to show: ``kind`` "equilibrium" or "past collapse", the tilt
+    (deg), the monitored horizontal displacement (m), the blocks' State, their sub-contacts and
+    which blocks are still in the analysis (``active``, (nb,) bool)."""
+
+    kind: str
+    tilt_deg: float
+    ux_m: float
+    state: State = field(repr=False)
+    contacts: SubContacts = field(repr=False)
+    active: np.ndarray = field(repr=False)
+
+
+@dataclass
+class TiltResult:
+    """Outcome of :func:`~drydem.analysis.tilt.tilt_analysis`. States are block
+    positions/orientations (State); ``cycles`` counts every cycle run, those of abandoned
+    adaptive trials included.
+    ``stable_under_gravity``: True (stage 1 reached equilibrium), False (a block fell under its
+    own weight: named in ``lost_blocks`` at 0 deg, or the monitored point moved the stop
+    displacement), None (no equilibrium within max_cycles: not known). ``ended_by``: why the
+    analysis stopped. ``last_equilibrium_deg``: the largest tilt in equilibrium;
+    ``collapse_angle_deg`` is that tilt only when the next step collapsed (the monitored block
+    fell or moved the stop displacement), else None (no collapse up to the maximum angle, or no
+    equilibrium within max_cycles, which is no verdict)."""
+
+    settings: TiltSettings
+    monitored_block: str
+    wall_height_m: float
+    stable_under_gravity: bool | None
+    last_equilibrium_deg: float | None
+    collapse_angle_deg: float | None
+    records: list[Record]
+    lost_blocks: list[tuple[str, float]]
+    cycles: int
+    runtime_s: float
+    collapse_state: State | None = field(repr=False)
+    final_state: State = field(repr=False)
+    ended_by: str
+
+    @property
+    def load_multiplier(self) -> float | None:
+        return None if self.collapse_angle_deg is None else math.tan(math.radians(self.collapse_angle_deg))
+
+    @property
+    def drift_limit_angles_deg(self) -> dict[str, float | None]:
+        return drift_limit_angles([r.tilt_deg for r in self.records], [r.drift for r in self.records])
+
+
+def monitored_block(model: Model) -> int:
+    """The movable block whose top is highest; ties go to the one nearest the middle of the wall."""
+    movable = np.flatnonzero(model.block_movable)
+    tops = np.array([model.block_shape[b].vertices[:, 2].max() for b in movable])
+    highest = movable[tops >= tops.max() - 1e-9 * model.contact_tolerance]
+    middle = np.mean([model.block_shape[b].centroid[0] for b in movable])
+    return int(highest[np.argmin(np.abs(model.block_centroid[highest, 0] - middle))])
+
+
+def monitor_index(model: Model, name: str | None) -> int:
+    """The block to monitor: ``name``'s (ModelError if there is none or it is fixed: a fixed
+    block never moves), or by default :func:`monitored_block`."""
+    if name is None:
+        return monitored_block(model)
+    block = model.block_index(name)
+    if not model.block_movable[block]:
+        raise ModelError(f"{model.source}: the monitored block {name!r} is fixed (it cannot move); monitor a movable block")
+    return block
+
+
+def wall_height(model: Model) -> float:
+    """Height of the movable blocks above their lowest point, m (the drift's denominator)."""
+    z = np.concatenate([model.block_shape[b].vertices[:, 2] for b in np.flatnonzero(model.block_movable)])
+    return float(z.max() - z.min())
