@@ -4,7 +4,8 @@ import math
 
 import pytest
 
-from drydem.parametric.calibrate import calibrate, mean_absolute_relative_error
+from drydem.errors import ModelError
+from drydem.parametric.calibrate import CalibrationError, calibrate, calibration_error, mean_absolute_relative_error
 
 
 def test_finds_the_minimum_of_a_synthetic_error_curve():
@@ -43,3 +44,34 @@ def test_the_objective_counts_a_wall_that_cannot_stand_as_0_deg_and_no_verdict_a
     assert wall_angle({"stable_under_gravity": True, "collapse_angle_deg": 18.3, "ended_by": "stop displacement"}) == 18.3
     no_verdict = {"stable_under_gravity": None, "collapse_angle_deg": None, "ended_by": "no equilibrium under gravity within max_cycles"}
     assert wall_angle(no_verdict) is None
+
+
+@pytest.mark.parametrize("settings, rule", [
+    ({"kn_min": 1e9, "kn_max": 1e7}, "calibrate kn_min = 1000000000.0, calibrate kn_max = 10000000.0: need calibrate kn_min < calibrate kn_max"),
+    ({"kn_min": 0.0}, "calibrate kn_min = 0.0: must be a number in [1e+04, 1e+15] Pa/m"),
+    ({"kn_max": True}, "calibrate kn_max = True: must be a number in [1e+04, 1e+15] Pa/m"),
+    ({"grid": 1}, "calibrate grid = 1: must be an integer in [2, 1000]"),
+    ({"grid": True}, "calibrate grid = True: must be an integer in [2, 1000]"),
+    ({"tolerance": 0}, "calibrate tolerance = 0: must be a number in (0, 1)"),
+    ({"max_evaluations": 0}, "calibrate max_evaluations = 0: must be an integer in [1, inf)"),
+])
+def test_a_bad_calibration_range_is_a_model_error_naming_it_and_its_range(settings, rule):
+    arguments = {"kn_min": 1e7, "kn_max": 1e9} | settings
+    with pytest.raises(ModelError) as refused:
+        calibrate(lambda kn: 0.0, arguments.pop("kn_min"), arguments.pop("kn_max"), **arguments)
+    assert str(refused.value) == rule
+
+
+def record(summary=None, error=None):
+    return {"status": "failed", "error": error} if error else {"status": "ok", "error": None, "summary": summary}
+
+
+def test_the_objective_of_a_kn_is_the_mean_error_of_its_records_with_a_fallen_wall_at_0_deg():
+    records = {"WD1": record({"stable_under_gravity": True, "collapse_angle_deg": 20.0, "ended_by": "stop displacement"}),
+               "WD6": record({"stable_under_gravity": False, "collapse_angle_deg": None, "ended_by": "unstable under gravity"})}
+    assert calibration_error(records, {"WD1": 18.3, "WD6": 7.8}) == pytest.approx((1.7 / 18.3 + 1.0) / 2)
+    assert calibration_error(records) == pytest.approx(calibration_error(records, {"WD1": 18.3, "WD6": 7.8}))  # the paper's Table 1
+    records["WD7"] = record({"stable_under_gravity": None, "collapse_angle_deg": None, "ended_by": "no equilibrium under gravity"})
+    records["WD2"] = record(error="ModelError: made up")
+    with pytest.raises(CalibrationError, match="runs without a collapse angle:\n  WD2: ModelError: made up\n  WD7: no equilibrium under gravity"):
+        calibration_error(records)

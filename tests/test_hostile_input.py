@@ -169,3 +169,40 @@ def test_a_study_folder_that_cannot_be_one_is_refused(tmp_path, command):
     not_a_folder.write_text("x")
     assert refused(run(*command, os.devnull), f"{os.devnull}: exists and is not a folder")
     assert refused(run(*command, not_a_folder / "results"), "file/results: cannot write results there")
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda: dd.JointMaterial(kn=True), "[joint] kn = True: must be a number in [1e+04, 1e+15] Pa/m"),
+    (lambda: dd.JointMaterial(friction=1), None),  # an int is a number
+    (lambda: dd.ContactSettings(points_per_length=True), "[contacts] points_per_length = True: must be an integer in [1, 32]"),
+    (lambda: dd.ContactSettings(tolerance=False), "[contacts] tolerance = False: must be a number in (0, inf) m"),
+    (lambda: dd.SolverSettings(max_cycles=True), "[solver] max_cycles = True: must be an integer in [1, 1e+10]"),
+    (lambda: dd.SolverSettings(mass_scaling=1), "[solver] mass_scaling = 1: must be true or false"),
+    (lambda: dd.SolverSettings(criterion="speed"), "[solver] criterion = 'speed': must be one of ('ratio', 'velocity')"),
+    (lambda: dd.Supports(fix_y="yes"), "[supports] fix_y = 'yes': must be true or false"),
+    (lambda: TiltSettings(increment_deg=True), "tilt setting increment_deg = True: must be a number in (0, 90) deg"),
+])
+def test_python_settings_refuse_booleans_as_numbers_with_one_error_type(make, message):
+    if message is None:
+        make()
+        return
+    with pytest.raises(dd.ModelError) as refused:
+        make()
+    assert str(refused.value) == message
+
+
+def test_every_bad_field_of_a_parameter_table_is_named_at_once():
+    with pytest.raises(dd.ModelError) as refused:
+        dd.JointMaterial(kn=0.0, friction=-1.0)
+    assert str(refused.value) == ("[joint] kn = 0.0: must be a number in [1e+04, 1e+15] Pa/m; "
+                                  "[joint] friction = -1.0: must be a number in (0, 10]")
+
+
+@pytest.mark.parametrize("every", [0, 1.5, True])
+def test_a_vtk_series_keeps_every_positive_integer_th_state_only(tmp_path, every):
+    from drydem.io.model_file import load_model
+    from drydem.io.vtk import VtkSeries
+
+    model = load_model(model_file(tmp_path))
+    with pytest.raises(dd.ModelError, match=rf"VtkSeries every = {every!r}: must be an integer in \[1, inf\)"):
+        VtkSeries(tmp_path / "vtk", model, every=every)

@@ -139,3 +139,26 @@ def test_progress_names_each_stage_as_it_starts():
         "non-associative iteration 1 of at most 2: solving the LP with HiGHS", "non-associative iteration 2 of at most 2: solving the LP with HiGHS",
     ]
     assert stages[-1].endswith(f"(lambda {result.history[1]:.4f} so far)")
+
+
+@pytest.mark.parametrize("setting, value, rule", [
+    ("relaxation", 0.0, "limit setting relaxation = 0.0: must be a number in (0, 1]"),
+    ("relaxation", 1.5, "limit setting relaxation = 1.5: must be a number in (0, 1]"),
+    ("max_iterations", 0, "limit setting max_iterations = 0: must be an integer in [1, 1e+04]"),
+    ("max_iterations", 2.5, "limit setting max_iterations = 2.5: must be an integer in [1, 1e+04]"),
+    ("max_iterations", True, "limit setting max_iterations = True: must be an integer in [1, 1e+04]"),
+    ("tolerance", -1e-4, "limit setting tolerance = -0.0001: must be a number in (0, 1)"),
+    ("tolerance", float("nan"), "limit setting tolerance = nan: must be a number in (0, 1)"),
+    ("relaxation", True, "limit setting relaxation = True: must be a number in (0, 1]"),
+    ("non_associative", 1, "limit setting non_associative = 1: must be true or false"),
+    ("non_associative", "yes", "limit setting non_associative = 'yes': must be true or false"),
+])
+def test_a_bad_limit_setting_is_a_model_error_naming_it_and_its_range(setting, value, rule):
+    with pytest.raises(dd.ModelError) as refused:
+        LimitSettings(**{setting: value})
+    assert str(refused.value) == rule
+
+
+def test_every_bad_limit_setting_is_named_at_once():
+    with pytest.raises(dd.ModelError, match=r"max_iterations = 0: .*; limit setting tolerance = 0: "):
+        LimitSettings(max_iterations=0, tolerance=0)

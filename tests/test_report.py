@@ -1,6 +1,9 @@
 """The study report: every table and figure from a results folder, gaps said, not crashed on."""
 
 import math
+import os
+import subprocess
+import sys
 
 import pytest
 from click.testing import CliRunner
@@ -81,3 +84,23 @@ def test_a_run_without_equilibrium_nor_collapse_is_a_lower_bound_not_an_angle():
     runs = Runs([record])
     assert runs.angle_cell("WD7", 1e10) == ">= 22.9" and runs.capacity("WD7", 1e10) is None
     assert Runs([tilt_record("WD7", 1e9)]).angle_cell("WD7", 1e9) == "18.0"  # 5 + 3 log10(100) + 7, truncated
+
+
+def test_drawing_a_figure_leaves_the_matplotlib_backend_alone(tmp_path):
+    """A notebook's backend (here svg, from MPLBACKEND) stays as it is, and pyplot unused."""
+    code = """if True:
+        import sys
+        import matplotlib
+        import drydem as dd
+        from drydem.report.plots import layout_figure
+        blocks = [dd.Block(name="base", shape=dd.box([0, 0, -0.01], [0.1, 0.012, 0]), fixed=True),
+                  dd.Block(name="brick", shape=dd.box([0, 0, 0], [0.025, 0.012, 0.0055]))]
+        layout_figure(dd.build_model(blocks, density=1800.0), sys.argv[1], monitored="brick")
+        print("matplotlib.pyplot" in sys.modules, matplotlib.get_backend())
+    """
+    figure = tmp_path / "wall.png"
+    ran = subprocess.run([sys.executable, "-c", code, str(figure)], env=os.environ | {"MPLBACKEND": "svg"},
+                         capture_output=True, text=True, timeout=300)
+    assert ran.returncode == 0, ran.stderr
+    assert ran.stdout.split() == ["False", "svg"]
+    assert figure.read_bytes().startswith(b"\x89PNG") and figure.stat().st_size > 5_000

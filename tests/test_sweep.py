@@ -151,3 +151,17 @@ def test_drydem_sweep_then_again_then_report(study_file, tmp_path):
     assert result.exit_code == 0 and (out / "report" / "report.html").is_file()
     result = CliRunner().invoke(main, ["sweep", "nosuchstudy"])
     assert result.exit_code == 1 and "not a shipped study (savalle2022)" in result.output
+
+
+def test_a_run_analyses_its_target_with_its_overrides_as_the_cli_does():
+    from drydem.io.target import load_target
+
+    spec = RunSpec(analysis="tilt", target="WD1", protocol="fixed", kn=1e8, ks=5e7, friction=0.7, points=2)
+    assert spec.overrides == {"kn": 1e8, "ks": 5e7, "friction": 0.7, "points": 2}
+    model = spec.model()
+    assert (model.joint.kn, model.joint.ks, model.joint.friction, model.contacts.points_per_length) == (1e8, 5e7, 0.7, 2)
+    assert model.joint == load_target("WD1").model.overridden(**spec.overrides).joint
+    plain = RunSpec(analysis="tilt", target="WD1", protocol="fixed")
+    assert plain.model().joint == load_target("WD1").model.joint
+    with pytest.raises(ModelError, match=r"\[joint\] friction = -1.0: must be a number in \(0, 10\]"):
+        RunSpec(analysis="tilt", target="WD1", protocol="fixed", friction=-1.0).model()

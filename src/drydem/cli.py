@@ -381,7 +381,7 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
     from tqdm import tqdm
 
     from drydem.masonry import studies
-    from drydem.parametric.sweep import load_study, pending
+    from drydem.parametric.sweep import load_study, open_workers, pending
     from drydem.files import writable_folder
     from drydem.parametric.sweep import sweep as run_sweep
 
@@ -400,47 +400,32 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
     click.echo(f"{study.name}: {len(study.runs)} runs, {plan.recorded} already recorded in {out}")
     for corrupt in plan.corrupt:
         click.echo(f"corrupt record, run again: {corrupt}", err=True)
-    with _executor(workers, scheduler) as pool, _signals_interrupt() as received, tqdm(total=len(plan.todo), desc="runs", unit=" run") as bar:
-        bar.write(f"running {len(plan.todo)} on {pool.where}")
-        failures = []
+    failures = []
+    try:  # a DrydemError: a scheduler that does not answer, or runs the executor lost
+        with open_workers(workers, scheduler) as pool, _signals_interrupt() as received, \
+                tqdm(total=len(plan.todo), desc="runs", unit=" run") as bar:
+            bar.write(f"running {len(plan.todo)} on {pool.where}")
 
-        def done(record):
-            bar.update(1)
-            if record["status"] == "failed":
-                failures.append(f"{record['id']}: {record['error']}")
-                bar.set_postfix(failed=len(failures))
+            def done(record):
+                bar.update(1)
+                if record["status"] == "failed":
+                    failures.append(f"{record['id']}: {record['error']}")
+                    bar.set_postfix(failed=len(failures))
 
-        try:
-            outcome = run_sweep(study.runs, out, pool.executor, retry_failed=retry_failed, in_flight=pool.slots, on_done=done,
-                                on_other=lambda spec: bar.update(1))
-        except KeyboardInterrupt:
-            click.echo(f"\ninterrupted ({received.name}); the finished runs are recorded in {out}; the same command goes on", err=True)
-            raise SystemExit(128 + received.number) from None
-        except DrydemError as exc:
-            raise click.ClickException(str(exc)) from None
+            try:
+                outcome = run_sweep(study.runs, out, pool.executor, retry_failed=retry_failed, in_flight=pool.slots, on_done=done,
+                                    on_other=lambda spec: bar.update(1))
+            except KeyboardInterrupt:
+                click.echo(f"\ninterrupted ({received.name}); the finished runs are recorded in {out}; the same command goes on", err=True)
+                raise SystemExit(128 + received.number) from None
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
     for failure in failures:
         click.echo(f"failed: {failure}", err=True)
     click.echo(f"{outcome.finished} runs done ({outcome.failed} failed), {outcome.skipped} skipped; records in {out / 'runs'}")
     if outcome.elsewhere:
         click.echo(f"{outcome.elsewhere} runs left to another sweep working on {out} (it holds their claims, runs/*.lock); "
                    "run this command again once it has finished to check that every run is recorded")
-
-
-@contextmanager
-def _executor(workers: int | None, scheduler: str | None):
-    """Where runs go (drydem.parametric.sweep.open_workers): ``workers`` local processes, or a
-    Dask scheduler's cluster; a scheduler that is not an address or does not answer is an error
-    naming it and what to check, within seconds."""
-    from contextlib import ExitStack
-
-    from drydem.parametric.sweep import open_workers
-
-    with ExitStack() as stack:
-        try:
-            pool = stack.enter_context(open_workers(workers, scheduler))
-        except DrydemError as exc:
-            raise click.ClickException(str(exc)) from None
-        yield pool
 
 
 @main.command()
@@ -476,6 +461,7 @@ def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, workers
     DESIGNS, reusing and adding runs in RESULTS_DIR (the paper's post-diction, Section 4.4);
     every option is checked before anything runs."""
     from drydem.parametric.calibrate import StiffnessSearch, calibrate_stiffness
+    from drydem.parametric.sweep import open_workers
     from drydem.files import writable_folder
 
     search = StiffnessSearch(tuple(d.strip() for d in designs.split(",") if d.strip()), kn_min, kn_max, ks_ratio, increment)
@@ -493,16 +479,17 @@ def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, workers
             click.echo(f"corrupt record, run again: {corrupt}", err=True)
         click.echo(f"  kn {kn:10.4g} Pa/m   mean absolute error {error:.2%}")
 
-    with _executor(workers, scheduler) as pool, _signals_interrupt() as received:
-        click.echo(f"running on {pool.where}")
-        try:
-            result = calibrate_stiffness(search, results_dir, pool.executor, in_flight=pool.slots, on_evaluation=evaluated)
-        except KeyboardInterrupt:
-            click.echo(f"\ninterrupted ({received.name}); the finished runs are recorded in {results_dir}; the same command reuses them",
-                       err=True)
-            raise SystemExit(128 + received.number) from None
-        except DrydemError as exc:
-            raise click.ClickException(str(exc)) from None
+    try:  # a DrydemError: a scheduler that does not answer, or a kn's runs without an angle
+        with open_workers(workers, scheduler) as pool, _signals_interrupt() as received:
+            click.echo(f"running on {pool.where}")
+            try:
+                result = calibrate_stiffness(search, results_dir, pool.executor, in_flight=pool.slots, on_evaluation=evaluated)
+            except KeyboardInterrupt:
+                click.echo(f"\ninterrupted ({received.name}); the finished runs are recorded in {results_dir}; the same command reuses them",
+                           err=True)
+                raise SystemExit(128 + received.number) from None
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
     click.echo(f"best kn         {result.best_kn:.4g} Pa/m (ks = {ks_ratio:g} kn): mean absolute error {result.best_error:.2%}")
 
 

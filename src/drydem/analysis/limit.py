@@ -45,7 +45,7 @@ from drydem.engine.contacts import world_points
 from drydem.engine.tracker import ContactTracker
 from drydem.errors import DrydemError
 from drydem.model.assembly import Model
-from drydem.model.parameters import G, ContactSettings
+from drydem.model.parameters import FLAG, G, ContactSettings, Range, check_fields
 from drydem.model.state import State
 
 #: sides of the linearised friction pyramid for 3D contacts
@@ -56,11 +56,23 @@ class LimitAnalysisError(DrydemError):
     """The limit analysis has no answer: unstable under dead load, no free block, solver failure."""
 
 
+#: the rule of each field of :class:`LimitSettings`: at most 10,000 iterations, each a linear
+#: program (minutes for a large wall); the tolerance is a relative change, a change of 100 %
+#: would end the iteration after any step; a relaxation of 0 would never change the forces
+LIMIT_RULES = {
+    "non_associative": FLAG,
+    "max_iterations": Range(1, 10_000, integer=True),
+    "tolerance": Range(0.0, 1.0, low_open=True, high_open=True),
+    "relaxation": Range(0.0, 1.0, low_open=True),
+}
+
+
 @dataclass(frozen=True, kw_only=True)
 class LimitSettings:
     """non_associative : run the Gilbert et al. (2006) iteration after the associative LP.
     max_iterations : of that iteration. tolerance : relative change of lambda that ends it.
-    relaxation : share of the new normal forces mixed into the old ones, 0 < r <= 1."""
+    relaxation : share of the new normal forces mixed into the old ones, 0 < r <= 1.
+    Checked when created (:data:`LIMIT_RULES`): ModelError naming each bad setting and its range."""
 
     non_associative: bool = False
     max_iterations: int = 100
@@ -68,10 +80,7 @@ class LimitSettings:
     relaxation: float = 0.5
 
     def __post_init__(self):
-        if not (0 < self.relaxation <= 1):
-            raise ValueError(f"relaxation = {self.relaxation}: must be in (0, 1]")
-        if self.max_iterations < 1 or self.tolerance <= 0:
-            raise ValueError("max_iterations must be >= 1 and tolerance > 0")
+        check_fields(self, LIMIT_RULES, "limit setting")
 
 
 @dataclass(frozen=True)

@@ -26,6 +26,7 @@ from drydem.engine.contacts import SubContacts, world_points
 from drydem.errors import DrydemError
 from drydem.files import replaced_atomically
 from drydem.model.assembly import Model
+from drydem.model.parameters import Range
 from drydem.model.rotation import matrices
 from drydem.model.state import State
 
@@ -81,6 +82,10 @@ def write_contacts_vtu(model: Model, path: str | Path, state: State, sub: SubCon
     return Path(path)
 
 
+#: keep every N-th equilibrium frame (``drydem tilt --save-every``)
+SAVE_EVERY = Range(1, None, integer=True)
+
+
 class VtkSeries:
     """Frames of a tilting analysis (drydem.analysis.tilt.Frame) as two VTK time series in
     ``folder``: ``blocks_NNNN.vtu`` and ``contacts_NNNN.vtu``, indexed by ``blocks.pvd`` and
@@ -93,8 +98,7 @@ class VtkSeries:
     given again replaces the frames from its tilt on)."""
 
     def __init__(self, folder: Path, model: Model, *, every: int = 1, resume: bool = False):
-        if every < 1:
-            raise ValueError(f"every = {every}: must be at least 1")
+        SAVE_EVERY.check(every, "VtkSeries every")
         self.folder, self.model, self.every = Path(folder), model, every
         self.folder.mkdir(parents=True, exist_ok=True)
         self.rows: list[tuple[int, str, float, float]] = _equilibrium_rows(self.folder / "frames.csv") if resume else []

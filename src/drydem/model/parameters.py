@@ -7,11 +7,17 @@ Every number is checked against a :class:`Range` whose bounds say what is physic
 numerically meaningful (each bound's reason is next to it), so that ``kn = true`` (a boolean
 is not a stiffness, though Python counts it as 1) or ``ratio = 1e300`` stop with a message
 naming the table, the key and the allowed range instead of running on nonsense.
+
+The one way to check settings, here and in the analyses' settings (tilting, limit analysis,
+calibration): a :class:`Rule` per field (:class:`Range` for numbers, :data:`FLAG` for
+switches, :class:`OneOf` for names) and :func:`check_fields`, which raises one
+:class:`~drydem.errors.ModelError` naming every field that breaks its rule, its value and the rule.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, fields
 
 from drydem.errors import ModelError
@@ -30,10 +36,51 @@ def is_integer(value) -> bool:
     return isinstance(value, int) and not isinstance(value, bool)
 
 
+class Rule:
+    """What a setting's value must be: ``value in rule`` says whether it is, ``str(rule)`` the
+    rule in words (``must be ...``)."""
+
+    def __contains__(self, value) -> bool:
+        raise NotImplementedError
+
+    def check(self, value, where: str) -> None:
+        """ModelError ``where = value: must be ...`` unless ``value`` obeys the rule."""
+        if value not in self:
+            raise ModelError(f"{where} = {value!r}: {self}")
+
+
+class Flag(Rule):
+    """A switch: True or False (not 0 or 1, nor a string)."""
+
+    def __contains__(self, value) -> bool:
+        return isinstance(value, bool)
+
+    def __str__(self) -> str:
+        return "must be true or false"
+
+
+#: the rule of every switch
+FLAG = Flag()
+
+
 @dataclass(frozen=True)
-class Range:
+class OneOf(Rule):
+    """One of ``options``, of the same type (``1`` is not ``True``, ``1.0`` not ``"1.0"``)."""
+
+    options: tuple
+
+    def __contains__(self, value) -> bool:
+        return any(type(value) is type(option) and value == option for option in self.options)
+
+    def __str__(self) -> str:
+        return f"must be one of {self.options}"
+
+
+@dataclass(frozen=True)
+class Range(Rule):
     """An interval of allowed values: ``low`` and ``high`` (None: unbounded), each end open or
-    closed; ``integer`` for counts; ``unit`` for messages."""
+    closed; ``integer`` for counts; ``unit`` for messages. A boolean is never in a range
+    (``True`` is an int in Python, not a number here)."""
 
     low: float | None
     high: float | None
@@ -56,10 +103,27 @@ class Range:
         interval = f"{'(' if self.low_open or self.low is None else '['}{low}, {high}{')' if self.high_open or self.high is None else ']'}"
         return f"must be {kind} in {interval}{' ' + self.unit if self.unit else ''}"
 
-    def check(self, value, where: str) -> None:
-        """ModelError ``where = value: must be ... in [low, high] unit`` unless ``value`` is in range."""
-        if value not in self:
-            raise ModelError(f"{where} = {value!r}: {self}")
+
+def field_problems(settings, rules: Mapping[str, Rule], name: Callable[[str], str] = str, *,
+                   optional: Collection[str] = ()) -> list[str]:
+    """``NAME = VALUE: must be ...`` for every field of ``settings`` (any object: a dataclass)
+    named in ``rules`` whose value breaks its rule, each field named by ``name(field)``; a field
+    in ``optional`` may also be None (a value derived later)."""
+    found = []
+    for field, rule in rules.items():
+        value = getattr(settings, field)
+        if not (value is None and field in optional) and value not in rule:
+            found.append(f"{name(field)} = {value!r}: {rule}")
+    return found
+
+
+def check_fields(settings, rules: Mapping[str, Rule], where: str, *, optional: Collection[str] = ()) -> None:
+    """Check the fields of ``settings`` named in ``rules`` (:func:`field_problems`): one
+    ModelError naming, for every field that breaks its rule, ``WHERE FIELD``, its value and
+    the rule (``[joint] kn = True: must be a number in [1e+04, 1e+15] Pa/m``)."""
+    problems = field_problems(settings, rules, lambda field: f"{where} {field}", optional=optional)
+    if problems:
+        raise ModelError("; ".join(problems))
 
 
 #: joint stiffness, Pa/m: below 1e4 the own weight of a 1 m masonry wall (~2e4 Pa) would close
@@ -77,13 +141,8 @@ DENSITY = Range(1.0, 25_000.0, unit="kg/m3")
 POINTS = Range(1, 32, integer=True)
 
 
-def _check(owner: str, name: str, value, allowed: Range) -> None:
-    allowed.check(value, f"[{owner}] {name}")
-
-
-def _require(ok: bool, owner: str, name: str, value, rule: str) -> None:
-    if not ok:
-        raise ModelError(f"[{owner}] {name} = {value!r}: {rule}")
+#: the rule of each field of :class:`JointMaterial`
+JOINT_RULES = {"kn": JOINT_STIFFNESS, "ks": JOINT_STIFFNESS, "friction": FRICTION, "cohesion": STRENGTH, "tension": STRENGTH}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -103,15 +162,15 @@ class JointMaterial:
     tension: float = 0.0
 
     def __post_init__(self):
-        _check("joint", "kn", self.kn, JOINT_STIFFNESS)
-        _check("joint", "ks", self.ks, JOINT_STIFFNESS)
-        _check("joint", "friction", self.friction, FRICTION)
-        _check("joint", "cohesion", self.cohesion, STRENGTH)
-        _check("joint", "tension", self.tension, STRENGTH)
+        check_fields(self, JOINT_RULES, "[joint]")
 
 
 #: contact tolerance, m: positive; its bound relative to the blocks is checked with the model
 TOLERANCE = Range(0.0, None, low_open=True, unit="m")
+
+
+#: the rule of each field of :class:`ContactSettings` (points_across and tolerance may also be None)
+CONTACT_RULES = {"points_per_length": POINTS, "points_across": POINTS, "tolerance": TOLERANCE}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -137,11 +196,7 @@ class ContactSettings:
     tolerance: float | None = None
 
     def __post_init__(self):
-        _check("contacts", "points_per_length", self.points_per_length, POINTS)
-        if self.points_across is not None:
-            _check("contacts", "points_across", self.points_across, POINTS)
-        if self.tolerance is not None:
-            _check("contacts", "tolerance", self.tolerance, TOLERANCE)
+        check_fields(self, CONTACT_RULES, "[contacts]", optional=("points_across", "tolerance"))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -156,9 +211,7 @@ class Supports:
     fix_rz: bool = False
 
     def __post_init__(self):
-        for f in fields(self):
-            value = getattr(self, f.name)
-            _require(isinstance(value, bool), "supports", f.name, value, "must be true or false")
+        check_fields(self, {f.name: FLAG for f in fields(self)}, "[supports]")
 
     @property
     def mask(self) -> tuple[bool, ...]:
@@ -178,6 +231,11 @@ RATIO = Range(1e-12, 1e-2)
 MAX_VELOCITY = Range(0.0, 1e-3, low_open=True, unit="m/s")
 #: cycles per equilibrium: 1e10 cycles are days of computing for a single load step
 MAX_CYCLES = Range(1, 10**10, integer=True)
+
+
+#: the rule of each field of :class:`SolverSettings`
+SOLVER_RULES = {"damping": DAMPING, "timestep_safety": TIMESTEP_SAFETY, "mass_scaling": FLAG, "criterion": OneOf(CRITERIA),
+                "ratio": RATIO, "max_velocity": MAX_VELOCITY, "max_cycles": MAX_CYCLES}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -202,13 +260,7 @@ class SolverSettings:
     max_cycles: int = 2_000_000
 
     def __post_init__(self):
-        _check("solver", "damping", self.damping, DAMPING)
-        _check("solver", "timestep_safety", self.timestep_safety, TIMESTEP_SAFETY)
-        _require(isinstance(self.mass_scaling, bool), "solver", "mass_scaling", self.mass_scaling, "must be true or false")
-        _require(self.criterion in CRITERIA, "solver", "criterion", self.criterion, f"must be one of {CRITERIA}")
-        _check("solver", "ratio", self.ratio, RATIO)
-        _check("solver", "max_velocity", self.max_velocity, MAX_VELOCITY)
-        _check("solver", "max_cycles", self.max_cycles, MAX_CYCLES)
+        check_fields(self, SOLVER_RULES, "[solver]")
 
 
 @dataclass(frozen=True)

@@ -9,24 +9,33 @@ the bracket it is assumed to be.
 
 :func:`calibrate_stiffness` is ``drydem calibrate``: a :class:`StiffnessSearch` (its settings all
 checked before anything runs) evaluated by sweeping each kn's tilting runs into a results folder,
-whose records it reuses.
+whose records it reuses. Its objective, for one kn, is :func:`calibration_error` of those runs'
+records: a wall that cannot stand under its own weight counts as 0 deg (:func:`wall_angle`).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from concurrent.futures import Executor
 from dataclasses import dataclass
 from pathlib import Path
+from types import SimpleNamespace
 
 from drydem.parametric.sweep import RecordError, RunSpec, SweepOutcome, read_record, record_path, sweep
 from drydem.errors import DrydemError, ModelError
-from drydem.model.parameters import JOINT_STIFFNESS, Range
+from drydem.model.parameters import JOINT_STIFFNESS, Range, field_problems
 
 GOLDEN = (math.sqrt(5) - 1) / 2
 #: ks / kn: any positive ratio (the stiffnesses it gives are checked against JOINT_STIFFNESS)
 KS_RATIO = Range(0.0, None, low_open=True)
+#: the ends of the kn searched (Pa/m), each a joint stiffness (and kn_min < kn_max)
+BOUND_RULES = {"kn_min": JOINT_STIFFNESS, "kn_max": JOINT_STIFFNESS}
+#: the rule of each setting of :func:`calibrate`'s search: a grid has at least its two ends, and
+#: 1000 points (evaluations) is far more than a curve needs; the tolerance is in log10 kn, where
+#: 1 (a factor of 10) would end the refinement at once
+SEARCH_RULES = {"grid": Range(2, 1000, integer=True), "tolerance": Range(0.0, 1.0, low_open=True, high_open=True),
+                "max_evaluations": Range(1, None, integer=True)}
 
 
 class CalibrationError(DrydemError):
@@ -44,9 +53,15 @@ class Calibration:
 
 def calibrate(error: Callable[[float], float], kn_min: float, kn_max: float, *, grid: int = 5,
               tolerance: float = 0.01, max_evaluations: int = 30) -> Calibration:
-    """Minimise ``error(kn)`` over [kn_min, kn_max] (Pa/m) to within ``tolerance`` in log10 kn."""
-    if not 0 < kn_min < kn_max:
-        raise ValueError(f"need 0 < kn_min < kn_max, got {kn_min}, {kn_max}")
+    """Minimise ``error(kn)`` over [kn_min, kn_max] (Pa/m) to within ``tolerance`` in log10 kn;
+    ModelError naming every setting out of its range (:data:`BOUND_RULES`, :data:`SEARCH_RULES`)."""
+    def name(field: str) -> str:
+        return f"calibrate {field}"
+
+    search = SimpleNamespace(kn_min=kn_min, kn_max=kn_max, grid=grid, tolerance=tolerance, max_evaluations=max_evaluations)
+    problems = _bound_problems(search, name) + field_problems(search, SEARCH_RULES, name)
+    if problems:
+        raise ModelError("; ".join(problems))
     seen: dict[float, float] = {}
 
     def f(log_kn: float) -> float:
@@ -73,6 +88,15 @@ def calibrate(error: Callable[[float], float], kn_min: float, kn_max: float, *, 
     return Calibration(10.0**log_best, seen[log_best], curve)
 
 
+def _bound_problems(search, name: Callable[[str], str]) -> list[str]:
+    """Why ``search``'s kn_min and kn_max (each named by ``name(field)``) are not the ends of a
+    range of joint stiffnesses: out of :data:`BOUND_RULES`, or not kn_min < kn_max."""
+    found = field_problems(search, BOUND_RULES, name)
+    if not found and not search.kn_min < search.kn_max:
+        found.append(f"{name('kn_min')} = {search.kn_min!r}, {name('kn_max')} = {search.kn_max!r}: need {name('kn_min')} < {name('kn_max')}")
+    return found
+
+
 def mean_absolute_relative_error(computed: dict[str, float], experiment: dict[str, float]) -> float:
     """Mean of |computed - experiment| / experiment over the walls in ``computed`` (paper Table 3)."""
     return sum(abs(computed[d] - experiment[d]) / experiment[d] for d in computed) / len(computed)
@@ -94,6 +118,22 @@ def wall_angle(summary: dict) -> float | None:
     if summary.get("stable_under_gravity") is False:
         return 0.0
     return summary["collapse_angle_deg"]
+
+
+def calibration_error(records: Mapping[str, dict], experiment: Mapping[str, float] | None = None) -> float:
+    """The objective that :func:`calibrate_stiffness` minimises, for one kn: the mean absolute
+    relative error (:func:`mean_absolute_relative_error`) of the walls' collapse angles against
+    ``experiment`` (deg; default :func:`experimental_angles`), from ``records``, each wall's
+    tilting run record at that kn (:func:`drydem.parametric.sweep.read_record`). A wall that
+    cannot stand under its own weight counts as 0 deg (:func:`wall_angle`). CalibrationError
+    naming every wall whose run failed or found no angle to compare (no verdict)."""
+    experiment = experimental_angles() if experiment is None else experiment
+    unusable = [f"{d}: {r['error']}" for d, r in records.items() if r["status"] == "failed"]
+    angles = {d: wall_angle(r["summary"]) for d, r in records.items() if r["status"] != "failed"}
+    unusable += [f"{d}: {records[d]['summary']['ended_by']}" for d, angle in angles.items() if angle is None]
+    if unusable:
+        raise CalibrationError("runs without a collapse angle:\n  " + "\n  ".join(unusable))
+    return mean_absolute_relative_error(angles, experiment)
 
 
 @dataclass(frozen=True)
@@ -120,21 +160,11 @@ class StiffnessSearch:
         if not self.designs or unknown:
             what = f"no experimental collapse angle for {unknown}" if unknown else "needs at least one wall"
             found.append(f"{name('designs')} {','.join(self.designs)!r}: {what}; known: {', '.join(sorted(known))}")
-        ends = {field: getattr(self, field) for field in ("kn_min", "kn_max")}
-        outside = [field for field, kn in ends.items() if kn not in JOINT_STIFFNESS]
-        found += [f"{name(field)} = {ends[field]!r}: {JOINT_STIFFNESS}" for field in outside]
-        ordered = not outside and self.kn_min < self.kn_max
-        if not outside and not ordered:
-            found.append(f"{name('kn_min')} = {self.kn_min!r}, {name('kn_max')} = {self.kn_max!r}: "
-                         f"need {name('kn_min')} < {name('kn_max')}")
-        if self.ks_ratio not in KS_RATIO:
-            found.append(f"{name('ks_ratio')} = {self.ks_ratio!r}: {KS_RATIO}")
-        elif ordered and not all(self.ks_ratio * kn in JOINT_STIFFNESS for kn in ends.values()):
-            found.append(f"{name('ks_ratio')} = {self.ks_ratio!r}: ks = ratio x kn, {self.ks_ratio * self.kn_min:.3g} to "
-                         f"{self.ks_ratio * self.kn_max:.3g} Pa/m, {JOINT_STIFFNESS}")
-        step = SETTING_RANGES["increment_deg"]
-        if self.increment not in step:
-            found.append(f"{name('increment')} = {self.increment!r}: {step}")
+        bounds = _bound_problems(self, name)
+        found += bounds + field_problems(self, {"ks_ratio": KS_RATIO, "increment": SETTING_RANGES["increment_deg"]}, name)
+        ks = (self.ks_ratio * self.kn_min, self.ks_ratio * self.kn_max)
+        if not bounds and self.ks_ratio in KS_RATIO and not all(k in JOINT_STIFFNESS for k in ks):
+            found.append(f"{name('ks_ratio')} = {self.ks_ratio!r}: ks = ratio x kn, {ks[0]:.3g} to {ks[1]:.3g} Pa/m, {JOINT_STIFFNESS}")
         return found
 
     def runs(self, kn: float) -> list[RunSpec]:
@@ -146,10 +176,10 @@ class StiffnessSearch:
 def calibrate_stiffness(search: StiffnessSearch, results: Path, executor: Executor, *, in_flight: int | None = None,
                         on_evaluation: Callable[[float, float, SweepOutcome], None] | None = None) -> Calibration:
     """:func:`calibrate` ``search`` on ``executor``: each kn's runs swept into ``results``
-    (reusing those recorded, running again the corrupt ones), the objective the mean absolute
-    relative error of :func:`wall_angle` against the experiments. ``on_evaluation(kn, error,
-    outcome)`` after each kn. ModelError for invalid settings (all named), CalibrationError
-    when a kn's runs failed or are being computed by another process."""
+    (reusing those recorded, running again the corrupt ones), the objective
+    :func:`calibration_error` against the experiments. ``on_evaluation(kn, error, outcome)``
+    after each kn. ModelError for invalid settings (all named), CalibrationError when a kn's
+    runs failed or are being computed by another process."""
     problems = search.problems()
     if problems:
         raise ModelError("; ".join(problems))
@@ -161,18 +191,18 @@ def calibrate_stiffness(search: StiffnessSearch, results: Path, executor: Execut
         if outcome.elsewhere:
             raise CalibrationError(f"kn = {kn:.4g}: {outcome.elsewhere} of its runs are being computed by another drydem process "
                                    f"on {results} (their claims: {Path(results) / 'runs'}/*.lock); run calibrate again when it has finished")
-        records, unusable = {}, []
+        records, unreadable = {}, []
         for design, spec in zip(search.designs, specs):
             try:
                 records[design] = read_record(record_path(results, spec.id))
             except RecordError as exc:
-                unusable.append(str(exc))
-        unusable += [f"{d}: {r['error']}" for d, r in records.items() if r["status"] == "failed"]
-        angles = {d: wall_angle(r["summary"]) for d, r in records.items() if r["status"] != "failed"}
-        unusable += [f"{d}: {records[d]['summary']['ended_by']}" for d, angle in angles.items() if angle is None]
-        if unusable:
-            raise CalibrationError(f"kn = {kn:.4g}: runs without a collapse angle:\n  " + "\n  ".join(unusable))
-        value = mean_absolute_relative_error(angles, experiment)
+                unreadable.append(str(exc))
+        if unreadable:
+            raise CalibrationError(f"kn = {kn:.4g}: run records that cannot be read:\n  " + "\n  ".join(unreadable))
+        try:
+            value = calibration_error(records, experiment)
+        except CalibrationError as exc:
+            raise CalibrationError(f"kn = {kn:.4g}: {exc}") from None
         if on_evaluation is not None:
             on_evaluation(kn, value, outcome)
         return value

@@ -54,6 +54,7 @@ from pathlib import Path
 
 from drydem.errors import DrydemError, ModelError
 from drydem.files import read_toml
+from drydem.model.assembly import Model
 from drydem.model.tables import no_unknown
 
 ANALYSES = {"tilt": ("fixed", "adaptive"), "limit": ("associative", "non-associative")}
@@ -96,6 +97,20 @@ class RunSpec:
         digest = hashlib.sha1(json.dumps(asdict(self), sort_keys=True).encode()).hexdigest()[:10]
         stiffness = "" if self.kn is None else f"-kn{self.kn:.3g}-ks{self.ks:.3g}"
         return f"{self.analysis}-{Path(self.target).stem}{stiffness}-{self.protocol}-{digest}"
+
+    @property
+    def overrides(self) -> dict:
+        """The values this run changes in its target's model (None: the target's), as keywords of
+        :meth:`drydem.model.assembly.Model.overridden` and ``parameter_changes``."""
+        return {key: getattr(self, key) for key in OVERRIDES}
+
+    def model(self) -> Model:
+        """The model this run analyses: its target's (:func:`drydem.io.target.load_target`) with
+        :attr:`overrides` applied; ModelError for a target that cannot be loaded or a value out
+        of its range."""
+        from drydem.io.target import load_target
+
+        return load_target(self.target).model.overridden(**self.overrides)
 
 
 @dataclass(frozen=True)
@@ -212,7 +227,7 @@ def _list(value) -> list:
 def _overrides(model, spec: RunSpec) -> dict:
     """``model``'s tables that ``spec`` changes (kn, ks, friction, points), for Model.replace;
     ModelError (from JointMaterial, ContactSettings) for a value out of its range."""
-    return model.parameter_changes(kn=spec.kn, ks=spec.ks, friction=spec.friction, points=spec.points)
+    return model.parameter_changes(**spec.overrides)
 
 
 def _tilt_settings(spec: RunSpec):
@@ -235,11 +250,8 @@ def run_one(spec: RunSpec) -> dict:
 
 def _analyse(spec: RunSpec) -> dict:
     from drydem.io.results import limit_summary, tilt_summary
-    from drydem.io.target import load_target
 
-    model = load_target(spec.target).model
-    changes = _overrides(model, spec)
-    model = model.replace(**changes) if changes else model
+    model = spec.model()
     if spec.analysis == "limit":
         from drydem.analysis.limit import LimitSettings, limit_analysis
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from drydem.errors import DrydemError
 from drydem.files import replaced_atomically, writable
-from drydem.report.plots import pyplot, draw_displacements, xz_outline
+from drydem.report.plots import draw_displacements, new_figure, xz_outline
 
 #: frame size: 1280 x 720 pixels (a multiple of 16, as H.264 wants)
 FIGURE_IN, DPI = (8.0, 4.5), 160
@@ -98,11 +98,9 @@ def render_video(folder: Path, path: Path, *, fps: float = 8.0) -> Path:
 
 
 def _image(frame: VideoFrame, norm, low: np.ndarray, high: np.ndarray) -> np.ndarray:
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=FIGURE_IN, dpi=DPI, layout="constrained")
+    fig = new_figure(figsize=FIGURE_IN, dpi=DPI, layout="constrained")
+    ax = fig.subplots()
     draw_displacements(fig, ax, frame.outlines, np.clip(frame.magnitude_mm, norm.vmin, None), title=frame.caption, norm=norm)
     ax.set(xlim=(low[0], high[0]), ylim=(low[1], high[1]))
     fig.canvas.draw()
-    image = np.asarray(fig.canvas.buffer_rgba())[:, :, :3].copy()
-    plt.close(fig)
-    return image
+    return np.asarray(fig.canvas.buffer_rgba())[:, :, :3].copy()

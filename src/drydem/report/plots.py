@@ -1,6 +1,9 @@
 """Figures of a tilting analysis: pushover curve (paper Figs 9-11) and mechanism (Figs 7-8).
 
-matplotlib is imported inside the functions (Agg backend), so the engine does not load it.
+matplotlib is imported inside the functions, so the engine does not load it. Figures are
+:class:`matplotlib.figure.Figure` objects made by :func:`new_figure`, outside pyplot: drawing
+one neither selects nor changes matplotlib's backend (a notebook's stays as it is), and no
+figure is left open in pyplot's list.
 """
 
 from __future__ import annotations
@@ -16,13 +19,16 @@ from drydem.model.assembly import Model
 from drydem.model.state import State
 
 
-def pyplot():
-    import matplotlib
+def new_figure(**options):
+    """A matplotlib Figure (``options``: figsize, dpi, layout, ...) drawn on an Agg canvas of
+    its own, not pyplot's: ``fig.savefig`` writes it, ``fig.canvas.buffer_rgba()`` gives its
+    pixels once drawn, and the global backend is left alone."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    fig = Figure(**options)
+    FigureCanvasAgg(fig)
+    return fig
 
 
 def figure_path(path: str | Path) -> Path:
@@ -40,8 +46,8 @@ def figure_path(path: str | Path) -> Path:
 
 def pushover_figure(result: TiltResult, path: Path, *, title: str = "") -> Path:
     """Tilt angle against the monitored horizontal displacement, with the EC8 drift limits."""
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(6.4, 4.4), layout="constrained")
+    fig = new_figure(figsize=(6.4, 4.4), layout="constrained")
+    ax = fig.subplots()
     ux_mm = np.array([r.ux_m for r in result.records]) * 1e3
     tilt = [r.tilt_deg for r in result.records]
     ax.plot(ux_mm, tilt, "-", marker="." if len(tilt) < 60 else None, color="tab:blue", label="equilibrium states")
@@ -56,7 +62,6 @@ def pushover_figure(result: TiltResult, path: Path, *, title: str = "") -> Path:
     ax.grid(alpha=0.3)
     ax.legend(loc="lower right", fontsize="small")
     fig.savefig(path, dpi=150)
-    plt.close(fig)
     return path
 
 
@@ -97,8 +102,8 @@ def mechanism_figure(model: Model, states: list[tuple[str, State, frozenset[str]
     """The model in its plane at each of ``states`` (label, State, names of blocks to leave out,
     e.g. those fallen away by then), blocks coloured by the magnitude of their displacement from
     the model file, each panel on its own scale (millimetres at equilibrium, decimetres past collapse)."""
-    plt = pyplot()
-    fig, axes = plt.subplots(1, len(states), figsize=(5.6 * len(states), 4.2), layout="constrained", squeeze=False)
+    fig = new_figure(figsize=(5.6 * len(states), 4.2), layout="constrained")
+    axes = fig.subplots(1, len(states), squeeze=False)
     for ax, (label, state, hidden) in zip(axes[0], states):
         blocks = np.array([b for b, name in enumerate(model.block_name) if name not in hidden])
         magnitude = np.linalg.norm(state.position[blocks] - model.block_centroid[blocks], axis=1) * 1e3
@@ -107,7 +112,6 @@ def mechanism_figure(model: Model, states: list[tuple[str, State, frozenset[str]
             marker = (state.position[model.block_index(monitored), [0, 2]], f"monitored: {monitored}")
         draw_displacements(fig, ax, block_outlines(model, state, blocks), magnitude, title=label, marker=marker)
     fig.savefig(path, dpi=150)
-    plt.close(fig)
     return path
 
 
@@ -120,14 +124,15 @@ def layout_figure(model: Model, path: Path, *, kinds: list[str] | None = None, v
     """The model in its plane as built: blocks coloured by ``kinds`` (one per block: brick,
     half, header, lintel, base; default brick, base for fixed blocks), ``voids`` (x-z outlines,
     m) hatched, the ``monitored`` block ringed."""
-    plt = pyplot()
     from matplotlib.collections import PolyCollection
+    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     fixed = model.block_fixed.all(axis=1)
     kinds = kinds or ["base" if f else "brick" for f in fixed]
     outlines = block_outlines(model, State.at_rest(model.block_centroid), np.arange(model.n_blocks))
-    fig, ax = plt.subplots(figsize=(8.0, 4.4), layout="constrained")
+    fig = new_figure(figsize=(8.0, 4.4), layout="constrained")
+    ax = fig.subplots()
     ax.add_collection(PolyCollection(outlines, facecolors=[KIND_COLOURS[k] for k in kinds], edgecolors="k", linewidths=0.4))
     if len(voids):
         ax.add_collection(PolyCollection(voids, facecolors="white", edgecolors="0.5", hatch="////", linewidths=0.3))
@@ -137,11 +142,10 @@ def layout_figure(model: Model, path: Path, *, kinds: list[str] | None = None, v
     if monitored is not None:
         b = model.block_index(monitored)
         ax.plot(*model.block_centroid[b, [0, 2]], "o", markersize=9, markerfacecolor="none", markeredgecolor="red", markeredgewidth=2)
-        legend.append(plt.Line2D([], [], marker="o", linestyle="", markerfacecolor="none", markeredgecolor="red", label=f"monitored: {monitored}"))
+        legend.append(Line2D([], [], marker="o", linestyle="", markerfacecolor="none", markeredgecolor="red", label=f"monitored: {monitored}"))
     ax.autoscale_view()
     ax.set_aspect("equal")
     ax.set(title=title, xlabel="x (m)", ylabel="z (m)")
     ax.legend(handles=legend, loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize="small")
     fig.savefig(path, dpi=150)
-    plt.close(fig)
     return path

@@ -18,7 +18,7 @@ from drydem.analysis.drift import EC8_DRIFT_LIMITS
 from drydem.parametric.sweep import RecordError, load_records
 from drydem.errors import DrydemError
 from drydem.masonry.published import savalle2022
-from drydem.report.plots import pyplot
+from drydem.report.plots import new_figure
 
 DESIGNS = [f"WD{k}" for k in range(1, 8)]
 #: the paper's grouping of the pushover figures
@@ -197,12 +197,11 @@ def _table4(runs: Runs, paper: dict) -> str:
 
 
 def _figure(folder: Path, name: str, caption: str, draw, *, panels: int = 1) -> str:
-    plt = pyplot()
-    fig, axes = plt.subplots(1, panels, figsize=(4.4 * max(panels, 1.4), 3.8), layout="constrained", squeeze=False)
+    fig = new_figure(figsize=(4.4 * max(panels, 1.4), 3.8), layout="constrained")
+    axes = fig.subplots(1, panels, squeeze=False)
     drew = draw(axes[0][0] if panels == 1 else axes[0])
     path = folder / f"{name}.png"
     fig.savefig(path, dpi=120)
-    plt.close(fig)
     missing = "" if drew else " (no runs for this figure in the study)"
     return f"## {caption}{missing}\n\n![{name}](figures/{path.name})"
 

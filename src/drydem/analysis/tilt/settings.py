@@ -14,7 +14,7 @@ from drydem.analysis.drift import drift_limit_angles
 from drydem.engine.contacts import SubContacts
 from drydem.errors import ModelError
 from drydem.model.assembly import Model
-from drydem.model.parameters import G, Range
+from drydem.model.parameters import FLAG, G, OneOf, Range, check_fields
 from drydem.model.state import State
 
 LOADINGS = ("tilt", "multiplier")
@@ -43,6 +43,10 @@ SETTING_RANGES = {
     "predictor_growth": Range(1.0, None),
     "predictor_cap_closures": Range(0.0, None, low_open=True),
 }
+
+
+#: the rule of every field of TiltSettings but the monitored block's name
+SETTING_RULES = SETTING_RANGES | {"adaptive": FLAG, "loading": OneOf(LOADINGS), "predictor": FLAG}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -81,10 +85,7 @@ class TiltSettings:
     predictor_cap_closures: float = 150.0
 
     def __post_init__(self):
-        for name, allowed in SETTING_RANGES.items():
-            allowed.check(getattr(self, name), f"tilt setting {name}")
-        if self.loading not in LOADINGS:
-            raise ModelError(f"tilt setting loading = {self.loading!r}: must be one of {LOADINGS}")
+        check_fields(self, SETTING_RULES, "tilt setting")
         if self.monitor is not None and not isinstance(self.monitor, str):
             raise ModelError(f"tilt setting monitor = {self.monitor!r}: must be a block name")
         if self.increment_deg > self.max_angle_deg:
