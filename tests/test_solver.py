@@ -138,3 +138,17 @@ def test_a_move_loads_the_shear_springs_by_ks_area_displacement():
     weight = sim.model.block_mass[1] * dd.G
     assert reaction[0] == pytest.approx(-1e8 * 0.025 * 0.012 * 1e-7, rel=1e-6)
     assert reaction[2] == pytest.approx(weight, rel=1e-6)
+
+
+def test_a_simulation_takes_only_the_settings_it_honours():
+    """cycle_to_equilibrium takes a cycle budget, not a SolverSettings whose damping, timestep
+    safety and mass scaling it would ignore (the model's are used); a bad budget or engine is an
+    input error naming it."""
+    sim = dd.Simulation(stack_model([0.0055]))
+    with pytest.raises(TypeError):
+        sim.cycle_to_equilibrium(solver=dd.SolverSettings())
+    for bad in (0, True, 2.5):
+        with pytest.raises(dd.ModelError, match=r"max_cycles = .*: must be an integer in \[1, 1e\+10\]"):
+            sim.cycle_to_equilibrium(max_cycles=bad)
+    with pytest.raises(dd.ModelError, match=r"engine = 'gpu': must be one of \['numba', 'numba-3d'\]"):
+        dd.Simulation(stack_model([0.0055]), engine="gpu")
