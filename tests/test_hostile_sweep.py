@@ -22,9 +22,9 @@ from click.testing import CliRunner
 
 from drydem.parametric import sweep as sweep_module
 from drydem.parametric.calibrate import StiffnessSearch, calibrate_stiffness
-from drydem.parametric.sweep import (
-    RunSpec, SweepError, _claim, _release, load_records, load_study, lock_path, pending, read_record, record_path, sweep, write_record,
-)
+from drydem.parametric.records import load_records, read_record, record_path, write_record
+from drydem.parametric.study import RunSpec, load_study
+from drydem.parametric.sweep import SweepError, claim, lock_path, pending, release, sweep
 from drydem.cli import main
 from drydem.errors import ModelError
 from test_sweep import STUDY, WALL_FILE, WALLS
@@ -225,7 +225,7 @@ def made_up_run(spec: RunSpec) -> dict:
 def test_a_run_claimed_by_another_sweep_is_left_to_it_and_a_dead_claim_is_taken_over(tmp_path, monkeypatch):
     monkeypatch.setattr(sweep_module, "run_one", made_up_run)
     (tmp_path / "runs").mkdir()
-    held = _claim(tmp_path, SPEC.id)  # another sweep (a lock is per open file, so one in this process is another's)
+    held = claim(tmp_path, SPEC.id)  # another sweep (a lock is per open file, so one in this process is another's)
     lock_path(tmp_path, OTHER.id).write_text("claimed by a sweep killed since")  # a file without its lock
     left = []
     with ThreadPoolExecutor(2) as executor:
@@ -235,7 +235,7 @@ def test_a_run_claimed_by_another_sweep_is_left_to_it_and_a_dead_claim_is_taken_
         assert not lock_path(tmp_path, OTHER.id).exists()
         # the other sweep records it, then ends its claim: nothing left to do here
         write_record(tmp_path, made_up_run(SPEC))
-        _release(tmp_path, SPEC.id, held)
+        release(tmp_path, SPEC.id, held)
         outcome = sweep([SPEC, OTHER], tmp_path, executor)
     assert (outcome.finished, outcome.elsewhere, outcome.skipped) == (0, 0, 2)
     assert not list((tmp_path / "runs").glob("*.lock"))
@@ -312,11 +312,11 @@ def test_a_worker_ends_with_its_killed_parent(tmp_path, initializer):
     script.write_text(textwrap.dedent(f"""
         import multiprocessing, os, time
         from concurrent.futures import ProcessPoolExecutor
-        from drydem.parametric import sweep
+        from drydem.parametric import workers
 
         if __name__ == "__main__":
             pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"),
-                                       initializer=sweep.{initializer}, initargs=(os.getpid(),))
+                                       initializer=workers.{initializer}, initargs=(os.getpid(),))
             print(pool.submit(os.getpid).result(), flush=True)
             pool.submit(time.sleep, 600)
             time.sleep(600)

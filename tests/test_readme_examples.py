@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from drydem.parametric.sweep import load_study
+from drydem.parametric.study import load_study
 from drydem.cli import main
 from drydem.io.target import load_target
 from drydem.masonry.walls import is_wall_file

@@ -8,7 +8,8 @@ import sys
 import pytest
 from click.testing import CliRunner
 
-from drydem.parametric.sweep import RunSpec, write_record
+from drydem.parametric.records import write_record
+from drydem.parametric.study import RunSpec
 from drydem.cli import main
 from drydem.report.study import DESIGNS, build_report
 

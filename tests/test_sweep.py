@@ -4,7 +4,10 @@ import json
 
 import pytest
 
-from drydem.parametric.sweep import RunSpec, load_records, load_study, local_executor, pending, record_path, sweep
+from drydem.parametric.records import load_records, record_path
+from drydem.parametric.study import RunSpec, load_study
+from drydem.parametric.sweep import pending, sweep
+from drydem.parametric.workers import local_executor
 from drydem.errors import ModelError
 
 #: two small walls (tilting in a second or two) as wall files beside the study

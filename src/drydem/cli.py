@@ -381,9 +381,11 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
     from tqdm import tqdm
 
     from drydem.masonry import studies
-    from drydem.parametric.sweep import load_study, open_workers, pending
     from drydem.files import writable_folder
+    from drydem.parametric.study import load_study
+    from drydem.parametric.sweep import pending
     from drydem.parametric.sweep import sweep as run_sweep
+    from drydem.parametric.workers import open_workers
 
     path = Path(study_file) if Path(study_file).is_file() else studies.find(study_file)
     if path is None:
@@ -461,8 +463,8 @@ def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, workers
     DESIGNS, reusing and adding runs in RESULTS_DIR (the paper's post-diction, Section 4.4);
     every option is checked before anything runs."""
     from drydem.parametric.calibrate import StiffnessSearch, calibrate_stiffness
-    from drydem.parametric.sweep import open_workers
     from drydem.files import writable_folder
+    from drydem.parametric.workers import open_workers
 
     search = StiffnessSearch(tuple(d.strip() for d in designs.split(",") if d.strip()), kn_min, kn_max, ks_ratio, increment)
     problems = search.problems(name=lambda field: "--" + field.replace("_", "-"))

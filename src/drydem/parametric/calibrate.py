@@ -22,9 +22,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
 
-from drydem.parametric.sweep import RecordError, RunSpec, SweepOutcome, read_record, record_path, sweep
 from drydem.errors import DrydemError, ModelError
 from drydem.model.parameters import JOINT_STIFFNESS, Range, field_problems
+from drydem.parametric.records import RecordError, read_record, record_path
+from drydem.parametric.study import RunSpec
+from drydem.parametric.sweep import SweepOutcome, sweep
 
 GOLDEN = (math.sqrt(5) - 1) / 2
 #: ks / kn: any positive ratio (the stiffnesses it gives are checked against JOINT_STIFFNESS)
@@ -124,7 +126,7 @@ def calibration_error(records: Mapping[str, dict], experiment: Mapping[str, floa
     """The objective that :func:`calibrate_stiffness` minimises, for one kn: the mean absolute
     relative error (:func:`mean_absolute_relative_error`) of the walls' collapse angles against
     ``experiment`` (deg; default :func:`experimental_angles`), from ``records``, each wall's
-    tilting run record at that kn (:func:`drydem.parametric.sweep.read_record`). A wall that
+    tilting run record at that kn (:func:`drydem.parametric.records.read_record`). A wall that
     cannot stand under its own weight counts as 0 deg (:func:`wall_angle`). CalibrationError
     naming every wall whose run failed or found no angle to compare (no verdict)."""
     experiment = experimental_angles() if experiment is None else experiment

@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 
 from drydem.analysis.drift import EC8_DRIFT_LIMITS
-from drydem.parametric.sweep import RecordError, load_records
 from drydem.errors import DrydemError
 from drydem.masonry.published import savalle2022
+from drydem.parametric.records import RecordError, load_records
 from drydem.report.plots import new_figure
 
 DESIGNS = [f"WD{k}" for k in range(1, 8)]

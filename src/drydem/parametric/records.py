@@ -1,0 +1,124 @@
+"""A run's record on disk: ``RESULTS/runs/ID.json``, written atomically as soon as the run
+finishes, holds the parameters, the status ("ok" or "failed" with the error), the summary and
+the pushover curve. A record is checked when it is read: one that is not JSON, lacks a key, or
+whose parameters do not give its id is corrupt (:class:`RecordError`), and a sweep runs it again.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from drydem.errors import DrydemError
+from drydem.parametric.study import ANALYSES, RunSpec
+
+
+class RecordError(DrydemError):
+    """A run record that cannot be used (unreadable, not JSON, incomplete, or not its run's);
+    the message names the file and what is wrong."""
+
+
+def record_path(results: Path, run_id: str) -> Path:
+    return Path(results) / "runs" / f"{run_id}.json"
+
+
+def write_record(results: Path, record: dict) -> Path:
+    """Write a run's record atomically: a temporary file, flushed to the disk, renamed over the
+    final one, so that a crash (or a power cut) leaves the old record or the new, not a part."""
+    path = record_path(results, record["id"])
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
+    with open(tmp, "w", encoding="utf-8") as file:
+        file.write(json.dumps(record, indent=1) + "\n")
+        file.flush()
+        os.fsync(file.fileno())
+    os.replace(tmp, path)
+    return path
+
+
+#: the keys of a record, by status, and of its summary, by analysis: what the report and the
+#: calibration read (a record without them is corrupt)
+RECORD_KEYS = {"ok": {"id", "spec", "status", "summary", "pushover"}, "failed": {"id", "spec", "status", "error"}}
+SUMMARY_KEYS = {"tilt": {"collapse_angle_deg", "drift_limit_angles_deg", "wall_height_m"}, "limit": {"collapse_angle_deg", "method"}}
+#: the columns of a pushover curve: tilt (deg), ux, uz (m), drift, cycles
+CURVE_COLUMNS = 5
+
+
+def read_record(path: str | Path) -> dict:
+    """The record in ``path``, checked: a JSON object whose id is the file's name and the id of
+    its parameters, with the keys of its status (RECORD_KEYS, SUMMARY_KEYS). RecordError naming
+    the file and what is wrong otherwise (a sweep killed while writing one without the atomic
+    write, a disk full, a hand edit)."""
+    path = Path(path)
+    try:
+        record = json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise RecordError(f"{path}: cannot read the record ({exc.strerror})") from None
+    except ValueError as exc:  # not JSON, or not UTF-8
+        raise RecordError(f"{path}: not a JSON record, empty or cut short? ({exc})") from None
+    problem = _record_problem(record, path.name.removesuffix(".json"))
+    if problem is not None:
+        raise RecordError(f"{path}: {problem}")
+    return record
+
+
+def _record_problem(record, run_id: str) -> str | None:
+    """What is wrong with ``record`` as the record of run ``run_id``, or None."""
+    if not isinstance(record, dict):
+        return f"a record is a JSON object, not {type(record).__name__}"
+    status = record.get("status")
+    if status not in RECORD_KEYS:
+        return f"status = {status!r}: must be one of {list(RECORD_KEYS)}"
+    missing = sorted(RECORD_KEYS[status] - set(record))
+    if missing:
+        return f"a {status!r} record without {missing}"
+    if record["id"] != run_id:
+        return f"its id {record['id']!r} is not its file's name"
+    try:
+        spec = RunSpec(**record["spec"])
+        spec_id = spec.id
+    except (TypeError, ValueError) as exc:
+        return f"spec is not the parameters of a run ({exc})"
+    if spec_id != run_id:
+        return f"its parameters are those of run {spec_id!r}, not of {run_id!r}"
+    if spec.analysis not in ANALYSES:
+        return f"spec analysis = {spec.analysis!r}: must be one of {list(ANALYSES)}"
+    if status == "failed":
+        return None if isinstance(record["error"], str) else "error must be the run's error message"
+    summary, curve = record["summary"], record["pushover"]
+    if not isinstance(summary, dict) or not SUMMARY_KEYS[spec.analysis] <= set(summary):
+        return f"summary must hold {sorted(SUMMARY_KEYS[spec.analysis])}"
+    if not (summary["collapse_angle_deg"] is None or _numeric(summary["collapse_angle_deg"])):
+        return f"summary collapse_angle_deg = {summary['collapse_angle_deg']!r}: must be a number (deg) or null"
+    if spec.analysis == "tilt" and not isinstance(summary["drift_limit_angles_deg"], dict):
+        return "summary drift_limit_angles_deg must map drift limits to angles"
+    if not isinstance(curve, list) or not all(isinstance(row, list) and len(row) == CURVE_COLUMNS and all(map(_numeric, row)) for row in curve):
+        return f"pushover must be a list of rows of {CURVE_COLUMNS} numbers (tilt, ux, uz, drift, cycles)"
+    return None
+
+
+def _numeric(value) -> bool:
+    """An int or float (not a boolean); NaN and infinities are numbers a run may record."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+@dataclass(frozen=True)
+class Records:
+    """The records of a results folder: ``valid`` ones, and the ``corrupt`` ones' errors (each
+    naming its file), left out."""
+
+    valid: list[dict]
+    corrupt: list[RecordError]
+
+
+def load_records(results: Path) -> Records:
+    """Every record in ``results/runs`` (in name order), checked by :func:`read_record`."""
+    valid, corrupt = [], []
+    for path in sorted((Path(results) / "runs").glob("*.json")):
+        try:
+            valid.append(read_record(path))
+        except RecordError as exc:
+            corrupt.append(exc)
+    return Records(valid, corrupt)

@@ -1,0 +1,118 @@
+"""Where a sweep's runs go: local processes (:func:`local_executor`, whose workers die with the
+sweep), or a Dask cluster's (:func:`connect`), both opened by :func:`open_workers`."""
+
+from __future__ import annotations
+
+import os
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from concurrent.futures import Executor
+from contextlib import contextmanager
+from dataclasses import dataclass
+
+from drydem.parametric.sweep import SweepError
+
+#: how long a Dask scheduler has to answer before the sweep gives up on it, s: a scheduler that
+#: is up answers a connection in milliseconds, so a longer wait only delays saying it is not
+SCHEDULER_TIMEOUT_S = 5.0
+
+
+@dataclass(frozen=True)
+class Workers:
+    """Where runs go: an ``executor``, a description of it (``where``), and the runs it computes
+    at once (``slots``; None for a Dask cluster, which may grow)."""
+
+    executor: Executor
+    where: str
+    slots: int | None
+
+
+@contextmanager
+def open_workers(workers: int | None = None, scheduler: str | None = None) -> Iterator[Workers]:
+    """``workers`` local processes (:func:`local_executor`; default: all cores), or the cluster
+    of the Dask scheduler at ``scheduler`` (:func:`connect`). On an exception (an interrupt)
+    the queued runs are cancelled rather than waited for."""
+    if scheduler is not None:
+        client = connect(scheduler)
+        pool = Workers(client.get_executor(), f"Dask scheduler {scheduler}", None)
+    else:
+        workers = workers or os.cpu_count() or 1
+        client, pool = None, Workers(local_executor(workers), f"{workers} local processes", workers)
+    try:
+        yield pool
+    except BaseException:
+        if client is None:
+            pool.executor.shutdown(wait=False, cancel_futures=True)
+        raise
+    else:
+        pool.executor.shutdown()
+    finally:
+        if client is not None:
+            client.close()
+
+
+def connect(address: str, *, timeout_s: float = SCHEDULER_TIMEOUT_S):
+    """A Dask client of the scheduler at ``address``; SweepError naming the address and what to
+    check when it is not an address or does not answer within ``timeout_s`` (Dask's own default
+    waits 30 s and then raises a bare OSError)."""
+    from distributed import Client
+
+    try:
+        return Client(address, timeout=timeout_s)
+    except (ValueError, TypeError) as exc:
+        raise SweepError(f"scheduler {address!r} is not a scheduler address ({exc}): expected tcp://HOST:PORT, "
+                         "the address `dask scheduler` prints (port 8786 by default)") from None
+    except OSError as exc:
+        raise SweepError(f"cannot reach the Dask scheduler at {address} ({exc}): check that it is running "
+                         "(`dask scheduler` prints its address), that the host and port are right, and that no firewall "
+                         "blocks the port") from None
+
+
+def local_executor(workers: int) -> Executor:
+    """``workers`` local processes, spawned (fresh interpreters, no forked state), that end when
+    this process ends however it ends (:func:`_exit_with_parent`)."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                               initializer=_exit_with_parent, initargs=(os.getpid(),))
+
+
+#: prctl's option that asks for a signal when the parent ends (linux/prctl.h)
+PR_SET_PDEATHSIG = 1
+
+
+def _exit_with_parent(parent: int) -> None:
+    """Worker initializer: end this worker when ``parent`` (the sweep) ends. Without it a sweep
+    killed outright (kill -9, the out-of-memory killer) leaves its workers computing on, then
+    waiting forever (each holds both ends of the pool's queue, so none sees it close).
+
+    On Linux the kernel sends the worker SIGKILL when its parent ends (prctl PR_SET_PDEATHSIG):
+    at once, even in the middle of a numba kernel, which holds the GIL for as long as it runs,
+    and with nothing to run in the worker; the parent is checked after setting it, in case it
+    ended before. The signal follows the parent *thread* that started the worker: the pool
+    starts its workers in the thread that submits, which for :func:`sweep` is the thread that
+    waits for them. Elsewhere, :func:`_watch_parent`."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+        import signal
+
+        if ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL) == 0:
+            if os.getppid() != parent:
+                os._exit(1)
+            return
+    _watch_parent(parent)
+
+
+def _watch_parent(parent: int) -> None:
+    """Worker initializer: a daemon thread ends this worker when its parent pid is no longer
+    ``parent`` (it was re-parented: its parent ended), checking every second (portable, but it
+    needs the GIL, so it waits for a numba kernel that runs to return)."""
+    def watch():
+        while os.getppid() == parent:
+            time.sleep(1.0)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="exit-with-parent", daemon=True).start()
