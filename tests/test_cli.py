@@ -105,7 +105,10 @@ def test_an_interrupted_tilt_keeps_its_checkpoint_and_resumes_from_it(tmp_path, 
 
     out = tmp_path / "run"
     command = [sys.executable, "-c", "from drydem.cli import main; main()", "tilt", "perforated_wall", "--out", str(out)]
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # SIGINT at its default, as in a terminal: a test runner started in the background (`cmd &`)
+    # ignores SIGINT, its children inherit that, and Python then installs no KeyboardInterrupt
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     csv = out / "pushover.csv"
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and not (csv.is_file() and len(csv.read_text().splitlines()) >= 3):
