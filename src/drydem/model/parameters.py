@@ -43,10 +43,15 @@ class Rule:
     def __contains__(self, value) -> bool:
         raise NotImplementedError
 
+    def problem(self, value, where: str) -> str | None:
+        """``where = value: must be ...`` if ``value`` breaks the rule, else None."""
+        return None if value in self else f"{where} = {value!r}: {self}"
+
     def check(self, value, where: str) -> None:
         """ModelError ``where = value: must be ...`` unless ``value`` obeys the rule."""
-        if value not in self:
-            raise ModelError(f"{where} = {value!r}: {self}")
+        problem = self.problem(value, where)
+        if problem is not None:
+            raise ModelError(problem)
 
 
 class Flag(Rule):
@@ -113,17 +118,21 @@ def field_problems(settings, rules: Mapping[str, Rule], name: Callable[[str], st
     for field, rule in rules.items():
         value = getattr(settings, field)
         if not (value is None and field in optional) and value not in rule:
-            found.append(f"{name(field)} = {value!r}: {rule}")
+            found.append(rule.problem(value, name(field)))
     return found
+
+
+def refuse(problems: list[str]) -> None:
+    """One ModelError naming every problem of ``problems`` (``; ``-separated), if there is one."""
+    if problems:
+        raise ModelError("; ".join(problems))
 
 
 def check_fields(settings, rules: Mapping[str, Rule], where: str, *, optional: Collection[str] = ()) -> None:
     """Check the fields of ``settings`` named in ``rules`` (:func:`field_problems`): one
     ModelError naming, for every field that breaks its rule, ``WHERE FIELD``, its value and
     the rule (``[joint] kn = True: must be a number in [1e+04, 1e+15] Pa/m``)."""
-    problems = field_problems(settings, rules, lambda field: f"{where} {field}", optional=optional)
-    if problems:
-        raise ModelError("; ".join(problems))
+    refuse(field_problems(settings, rules, lambda field: f"{where} {field}", optional=optional))
 
 
 #: joint stiffness, Pa/m: below 1e4 the own weight of a 1 m masonry wall (~2e4 Pa) would close

@@ -22,8 +22,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
 
-from drydem.errors import DrydemError, ModelError
-from drydem.model.parameters import JOINT_STIFFNESS, Range, field_problems
+from drydem.errors import DrydemError
+from drydem.model.parameters import JOINT_STIFFNESS, Range, field_problems, refuse
 from drydem.parametric.records import RecordError, read_record, record_path
 from drydem.parametric.study import RunSpec
 from drydem.parametric.sweep import SweepOutcome, sweep
@@ -61,9 +61,7 @@ def calibrate(error: Callable[[float], float], kn_min: float, kn_max: float, *, 
         return f"calibrate {field}"
 
     search = SimpleNamespace(kn_min=kn_min, kn_max=kn_max, grid=grid, tolerance=tolerance, max_evaluations=max_evaluations)
-    problems = _bound_problems(search, name) + field_problems(search, SEARCH_RULES, name)
-    if problems:
-        raise ModelError("; ".join(problems))
+    refuse(_bound_problems(search, name) + field_problems(search, SEARCH_RULES, name))
     seen: dict[float, float] = {}
 
     def f(log_kn: float) -> float:
@@ -182,9 +180,7 @@ def calibrate_stiffness(search: StiffnessSearch, results: Path, executor: Execut
     :func:`calibration_error` against the experiments. ``on_evaluation(kn, error, outcome)``
     after each kn. ModelError for invalid settings (all named), CalibrationError when a kn's
     runs failed or are being computed by another process."""
-    problems = search.problems()
-    if problems:
-        raise ModelError("; ".join(problems))
+    refuse(search.problems())
     experiment = experimental_angles()
 
     def error(kn: float) -> float:
