@@ -8,6 +8,7 @@ import drydem as dd
 from drydem.engine import cycle3d
 from drydem.engine import cycle_planar
 from oracles import cycle as reference
+from drydem.engine.damping import Damping
 from drydem.engine.joints import JointConstants
 from conftest import layout_blocks, tilted_gravity
 
@@ -17,10 +18,10 @@ def copies(sim):
     return sim.state.copy(), sim.contacts.copy()
 
 
-def run_step(step, sim, state, sub, gravity, joint):
+def run_step(step, sim, state, sub, gravity, joint, damping):
     nb = sim.model.n_blocks
     force, moment, rot = np.empty((nb, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3))
-    stats = step(state, sim.blocks, sub, joint, gravity, sim.timestep, 0.8, rot, force, moment, True)
+    stats = step(state, sim.blocks, sub, joint, gravity, sim.timestep, damping, rot, force, moment, True)
     return force, stats
 
 
@@ -44,15 +45,15 @@ def loaded_wall_3d(benchmark_wall):
     return sim
 
 
-def assert_same_cycle(step, oracle, sim, joint, gravity, components=(0, 1, 2)):
+def assert_same_cycle(step, oracle, sim, joint, gravity, components=(0, 1, 2), damping=Damping(0.8)):
     """One cycle of ``step`` and of its ``oracle`` from copies of the same state: block forces
     (``components`` of them), sub-contact forces and slip and the cycle's measures to round-off;
     the motion to round-off of each array's own scale (velocities come from nearly cancelling
     contact forces, and angular ones are divided by inertias of ~1e-8 kg m2). Returns the
     oracle's sub-contacts."""
     (state, sub), (state_oracle, sub_oracle) = copies(sim), copies(sim)
-    force, stats = run_step(step, sim, state, sub, gravity, joint)
-    force_oracle, stats_oracle = run_step(oracle, sim, state_oracle, sub_oracle, gravity, joint)
+    force, stats = run_step(step, sim, state, sub, gravity, joint, damping)
+    force_oracle, stats_oracle = run_step(oracle, sim, state_oracle, sub_oracle, gravity, joint, damping)
     scale = np.abs(force_oracle).max()
     np.testing.assert_allclose(force[:, components], force_oracle[:, components], rtol=0, atol=1e-12 * scale)
     np.testing.assert_allclose(sub.normal_force, sub_oracle.normal_force, rtol=0, atol=1e-12 * scale)
@@ -79,6 +80,20 @@ def test_planar_step_gives_the_3d_kernels_forces_and_motion(loaded_wall):
     joint = JointConstants.of(loaded_wall.model.joint)
     sub = assert_same_cycle(cycle_planar.step, cycle3d.step, loaded_wall, joint, tilted_gravity(12.0), components=[0, 2])
     assert (sub.shear_force != 0).any() and (sub.normal_force == 0).any()
+
+
+#: dynamics' damping: no local damping, contact dashpots (ratio and Rayleigh's stiffness term) and
+#: Rayleigh's mass term, each large enough to change the forces well above round-off
+VISCOUS = Damping(0.0, contact_ratio=0.3, stiffness_proportional=1e-4, mass_proportional=2.0)
+
+
+def test_viscous_damping_gives_the_oracles_forces_and_motion(loaded_wall_3d, loaded_wall):
+    """The dashpots and the mass-proportional drag: the 3D kernel against the NumPy oracle, the
+    planar kernel against the 3D one, one cycle from the same moving states."""
+    joint = JointConstants.of(loaded_wall_3d.model.joint)
+    assert_same_cycle(cycle3d.step, reference.step, loaded_wall_3d, joint, tilted_gravity(12.0, turn_deg=30.0), damping=VISCOUS)
+    joint = JointConstants.of(loaded_wall.model.joint)
+    assert_same_cycle(cycle_planar.step, cycle3d.step, loaded_wall, joint, tilted_gravity(12.0), components=[0, 2], damping=VISCOUS)
 
 
 def test_many_cycles_with_redetection_stay_together():

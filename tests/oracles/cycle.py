@@ -69,8 +69,11 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
     sub.shear_force[:] = fs_new
     sub.intact[:] = sub.intact & ~slip & ~opened
 
+    # normal dashpots (drydem.engine.damping): c = A (2 zeta sqrt(kn m_ab / A_c) + beta kn), no pull
+    push = np.where(opened, 0.0, fn + _dashpot(sub, blocks, joint, damping, n, v_rel, fn))
+
     # forces on the incident (+) and reference (-) blocks at the incident point
-    f = fn[:, None] * n + fs_new
+    f = push[:, None] * n + fs_new
     np.add.at(force, b, f)
     np.add.at(moment, b, np.cross(arm_b, f))
     np.add.at(force, a, -f)
@@ -81,10 +84,11 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
     free_t, free_r = blocks.free[:, :3], blocks.free[:, 3:]
     f_free, m_free = force * free_t, moment * free_r
     unbalanced = np.maximum(_norm(f_free), _norm(m_free) / blocks.radius)
-    vel += _damped(f_free, vel, damping) * (blocks.inv_mass[:, None] * dt) * moving[:, None]
-    torque = _damped(m_free, omega, damping)
+    drag = damping.mass_proportional
+    vel += (_damped(f_free, vel, damping.local) * blocks.inv_mass[:, None] - drag * vel) * dt * moving[:, None]
+    torque = _damped(m_free, omega, damping.local)
     spin = _world_tensor_apply(rot, blocks.inertia_body, omega)
-    accel = _world_tensor_apply(rot, blocks.inv_inertia_body, torque - np.cross(omega, spin))
+    accel = _world_tensor_apply(rot, blocks.inv_inertia_body, torque - np.cross(omega, spin) - drag * spin)
     omega += accel * dt * free_r * moving[:, None]
     vel *= free_t
     pos += vel * dt * moving[:, None]
@@ -100,6 +104,17 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
     if not moving.any():
         return 0.0, 0.0, 0.0, 0.0
     return float(unbalanced[moving].max()), float(speed[moving].max()), float(kinetic), float(travel)
+
+
+def _dashpot(sub, blocks, joint, damping, n, v_rel, fn):
+    """The dashpots' normal forces (n_sub,), N: -c v_n, at most cancelling a compression."""
+    inv_sum = (blocks.inv_mass[sub.block_ref] + blocks.inv_mass[sub.block_inc])
+    contact_area = np.bincount(sub.contact, weights=sub.area, minlength=len(sub.pairs))[sub.contact]
+    reduced = np.divide(1.0, inv_sum, out=np.zeros_like(inv_sum), where=inv_sum > 0)
+    per_area = 2.0 * damping.contact_ratio * np.sqrt(joint.kn * reduced / contact_area) + damping.stiffness_proportional * joint.kn
+    per_area = np.where(inv_sum > 0, per_area, 0.0)
+    opening = np.einsum("ni,ni->n", v_rel, n)
+    return np.where(fn > 0, np.maximum(-per_area * sub.area * opening, -fn), np.maximum(-per_area * sub.area * opening, 0.0))
 
 
 def run_cycles(state, blocks, sub, joint, loop, broad_state, neighbours):

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from drydem.engine.damping import local_damping
+from drydem.engine.damping import dashpot_force, dashpot_per_area, has_dashpots, local_damping
 from drydem.engine.joints import normal_law, shear_law
 from drydem.engine.loop import FASTMATH, cycle_loop
 from drydem.model.rotation import mat_t_vec, mat_vec, quaternion_to_matrix, rotate_by_vector
@@ -38,7 +38,7 @@ def _world_tensor_apply(r, tensor, v0, v1, v2):
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
-def contact_forces(state, rot, sub, joint, dt, force, moment):
+def contact_forces(state, rot, inv_mass, sub, joint, damping, dt, force, moment):
     """Step 3: update every sub-contact's forces and add them to ``force`` and ``moment`` (N, N m).
 
     Per contact (blocks a = reference, b = incident, normal n = R_a n_body, d = vector from
@@ -46,11 +46,14 @@ def contact_forces(state, rot, sub, joint, dt, force, moment):
     gap = (d + r) . n - offset (every reference point lies on the plane n . x = offset), and
     relative velocity v_b - v_a - w_a x d + (w_b - w_a) x r. The forces F act at x_b on b
     and -F on a; the contact's sums are scattered once: moment on b sum r x F, on a
-    -(d x sum F + sum r x F).
+    -(d x sum F + sum r x F). With viscous ``damping``, a normal dashpot beside each spring
+    (:mod:`drydem.engine.damping`, ``inv_mass`` (nb,) 1/kg giving the pairs' reduced masses).
     """
     pos, vel, omega = state.position, state.velocity, state.angular_velocity
+    viscous = has_dashpots(damping)
     for c in range(sub.pairs.shape[0]):
         a, b = sub.pairs[c, 0], sub.pairs[c, 1]
+        dashpot = dashpot_per_area(sub.start[c], sub.start[c + 1], sub.area, inv_mass[a], inv_mass[b], joint.kn, damping) if viscous else 0.0
         nx, ny, nz = mat_vec(rot[a], sub.normal_body[c, 0], sub.normal_body[c, 1], sub.normal_body[c, 2])
         dx, dy, dz = pos[b, 0] - pos[a, 0], pos[b, 1] - pos[a, 1], pos[b, 2] - pos[a, 2]
         base_gap = dx * nx + dy * ny + dz * nz - sub.offset[c]
@@ -90,7 +93,8 @@ def contact_forces(state, rot, sub, joint, dt, force, moment):
             sub.normal_force[s] = fn
             fs[0], fs[1], fs[2] = sx, sy, sz
             sub.intact[s] = intact
-            fx, fy, fz = fn * nx + sx, fn * ny + sy, fn * nz + sz
+            push = fn + dashpot_force(fn, vn, dashpot * sub.area[s]) if viscous else fn
+            fx, fy, fz = push * nx + sx, push * ny + sy, push * nz + sz
             fx_sum += fx
             fy_sum += fy
             fz_sum += fz
@@ -113,8 +117,11 @@ def contact_forces(state, rot, sub, joint, dt, force, moment):
 
 @numba.njit(cache=True)
 def integrate(state, rot, blocks, force, moment, damping, dt):
-    """Steps 4-5: damped velocities, positions and rotations. Returns (max unbalanced force
-    or moment / radius over the free degrees of freedom, N; max block point speed, m/s)."""
+    """Steps 4-5: damped velocities, positions and rotations (local damping, and Rayleigh's
+    mass-proportional term -alpha_R m v, -alpha_R I_w omega: :mod:`drydem.engine.damping`).
+    Returns (max unbalanced force or moment / radius over the free degrees of freedom, N;
+    max block point speed, m/s)."""
+    local, drag = damping.local, damping.mass_proportional
     max_unbalanced = 0.0
     max_speed = 0.0
     for i in range(state.position.shape[0]):
@@ -127,16 +134,17 @@ def integrate(state, rot, blocks, force, moment, damping, dt):
         for k in range(3):
             f = force[i, k] * free[k]
             f2 += f * f
-            state.velocity[i, k] += local_damping(f, state.velocity[i, k], damping) * blocks.inv_mass[i] * dt
+            v = state.velocity[i, k]
+            state.velocity[i, k] += (local_damping(f, v, local) * blocks.inv_mass[i] - drag * v) * dt
             m = moment[i, k] * free[3 + k]
             m2 += m * m
-            moment[i, k] = local_damping(m, state.angular_velocity[i, k], damping)
+            moment[i, k] = local_damping(m, state.angular_velocity[i, k], local)
         # world inertia I_w = R I_body R^T applied to omega, and the gyroscopic moment omega x I_w omega
         w = state.angular_velocity[i]
         lx, ly, lz = _world_tensor_apply(r, blocks.inertia_body[i], w[0], w[1], w[2])
-        tx = moment[i, 0] - (w[1] * lz - w[2] * ly)
-        ty = moment[i, 1] - (w[2] * lx - w[0] * lz)
-        tz = moment[i, 2] - (w[0] * ly - w[1] * lx)
+        tx = moment[i, 0] - (w[1] * lz - w[2] * ly) - drag * lx
+        ty = moment[i, 1] - (w[2] * lx - w[0] * lz) - drag * ly
+        tz = moment[i, 2] - (w[0] * ly - w[1] * lx) - drag * lz
         ax, ay, az = _world_tensor_apply(r, blocks.inv_inertia_body[i], tx, ty, tz)
         w[0] += ax * dt * free[3]
         w[1] += ay * dt * free[4]
@@ -184,7 +192,7 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
         for k in range(3):
             force[i, k] = blocks.mass[i] * gravity[k]
             moment[i, k] = 0.0
-    contact_forces(state, rot, sub, joint, dt, force, moment)
+    contact_forces(state, rot, blocks.inv_mass, sub, joint, damping, dt, force, moment)
     unbalanced, speed = integrate(state, rot, blocks, force, moment, damping, dt)
     kinetic, travel = energies(state, rot, blocks) if measure else (0.0, 0.0)
     return unbalanced, speed, kinetic, travel

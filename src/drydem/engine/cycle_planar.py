@@ -21,7 +21,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from drydem.engine.damping import local_damping
+from drydem.engine.damping import dashpot_force, dashpot_per_area, has_dashpots, local_damping
 from drydem.engine.joints import normal_law, shear_law
 from drydem.engine.loop import FASTMATH, cycle_loop
 from drydem.model.rotation import rotate_about_y
@@ -41,7 +41,7 @@ def _cos_sin(q):
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
-def contact_forces(state, sub, joint, dt, force, moment):
+def contact_forces(state, inv_mass, sub, joint, damping, dt, force, moment):
     """Every sub-contact's forces (as :func:`drydem.engine.cycle3d.contact_forces`), in the x-z plane:
     forces summed into ``force[:, 0]``, ``force[:, 2]`` (N) and moments about y into
     ``moment[:, 1]`` (N m). A point's arm r = R_b p and the centroid offset d give the gap
@@ -55,11 +55,13 @@ def contact_forces(state, sub, joint, dt, force, moment):
     and tan^2 by their series below TURN_SERIES rad, exact to round-off there). Where F_s did
     not lie along the last tangent (after a re-detection or a predictor move), which
     (F_s . n)^2 = (F_s . t)^2 tan^2(w_a dt) tells to round-off, the magnitude is
-    sqrt((F_s . t)^2 + (F_s . n)^2)."""
+    sqrt((F_s . t)^2 + (F_s . n)^2). Viscous ``damping``: as in the 3D kernel."""
     pos, vel, omega, quat = state.position, state.velocity, state.angular_velocity, state.quaternion
     point, area, intact, shear, normal = sub.point_inc_body, sub.area, sub.intact, sub.shear_force, sub.normal_force
+    viscous = has_dashpots(damping)
     for c in range(sub.pairs.shape[0]):
         a, b = sub.pairs[c, 0], sub.pairs[c, 1]
+        dashpot = dashpot_per_area(sub.start[c], sub.start[c + 1], area, inv_mass[a], inv_mass[b], joint.kn, damping) if viscous else 0.0
         ca, sa = _cos_sin(quat[a])
         cb, sb = _cos_sin(quat[b])
         nbx, nbz = sub.normal_body[c, 0], sub.normal_body[c, 2]
@@ -97,6 +99,8 @@ def contact_forces(state, sub, joint, dt, force, moment):
             sx, _, sz, intact[s] = shear_law(fn, du * nz, 0.0, -du * nx, along * nz, 0.0, -along * nx, area[s], intact[s], joint)
             normal[s] = fn
             shear[s, 0], shear[s, 2] = sx, sz
+            if viscous:
+                fn += dashpot_force(fn, (v0x + dw * rz) * nx + (v0z - dw * rx) * nz, dashpot * area[s])
             fx, fz = fn * nx + sx, fn * nz + sz
             fx_sum += fx
             fz_sum += fz
@@ -113,6 +117,7 @@ def contact_forces(state, sub, joint, dt, force, moment):
 def integrate(state, blocks, force, moment, damping, dt):
     """Damped velocities, positions and rotations of x, z and the rotation about y (as
     :func:`drydem.engine.cycle3d.integrate`, which returns the same two measures)."""
+    local, drag = damping.local, damping.mass_proportional
     max_unbalanced_sq = 0.0
     max_speed = 0.0
     for i in range(state.position.shape[0]):
@@ -121,10 +126,10 @@ def integrate(state, blocks, force, moment, damping, dt):
         free_x, free_z, free_ry = blocks.free[i, 0], blocks.free[i, 2], blocks.free[i, 4]
         v, p = state.velocity[i], state.position[i]
         fx, fz, my = force[i, 0] * free_x, force[i, 2] * free_z, moment[i, 1] * free_ry
-        v[0] = (v[0] + local_damping(fx, v[0], damping) * blocks.inv_mass[i] * dt) * free_x
-        v[2] = (v[2] + local_damping(fz, v[2], damping) * blocks.inv_mass[i] * dt) * free_z
+        v[0] = (v[0] + (local_damping(fx, v[0], local) * blocks.inv_mass[i] - drag * v[0]) * dt) * free_x
+        v[2] = (v[2] + (local_damping(fz, v[2], local) * blocks.inv_mass[i] - drag * v[2]) * dt) * free_z
         w = state.angular_velocity[i, 1]
-        w += local_damping(my, w, damping) * blocks.inv_inertia_body[i, 1, 1] * dt * free_ry
+        w += (local_damping(my, w, local) * blocks.inv_inertia_body[i, 1, 1] - drag * w) * dt * free_ry
         state.angular_velocity[i, 1] = w
         p[0] += v[0] * dt
         p[2] += v[2] * dt
@@ -160,7 +165,7 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
         force[i, 0] = blocks.mass[i] * gravity[0]
         force[i, 2] = blocks.mass[i] * gravity[2]
         moment[i, 1] = 0.0
-    contact_forces(state, sub, joint, dt, force, moment)
+    contact_forces(state, blocks.inv_mass, sub, joint, damping, dt, force, moment)
     unbalanced, speed = integrate(state, blocks, force, moment, damping, dt)
     kinetic, travel = energies(state, blocks) if measure else (0.0, 0.0)
     return unbalanced, speed, kinetic, travel

@@ -28,6 +28,7 @@ import numba
 import numpy as np
 
 from drydem.engine.contacts import SubContacts
+from drydem.engine.damping import Damping, timestep_factor
 from drydem.errors import ModelError
 from drydem.model.assembly import Model
 from drydem.model.parameters import G
@@ -145,13 +146,15 @@ def scaled_inertia(
 
 
 def timestep_and_blocks(
-    model: Model, contacts: SubContacts, active: np.ndarray, *, fixed_timestep: float | None, scaled_timestep: float | None
+    model: Model, contacts: SubContacts, active: np.ndarray, *, fixed_timestep: float | None, scaled_timestep: float | None,
+    damping: Damping,
 ) -> tuple[float, BlockConstants]:
     """The timestep (s) and the blocks' constants with ``contacts``, blocks not ``active`` held.
 
     The timestep is ``fixed_timestep`` (ModelError if above the critical one), else
-    ``solver.timestep_safety`` times the critical one (:func:`critical_timestep`), or the free
-    flight one where nothing is sprung. With mass scaling, the masses and inertias are the
+    ``solver.timestep_safety`` times the critical one (:func:`critical_timestep`, reduced for
+    the dashpots of a viscous ``damping``: :func:`drydem.engine.damping.timestep_factor`), or the
+    free flight one where nothing is sprung. With mass scaling, the masses and inertias are the
     fictitious ones (:func:`scaled_inertia`) for ``scaled_timestep`` (s; None: for this timestep,
     which is then the one to keep).
     """
@@ -159,6 +162,7 @@ def timestep_and_blocks(
     k_t, k_r = contact_stiffness(contacts, model.joint.kn, model.joint.ks, model.n_blocks)
     movable = model.block_movable & active
     critical = critical_timestep(model.block_mass, model.block_inertia_whitening, movable, k_t, k_r)
+    critical *= timestep_factor(damping, critical) if np.isfinite(critical) else 1.0
     if fixed_timestep is not None:
         if fixed_timestep > critical:
             raise ModelError(

@@ -11,6 +11,8 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
+from drydem.engine.damping import Damping
+
 #: kinetic energy above this many times the work gravity can have done means a blow-up
 DIVERGENCE_FACTOR = 10.0
 #: the energy test of divergence runs every this many cycles (a NaN is caught at every cycle)
@@ -125,21 +127,25 @@ def accumulate_motion(state, lever, dt, moved, slack):
 class LoopSettings(NamedTuple):
     """What one call of a kernel's ``run_cycles`` is to do (:func:`cycle_loop`).
 
-    gravity : (3,) m/s2. dt : timestep, s. damping : local damping coefficient. max_cycles :
-    cycles at most. criterion, limit : RATIO (max unbalanced force / force_scale < limit) or
-    VELOCITY (max block point speed < limit, m/s). force_scale : N. travel_slack : kg m, of the
-    divergence test. absolute_limit : m, of :func:`detection_slack`.
+    gravity : (3,) m/s2. dt : timestep, s. damping : a :class:`~drydem.engine.damping.Damping`.
+    max_cycles : cycles at most. criterion, limit : RATIO (max unbalanced force / force_scale <
+    limit) or VELOCITY (max block point speed < limit, m/s). force_scale : N. travel_slack :
+    kg m, of the divergence test. absolute_limit : m, of :func:`detection_slack`.
+    ground_acceleration : (n, 3) m/s2, the table's acceleration a_g at each cycle (the body
+    force of cycle k is m (g - a_g[k]): the blocks move in the frame of the table; the call
+    ends after n cycles if n < max_cycles), or (0, 3) for a table at rest.
     """
 
     gravity: np.ndarray
     dt: float
-    damping: float
+    damping: Damping
     max_cycles: int
     criterion: int
     limit: float
     force_scale: float
     travel_slack: float
     absolute_limit: float
+    ground_acceleration: np.ndarray
 
 
 @numba.njit(cache=True, inline="always")
@@ -153,11 +159,15 @@ def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neig
     there crashes numba. ``broad_state`` and ``neighbours`` go to :func:`detection_slack`, which
     runs only once a block may have used up its slack (:func:`accumulate_motion`).
 
-    Divergence: a NaN, or more kinetic energy than gravity can have supplied. Damping only
-    removes energy, so the kinetic energy stays below the work of gravity, at most
-    |g| sum m |x - x_origin|; above DIVERGENCE_FACTOR times that (plus ``travel_slack``, kg m,
-    for the settling at the start) the integration has blown up. A block falling freely for
-    any time does not trigger it. The energies are measured every ENERGY_CHECK_EVERY cycles
+    A shaking table (``loop.ground_acceleration``) adds the inertial body force -m a_g of the
+    table's frame, cycle by cycle: for a rigid table translating without turning this is exact,
+    and the blocks' positions and velocities are those relative to the table.
+
+    Divergence: a NaN, or more kinetic energy than the body forces can have supplied. Damping
+    only removes energy, so the kinetic energy stays below their work, at most
+    g_max sum m |x - x_origin| with g_max = |g| + max |a_g|; above DIVERGENCE_FACTOR times that
+    (plus ``travel_slack``, kg m, for the settling at the start) the integration has blown up.
+    A block falling freely for any time does not trigger it. The energies are measured every ENERGY_CHECK_EVERY cycles
     (they cost a third of the motion update); a blow-up takes far longer to matter.
 
     Each compiled kernel has a cached ``run_cycles`` of its own into which this loop is inlined
@@ -171,13 +181,23 @@ def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neig
     force = np.empty((nb, 3))
     moment = np.empty((nb, 3))
     ratio, speed = np.inf, np.inf
+    ground = loop.ground_acceleration
+    shaking = ground.shape[0] > 0
+    body = gravity.copy()
     g = np.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
+    max_cycles = loop.max_cycles
+    if shaking:
+        g += np.sqrt((ground * ground).sum(axis=1)).max()
+        max_cycles = min(max_cycles, ground.shape[0])  # never read past the series
     lever = 4.0 * blocks.radius.max()
     slack = np.full(nb, -1.0)  # unknown: look at the first cycle
     moved = np.zeros(nb)
-    for cycle in range(loop.max_cycles):
+    for cycle in range(max_cycles):
         measure = cycle % ENERGY_CHECK_EVERY == 0
-        unbalanced, speed, kinetic, travel = step_function(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, measure)
+        if shaking:
+            for k in range(3):
+                body[k] = gravity[k] - ground[cycle, k]
+        unbalanced, speed, kinetic, travel = step_function(state, blocks, sub, joint, body, dt, damping, rot, force, moment, measure)
         ratio = unbalanced / loop.force_scale
         if not (speed < np.inf and (not measure or kinetic <= DIVERGENCE_FACTOR * g * (travel + loop.travel_slack))):
             return cycle + 1, DIVERGED, ratio, speed
@@ -187,4 +207,4 @@ def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neig
             moved[:] = 0.0
             if detection_slack(state, broad_state, neighbours, blocks.radius, loop.absolute_limit, slack) <= 0.0:
                 return cycle + 1, REDETECT, ratio, speed
-    return loop.max_cycles, RUNNING, ratio, speed
+    return max_cycles, RUNNING, ratio, speed

@@ -24,21 +24,26 @@ import numpy as np
 
 from drydem.engine import cycle3d, cycle_planar, diagnostics, loop
 from drydem.engine.contacts import NeighbourList, SubContacts
+from drydem.engine.damping import Damping
 from drydem.engine.inertia import BlockConstants, keep_kinetic_energy, timestep_and_blocks
 from drydem.engine.joints import JointConstants
 from drydem.engine.tracker import ContactTracker
 from drydem.errors import DivergenceError, ModelError
 from drydem.model.assembly import Model
-from drydem.model.parameters import MAX_CYCLES, G
+from drydem.model.parameters import DAMPING, MAX_CYCLES, G, Range, check_fields
 from drydem.model.state import State
 
 #: "numba": compiled, the planar cycle for in-plane models (drydem.engine.cycle_planar), else the
 #: 3D one; "numba-3d": the compiled 3D cycle for every model
 ENGINES = ("numba", "numba-3d")
+#: a damping coefficient or ratio: any finite value >= 0
+NON_NEGATIVE = Range(0.0, None)
 #: cycles run in one call of the kernel loop between progress reports
 CHUNK = 5_000
 #: 1/kg: blocks this heavy keep their velocities through a cycle's forces (Simulation.move)
 IMMOVABLE_INVERSE_MASS = 1e-300
+#: the ground acceleration of a table at rest (LoopSettings.ground_acceleration)
+AT_REST = np.zeros((0, 3))
 
 
 class StepStats(NamedTuple):
@@ -86,6 +91,9 @@ class Simulation:
     ``engine`` is one of ENGINES ("numba", the default, is the fastest) or a function with the
     signature of :func:`drydem.engine.cycle3d.run_cycles` (the tests pass the NumPy oracle).
     ``timestep`` (s) overrides the automatic one; it must not exceed the critical timestep.
+    ``damping`` (:class:`~drydem.engine.damping.Damping`; default: the model's local damping
+    alone, for statics) is what the cycles dissipate energy with; viscous damping shortens the
+    timestep (:func:`drydem.engine.damping.timestep_factor`).
 
     Public arrays: ``state``; ``contacts``, ``neighbours`` and ``active`` (the blocks still in the
     analysis) of the ``tracker``; ``blocks``, the constants the cycle runs with
@@ -93,8 +101,10 @@ class Simulation:
     cycle function; ``cycles`` run so far.
     """
 
-    def __init__(self, model: Model, *, state: State | None = None, engine: str | Callable = "numba", timestep: float | None = None):
+    def __init__(self, model: Model, *, state: State | None = None, engine: str | Callable = "numba", timestep: float | None = None,
+                 damping: Damping | None = None):
         self.model = model
+        self.damping = Damping(model.solver.damping) if damping is None else _checked(damping, model)
         self.state = state.copy() if state is not None else State.at_rest(model.block_centroid)
         self.run_cycles = _cycle_function(model, engine)
         self.tracker = ContactTracker(model, self.state)
@@ -129,13 +139,19 @@ class Simulation:
         """The timestep and block constants for the current contacts; with mass scaling, the
         velocities keep each block's kinetic energy through the change of fictitious masses."""
         dt, blocks = timestep_and_blocks(
-            self.model, self.tracker.contacts, self.tracker.active, fixed_timestep=self._fixed_timestep, scaled_timestep=self._scaled_timestep
+            self.model, self.tracker.contacts, self.tracker.active, fixed_timestep=self._fixed_timestep, scaled_timestep=self._scaled_timestep,
+            damping=self.damping,
         )
         if self.model.solver.mass_scaling:
             self._scaled_timestep = dt
             if self.blocks is not None:
                 keep_kinetic_energy(self.state, self.blocks, blocks)
         self.timestep, self.blocks = dt, blocks
+
+    def use_damping(self, damping: Damping) -> None:
+        """Cycle on with ``damping`` (the timestep follows: dashpots shorten it)."""
+        self.damping = _checked(damping, self.model)
+        self._update_inertia()
 
     def remove_blocks(self, blocks) -> None:
         """Take blocks out of the analysis (e.g. bricks that fell out of the wall): they stop
@@ -186,9 +202,19 @@ class Simulation:
         self.state.velocity[:] = 0.0
         self.state.angular_velocity[:] = 0.0
 
-    def cycle(self, n: int, *, gravity=(0.0, 0.0, -G)) -> EquilibriumResult:
-        """Run exactly ``n`` cycles (re-detecting contacts as needed), no equilibrium test."""
-        return self._run(gravity, n, criterion=loop.RATIO, limit=-1.0, criterion_name="none")
+    def cycle(self, n: int, *, gravity=(0.0, 0.0, -G), ground_acceleration: np.ndarray | None = None,
+              stop: Callable[[], bool] | None = None) -> EquilibriumResult:
+        """Run ``n`` cycles (re-detecting contacts as needed), no equilibrium test; ``stop()``
+        as in :meth:`cycle_to_equilibrium`.
+
+        ``ground_acceleration`` (n, 3) m/s2: the table's acceleration at each of the cycles; the
+        blocks then move in the frame of the table (:func:`drydem.engine.loop.cycle_loop`), so
+        their positions and velocities are relative to it."""
+        if ground_acceleration is not None:
+            ground_acceleration = np.ascontiguousarray(ground_acceleration, dtype=float)
+            if ground_acceleration.shape != (n, 3) or not np.all(np.isfinite(ground_acceleration)):
+                raise ModelError(f"ground_acceleration must be a finite ({n}, 3) array in m/s2, got shape {ground_acceleration.shape}")
+        return self._run(gravity, n, criterion=loop.RATIO, limit=-1.0, criterion_name="none", ground=ground_acceleration, stop=stop)
 
     def cycle_to_equilibrium(
         self, *, gravity=(0.0, 0.0, -G), max_cycles: int | None = None, progress: Callable[[int, StepStats], None] | None = None,
@@ -214,6 +240,7 @@ class Simulation:
     def _run(
         self, gravity, max_cycles: int, *, criterion: int, limit: float, criterion_name: str, progress=None,
         travel_slack: float | None = None, blocks: BlockConstants | None = None, stop: Callable[[], bool] | None = None,
+        ground: np.ndarray | None = None,
     ) -> EquilibriumResult:
         m = self.model
         g = np.asarray(gravity, dtype=float)
@@ -229,9 +256,10 @@ class Simulation:
         done, detections = 0, 0
         code, stats = loop.RUNNING, StepStats(np.inf, np.inf)
         while done < max_cycles:
+            chunk = min(CHUNK, max_cycles - done)
             settings = loop.LoopSettings(
-                g, self.timestep, m.solver.damping, min(CHUNK, max_cycles - done), criterion, limit, max(weight, 1e-300),
-                travel_slack, self.tracker.absolute_limit,
+                g, self.timestep, self.damping, chunk, criterion, limit, max(weight, 1e-300), travel_slack, self.tracker.absolute_limit,
+                AT_REST if ground is None else ground[done:done + chunk],
             )
             tracker = self.tracker
             n, code, ratio, speed = self.run_cycles(self.state, blocks or self.blocks, tracker.contacts, joint, settings, tracker.broad_state, tracker.neighbours)
@@ -264,6 +292,15 @@ class Simulation:
     def reactions(self, block: int) -> np.ndarray:
         """Total contact force (N, world frame) that the other blocks exert on ``block``."""
         return diagnostics.reactions(self.state, self.contacts, block)
+
+
+def _checked(damping: Damping, model: Model) -> Damping:
+    """``damping`` as floats, or a ModelError naming each coefficient out of its range."""
+    if not isinstance(damping, Damping):
+        raise ModelError(f"{model.source}: damping must be a drydem.engine.damping.Damping, got {damping!r}")
+    rules = {"local": DAMPING, "contact_ratio": NON_NEGATIVE, "stiffness_proportional": NON_NEGATIVE, "mass_proportional": NON_NEGATIVE}
+    check_fields(damping, rules, f"{model.source}: damping")
+    return Damping(*(float(value) for value in damping))
 
 
 def _cycle_function(model: Model, engine: str | Callable) -> Callable:

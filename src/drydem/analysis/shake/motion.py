@@ -1,0 +1,395 @@
+"""The ground motion of ``drydem shake``: the shaking table's acceleration history.
+
+A :class:`GroundMotion` is sampled at times ``time_s`` (s, strictly increasing from 0) with the
+table's acceleration ``acceleration_m_s2`` (m/s2, x, y, z components). It comes from a file
+(:func:`read_motion`: a CSV table, :func:`read_csv_motion`, or a PEER NGA ``.AT2`` record,
+:func:`read_at2`) or from an analytic pulse (:func:`pulse`), and gives the explicit engine one
+acceleration per cycle (:meth:`GroundMotion.per_cycle`).
+
+Every bad input is a :class:`~drydem.errors.ModelError` naming the file (and line) or the
+parameter, and the rule it breaks.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+from dataclasses import dataclass, replace
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+from scipy.integrate import cumulative_trapezoid, trapezoid
+
+from drydem.errors import ModelError
+from drydem.model.parameters import G, OneOf, Range, Rule, check_fields
+
+#: the analytic pulses of :func:`pulse`
+PULSES = ("one-sine", "sine", "ricker")
+#: the table's axes, in the order of the acceleration's columns
+DIRECTIONS = ("x", "y", "z")
+#: the columns of a CSV motion: time, then the acceleration along each of DIRECTIONS
+TIME_COLUMN = "time_s"
+ACCELERATION_COLUMNS = ("acc_x_m_s2", "acc_y_m_s2", "acc_z_m_s2")
+#: the suffixes :func:`read_motion` knows (lower case)
+SUFFIXES = (".csv", ".at2")
+
+#: any finite real: a negative scale factor or amplitude flips the motion
+REAL = Range(None, None)
+#: s: the explicit timestep
+TIMESTEP = Range(0.0, None, low_open=True, unit="s")
+#: a number of cycles
+COUNT = Range(0, None, integer=True)
+#: s, a time in the analysis
+START = Range(0.0, None, unit="s")
+
+#: the rule of each argument of :func:`pulse`
+PULSE_RULES = {
+    "kind": OneOf(PULSES),
+    "amplitude_m_s2": Range(None, None, unit="m/s2"),
+    "frequency_hz": Range(0.0, None, low_open=True, unit="Hz"),
+    # 1000 periods are a stationary test, no pulse; the bound keeps the record below 1e7 samples
+    "cycles": Range(1, 1000, integer=True),
+    "direction": OneOf(DIRECTIONS),
+    # below 20 samples a period, linear interpolation between samples misses a peak by more
+    # than 1 - cos(pi / 20) = 1.2 %; beyond 10,000 the miss (5e-8) is far below any record's
+    "samples_per_period": Range(20, 10_000, integer=True),
+}
+
+
+def _check(where: str, rules: dict[str, Rule], **values) -> None:
+    """One ModelError naming ``WHERE NAME = VALUE`` and the rule for each value breaking its rule."""
+    check_fields(SimpleNamespace(**values), rules, where)
+
+
+@dataclass(frozen=True, eq=False)
+class GroundMotion:
+    """The shaking table's acceleration history.
+
+    time_s : (n,) sample times, s: strictly increasing, from 0; n >= 2.
+    acceleration_m_s2 : (n, 3) the table's acceleration at each sample, m/s2 (x, y, z).
+    name : the file name or the pulse's description, for messages and reports.
+
+    Both arrays are stored as read-only float copies. Between samples the acceleration is
+    linear; after the last one the table moves freely (zero acceleration).
+    """
+
+    time_s: np.ndarray
+    acceleration_m_s2: np.ndarray
+    name: str
+
+    def __post_init__(self):
+        try:
+            time = np.array(self.time_s, dtype=float)
+            acceleration = np.array(self.acceleration_m_s2, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise ModelError(f"{self.name}: the times and accelerations must be numbers ({exc})") from None
+        problem = _samples_problem(time, acceleration)
+        if problem is not None:
+            raise ModelError(f"{self.name}: {problem}")
+        time.flags.writeable = acceleration.flags.writeable = False
+        object.__setattr__(self, "time_s", time)
+        object.__setattr__(self, "acceleration_m_s2", acceleration)
+
+    @property
+    def duration_s(self) -> float:
+        """The last sample's time, s."""
+        return float(self.time_s[-1])
+
+    @property
+    def peaks_m_s2(self) -> tuple[float, float, float]:
+        """The peak |acceleration| of each component (x, y, z), m/s2."""
+        return tuple(float(peak) for peak in np.abs(self.acceleration_m_s2).max(axis=0))
+
+    @property
+    def pga_m_s2(self) -> float:
+        """Peak horizontal acceleration, m/s2: max over the samples of sqrt(a_x^2 + a_y^2)."""
+        return float(np.hypot(self.acceleration_m_s2[:, 0], self.acceleration_m_s2[:, 1]).max())
+
+    @property
+    def pga_g(self) -> float:
+        """Peak horizontal acceleration in units of g (:data:`~drydem.model.parameters.G`)."""
+        return self.pga_m_s2 / G
+
+    def scaled(self, factor: float) -> GroundMotion:
+        """The motion with every acceleration times ``factor`` (any finite real: 0 is a table at
+        rest, a negative factor flips the motion)."""
+        REAL.check(factor, f"{self.name}: scale factor")
+        return replace(self, acceleration_m_s2=self.acceleration_m_s2 * factor, name=f"{self.name} x {factor:g}")
+
+    def velocity_m_s(self) -> np.ndarray:
+        """(n, 3) the table's velocity at each sample, m/s: v(t_i) = sum over j < i of
+        (a_j + a_(j+1)) / 2 (t_(j+1) - t_j), from rest (the trapezoidal rule)."""
+        return cumulative_trapezoid(self.acceleration_m_s2, self.time_s, axis=0, initial=0.0)
+
+    def displacement_m(self) -> np.ndarray:
+        """(n, 3) the table's displacement at each sample, m: the velocity
+        (:meth:`velocity_m_s`) integrated in the same way, from 0."""
+        return cumulative_trapezoid(self.velocity_m_s(), self.time_s, axis=0, initial=0.0)
+
+    def baseline_corrected(self) -> GroundMotion:
+        """The motion less a linear baseline that brings the table to rest at the record's end.
+
+        Each component's acceleration becomes a(t) - (c0 + c1 t / T), T the duration, with c0
+        and c1 the one solution of the two linear conditions that the table's final velocity and
+        final displacement, integrated from the samples as :meth:`velocity_m_s` and
+        :meth:`displacement_m` do, are both zero. A polynomial baseline fitted to the
+        acceleration is the classic correction of strong-motion records; see Boore (2001),
+        "Effect of baseline corrections on displacements and response spectra for several
+        recordings of the 1999 Chi-Chi, Taiwan, earthquake", BSSA 91(5), 1199-1211, and Boore &
+        Bommer (2005), "Processing of strong-motion accelerograms: needs, options and
+        consequences", Soil Dyn. Earthq. Eng. 25, 93-115. Here the baseline is fixed by the end
+        conditions instead of a least-squares fit, as for shaking-table drive signals, whose
+        stroke must come back to its start.
+
+        The baseline shifts every sample, so the PGA changes, by at most the baseline's peak
+        max(|c0|, |c0 + c1|): slightly for a record that nearly ends at rest. A record that
+        already ends at rest (zero final velocity and displacement) has c0 = c1 = 0 and is left
+        unchanged up to round-off. Needs 3 samples or more (with 2 the conditions are dependent).
+        """
+        if self.time_s.size < 3:
+            raise ModelError(f"{self.name}: a baseline correction needs at least 3 samples; the record has {self.time_s.size}")
+        basis = np.stack([np.ones_like(self.time_s), self.time_s / self.duration_s], axis=1)
+        coefficients = np.linalg.solve(self._final_state(basis), self._final_state(self.acceleration_m_s2))
+        return replace(self, acceleration_m_s2=self.acceleration_m_s2 - basis @ coefficients,
+                       name=f"{self.name}, baseline-corrected")
+
+    def _final_state(self, acceleration: np.ndarray) -> np.ndarray:
+        """(2, k) the final velocity (row 0) and displacement (row 1) of each of the k columns
+        of ``acceleration`` (n, k), integrated as :meth:`velocity_m_s` and :meth:`displacement_m`."""
+        velocity = cumulative_trapezoid(acceleration, self.time_s, axis=0, initial=0.0)
+        return np.stack([velocity[-1], trapezoid(velocity, self.time_s, axis=0)])
+
+    def per_cycle(self, dt_s: float, cycles: int, start_s: float = 0.0) -> np.ndarray:
+        """(cycles, 3) the table's acceleration at each explicit cycle, m/s2.
+
+        Row k is the acceleration at t = start_s + k dt_s: the central-difference update of a
+        cycle takes the velocity from t - dt/2 to t + dt/2 with the forces at t (the cycle
+        starting at ``start_s`` s first). The record is interpolated linearly between samples
+        (exact at the sample times) and is zero after its end, where the table moves freely.
+        """
+        _check("per_cycle", {"dt_s": TIMESTEP, "cycles": COUNT, "start_s": START},
+               dt_s=dt_s, cycles=cycles, start_s=start_s)
+        times = start_s + np.arange(cycles) * dt_s
+        return np.stack([np.interp(times, self.time_s, component, right=0.0)
+                         for component in self.acceleration_m_s2.T], axis=1)
+
+
+def _samples_problem(time: np.ndarray, acceleration: np.ndarray) -> str | None:
+    """What is wrong with a motion's samples (the rules of :class:`GroundMotion`), or None."""
+    if time.ndim != 1 or time.size < 2:
+        return f"time_s must be a list of at least 2 times; got shape {time.shape}"
+    if acceleration.shape != (time.size, 3):
+        return f"acceleration_m_s2 must have shape ({time.size}, 3), one x, y, z row per time; got {acceleration.shape}"
+    if not (np.isfinite(time).all() and np.isfinite(acceleration).all()):
+        return "the times and accelerations must be finite numbers (no NaN or infinity)"
+    if time[0] != 0.0:
+        return f"time_s must start at 0 s; it starts at {time[0]:g} s"
+    steps = np.diff(time)
+    if (steps <= 0.0).any():
+        i = int(np.argmax(steps <= 0.0)) + 1
+        return f"time_s must increase strictly; sample {i} (t = {time[i]:g} s) is not after sample {i - 1} (t = {time[i - 1]:g} s)"
+    return None
+
+
+def _check_file(path: Path, kind: str) -> None:
+    """A ModelError naming ``path`` if it is a folder or missing."""
+    if path.is_dir():
+        raise ModelError(f"{path}: is a folder, not a {kind} file")
+    if not path.exists():
+        raise ModelError(f"{path}: no such file")
+
+
+def _read_text(path: Path, kind: str, encoding: str) -> str:
+    """The text of ``path``; a ModelError naming it if it is missing, a folder or unreadable."""
+    _check_file(path, kind)
+    try:
+        return path.read_text(encoding=encoding)
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read the file ({exc.strerror})") from None
+    except UnicodeDecodeError as exc:
+        raise ModelError(f"{path}: not a text file (byte {exc.start} is not UTF-8); a {kind} file is text") from None
+
+
+def _number(text: str, where: str) -> float:
+    """``text`` as a finite float; else a ModelError ``WHERE: 'TEXT' is not a (finite) number``."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise ModelError(f"{where}: {text.strip()!r} is not a number") from None
+    if not math.isfinite(value):
+        raise ModelError(f"{where}: {text.strip()!r} is not a finite number")
+    return value
+
+
+def _checked_times(path: Path, time: np.ndarray, lines: list[int]) -> np.ndarray:
+    """The times of a file's samples (read on ``lines``) shifted to start at 0; a ModelError
+    naming the file and line if one is negative or not after the one before."""
+    if time[0] < 0.0:
+        raise ModelError(f"{path}: line {lines[0]}: time_s = {time[0]:g}: times must be >= 0 s")
+    late = np.flatnonzero(np.diff(time) <= 0.0)
+    if late.size:
+        i = int(late[0]) + 1
+        raise ModelError(f"{path}: line {lines[i]}: time_s = {time[i]:g} is not after {time[i - 1]:g} "
+                         f"(line {lines[i - 1]}): times must increase strictly")
+    return time - time[0]
+
+
+def read_csv_motion(path: str | Path) -> GroundMotion:
+    """A motion from a CSV table: a header naming the columns ``time_s`` (s) and
+    ``acc_x_m_s2`` (m/s2), and optionally ``acc_y_m_s2`` and ``acc_z_m_s2``, in any order
+    (a missing one is zero); then one row of finite numbers per sample, at least 2, the times
+    strictly increasing from 0 or later (a record starting at t0 > 0 is shifted to start at 0).
+    Blank lines are skipped. A ModelError names the file, the line and the rule broken."""
+    path = Path(path)
+    rows = csv.reader(_read_text(path, "CSV motion", "utf-8-sig").splitlines())
+    header = [name.strip() for name in next(rows, [])]
+    present = _present_columns(path, header)
+    samples, lines = [], []
+    for row in rows:
+        if not any(cell.strip() for cell in row):
+            continue
+        if len(row) != len(header):
+            raise ModelError(f"{path}: line {rows.line_num}: {len(row)} values; the header has {len(header)} columns")
+        samples.append([_number(row[header.index(name)], f"{path}: line {rows.line_num}: {name}") for name in present])
+        lines.append(rows.line_num)
+    if len(samples) < 2:
+        raise ModelError(f"{path}: {len(samples)} rows of samples; a motion needs at least 2")
+    table = np.array(samples)
+    acceleration = np.zeros((len(samples), 3))
+    for column, name in enumerate(present[1:], start=1):
+        acceleration[:, ACCELERATION_COLUMNS.index(name)] = table[:, column]
+    return GroundMotion(_checked_times(path, table[:, 0], lines), acceleration, path.name)
+
+
+def _present_columns(path: Path, header: list[str]) -> list[str]:
+    """The known columns ``header`` names, time first, then the accelerations along x, y, z;
+    a ModelError naming the file if a column is missing, unknown or repeated."""
+    expected = f"expected the columns {TIME_COLUMN}, {ACCELERATION_COLUMNS[0]} and optionally {', '.join(ACCELERATION_COLUMNS[1:])}"
+    if not header:
+        raise ModelError(f"{path}: empty: no header line; {expected}")
+    known = (TIME_COLUMN, *ACCELERATION_COLUMNS)
+    unknown = [name for name in header if name not in known]
+    repeated = sorted({name for name in header if header.count(name) > 1})
+    missing = [name for name in known[:2] if name not in header]
+    for problem, names in (("unknown columns", unknown), ("repeated columns", repeated), ("missing columns", missing)):
+        if names:
+            raise ModelError(f"{path}: line 1: {problem} {', '.join(map(repr, names))}; {expected}")
+    return [name for name in known if name in header]
+
+
+#: line 4 of a PEER NGA .AT2 file: ``NPTS=  5590, DT=   .0050 SEC`` (NGA-West2) or
+#: ``5590    0.0050    NPTS, DT`` (the older NGA files)
+AT2_NPTS_DT = (re.compile(r"NPTS\s*=\s*(\S+?)\s*,?\s*DT\s*=\s*(\S+?)(?:\s*SECS?)?\s*,?\s*$", re.IGNORECASE),
+               re.compile(r"^\s*(\S+)\s+(\S+)\s+NPTS\s*,\s*DT\b", re.IGNORECASE))
+#: line 3 of a PEER NGA .AT2 file: ``ACCELERATION TIME SERIES IN UNITS OF G`` (or ``HISTORY``)
+AT2_UNITS = re.compile(r"\bACCELERATION\b.*\bUNITS\s+OF\s+G\b", re.IGNORECASE)
+#: the number of points, at least 2 (a motion's least)
+NPTS = Range(2, None, integer=True)
+
+
+def read_at2(path: str | Path, direction: str = "x") -> GroundMotion:
+    """A motion from a PEER NGA ``.AT2`` record, which drives the table along ``direction``
+    ("x", "y" or "z"; the other components are zero).
+
+    The file has 4 header lines: a title; the event, date, station and component; the units,
+    ``ACCELERATION TIME SERIES IN UNITS OF G``; the number of points and the time step, s, as
+    ``NPTS=  5590, DT=   .0050 SEC`` (NGA-West2; the commas optional) or as
+    ``5590    0.0050    NPTS, DT`` (older files). Then the NPTS accelerations in g, several to
+    a line, sampled every DT from t = 0; they are converted to m/s2 with g = 9.81 m/s2
+    (:data:`~drydem.model.parameters.G`). A ModelError names the file, the line and the rule
+    broken; the count of values must be NPTS (a truncated file is refused)."""
+    path = Path(path)
+    OneOf(DIRECTIONS).check(direction, f"{path}: direction")
+    lines = _read_text(path, "PEER .AT2", "latin-1").splitlines()
+    if len(lines) < 4:
+        raise ModelError(f"{path}: {len(lines)} lines; a PEER .AT2 file has 4 header lines "
+                         "(title; event and station; units; NPTS and DT), then the accelerations")
+    if not AT2_UNITS.search(lines[2]):
+        raise ModelError(f"{path}: line 3: {lines[2].strip()!r}: expected 'ACCELERATION TIME SERIES IN UNITS OF G'")
+    npts, dt_s = _at2_npts_dt(path, lines[3])
+    values = [_number(text, f"{path}: line {number}") for number, line in enumerate(lines[4:], start=5) for text in line.split()]
+    if len(values) != npts:
+        raise ModelError(f"{path}: line 4 gives NPTS = {npts}, but the file holds {len(values)} values"
+                         f"{' (truncated?)' if len(values) < npts else ''}")
+    acceleration = np.zeros((npts, 3))
+    acceleration[:, DIRECTIONS.index(direction)] = np.array(values) * G
+    return GroundMotion(np.arange(npts) * dt_s, acceleration, path.name)
+
+
+def _at2_npts_dt(path: Path, line: str) -> tuple[int, float]:
+    """NPTS and DT (s) from line 4 of an .AT2 file (:data:`AT2_NPTS_DT`); a ModelError naming
+    the file if the line is neither form or NPTS is not an integer >= 2 or DT not > 0."""
+    match = AT2_NPTS_DT[0].search(line) or AT2_NPTS_DT[1].match(line)
+    if match is None:
+        raise ModelError(f"{path}: line 4: {line.strip()!r}: expected 'NPTS=  5590, DT=   .0050 SEC' or '5590    0.0050    NPTS, DT'")
+    npts_text, dt_text = match.groups()
+    npts = int(npts_text) if npts_text.isdigit() else npts_text
+    NPTS.check(npts, f"{path}: line 4: NPTS")
+    dt_s = _number(dt_text, f"{path}: line 4: DT")
+    TIMESTEP.check(dt_s, f"{path}: line 4: DT")
+    return npts, dt_s
+
+
+def read_motion(path: str | Path, direction: str | None = None) -> GroundMotion:
+    """A motion from a file, by its suffix (either case): ``.csv`` (:func:`read_csv_motion`,
+    whose columns say the directions) or ``.at2`` (:func:`read_at2`, along ``direction``,
+    default "x"). A ModelError names the file if it is missing or a folder, if the suffix is
+    another, or if a direction is given for a CSV file."""
+    path = Path(path)
+    _check_file(path, "motion")
+    suffix = path.suffix.lower()
+    if suffix not in SUFFIXES:
+        raise ModelError(f"{path}: unknown motion file type {path.suffix!r}; supported: {', '.join(SUFFIXES)} (either case)")
+    if suffix == ".at2":
+        return read_at2(path, "x" if direction is None else direction)
+    if direction is not None:
+        raise ModelError(f"{path}: direction = {direction!r} applies to a single-component .AT2 record; "
+                         f"a CSV motion gives its directions as columns {', '.join(ACCELERATION_COLUMNS)}")
+    return read_csv_motion(path)
+
+
+def pulse(kind: str, *, amplitude_m_s2: float, frequency_hz: float, cycles: int = 1, direction: str = "x",
+          samples_per_period: int = 200) -> GroundMotion:
+    """An analytic acceleration pulse of amplitude A = ``amplitude_m_s2`` (a negative one
+    pushes the other way) and frequency f = ``frequency_hz`` along ``direction``, sampled at
+    ``samples_per_period`` points per period 1/f (at least; times k dt from 0).
+
+    ``"one-sine"``: a(t) = A sin(2 pi f t), 0 <= t <= 1/f: one full period, ``cycles`` = 1;
+    the one-sine acceleration pulse, type-A cycloidal pulse of Zhang & Makris (2001),
+    "Rocking response of free-standing blocks under cycloidal pulses", J. Eng. Mech. 127(5),
+    473-483. The table ends at zero velocity, v = A / (2 pi f) (1 - cos 2 pi f t), displaced
+    by A / (2 pi f^2).
+
+    ``"sine"``: the same for ``cycles`` whole periods, 0 <= t <= cycles / f: zero final
+    velocity; the displacement drifts, A / (2 pi f) (t - sin(2 pi f t) / (2 pi f)), to
+    A cycles / (2 pi f^2) (:meth:`GroundMotion.baseline_corrected` brings it back).
+
+    ``"ricker"``: a(t) = A (1 - 2 u^2) exp(-u^2), u = pi f (t - t0), t0 = 1.5 / f,
+    0 <= t <= 2 t0 (Ricker 1953, "The form and laws of propagation of seismic wavelets",
+    Geophysics 18(1), 10-40); f is the peak frequency of its spectrum, A the peak at t0. Its
+    ends are -1e-8 A; the table's velocity, A / (pi f) (u exp(-u^2) + u0 exp(-u0^2)) with
+    u0 = 1.5 pi, ends at 2 u0 exp(-u0^2) A / (pi f), and its displacement at
+    2 u0^2 exp(-u0^2) A / (pi f)^2: both within 2e-8 of their peaks, it ends at rest.
+    ``cycles`` must be 1.
+    """
+    _check("pulse", PULSE_RULES, kind=kind, amplitude_m_s2=amplitude_m_s2, frequency_hz=frequency_hz,
+           cycles=cycles, direction=direction, samples_per_period=samples_per_period)
+    if kind != "sine" and cycles != 1:
+        raise ModelError(f"pulse cycles = {cycles}: a {kind} pulse has no cycles to repeat (cycles = 1); "
+                         "use kind 'sine' for several periods")
+    if kind == "ricker":
+        half = math.ceil(1.5 * samples_per_period)  # t0 = 1.5 / f is a sample
+        time = np.arange(2 * half + 1) * (1.5 / frequency_hz / half)
+        u = math.pi * frequency_hz * (time - 1.5 / frequency_hz)
+        values = amplitude_m_s2 * (1.0 - 2.0 * u**2) * np.exp(-(u**2))
+        name = f"ricker pulse {amplitude_m_s2:g} m/s2, {frequency_hz:g} Hz along {direction}"
+    else:
+        time = np.arange(cycles * samples_per_period + 1) / (frequency_hz * samples_per_period)
+        values = amplitude_m_s2 * np.sin(2.0 * math.pi * frequency_hz * time)
+        repeats = f", {cycles} cycles" if kind == "sine" else ""
+        name = f"{kind} pulse {amplitude_m_s2:g} m/s2, {frequency_hz:g} Hz{repeats} along {direction}"
+    acceleration = np.zeros((time.size, 3))
+    acceleration[:, DIRECTIONS.index(direction)] = values
+    return GroundMotion(time, acceleration, name)

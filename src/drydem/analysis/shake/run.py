@@ -1,0 +1,157 @@
+"""One time history on a shaking table: :func:`shake_analysis`.
+
+Stage 1: the model settles under vertical gravity with the static solver (local damping,
+cycled to equilibrium), as the tilting analysis does; a model that cannot stand, or reaches
+no equilibrium within ``max_cycles``, is not shaken (DrydemError saying which).
+
+Stage 2: the time history. Local damping is off; the contacts get their dashpots (the ratio
+given or calibrated to the target restitution, :mod:`drydem.analysis.shake.restitution`) and
+Rayleigh damping if asked (:mod:`drydem.engine.damping`). The table's acceleration a_g(t)
+enters as the inertial body force -m a_g of the table's frame at every cycle
+(:func:`drydem.engine.loop.cycle_loop`): for a rigid table, translating without turning,
+this is the same as moving the fixed blocks, and gives the response relative to the table
+directly. Mass scaling is off (it would change the dynamics). The motion is sampled at
+every cycle (:meth:`~drydem.analysis.shake.motion.GroundMotion.per_cycle`); a change of the
+timestep at a re-detection ends the chunk, so each cycle's time is exact.
+
+A block has fallen when it turned more than ``fall_rotation_deg`` from its orientation at rest
+(overturned), or when its centroid dropped more than ``lost_drop_heights`` of its own heights
+below where it rested (it fell out of the model; it is then taken out of the analysis, as in
+the tilting analysis). The analysis stops when the monitored block has fallen.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+from collections.abc import Callable
+
+import numpy as np
+
+from drydem.analysis.shake.restitution import RockingBlock, calibrated_damping_ratio, housner_restitution
+from drydem.analysis.shake.settings import DURATION, HOUSNER, MONITOR_FELL, History, ShakeFrame, ShakeResult, ShakeSettings
+from drydem.analysis.tilt.settings import monitor_index
+from drydem.engine.damping import Damping
+from drydem.engine.simulation import Simulation
+from drydem.errors import DrydemError
+from drydem.model.assembly import Model
+from drydem.model.rotation import rotation_vectors
+
+#: a chunk shorter than this fraction of a timestep is not run (the end of the analysis)
+TIME_ROUNDING = 1e-6
+
+
+def shake_analysis(
+    model: Model, settings: ShakeSettings, *, on_progress: Callable[[float, int, float], None] | None = None,
+    on_frame: Callable[[ShakeFrame], None] | None = None,
+) -> ShakeResult:
+    """The time history of ``model`` under ``settings.motion`` (module docstring).
+
+    ``on_progress(time_s, cycles, rotation_rad)`` and ``on_frame(frame)`` are called at every
+    output interval."""
+    start = time.perf_counter()
+    if model.solver.mass_scaling:
+        model = model.replace(solver=replace(model.solver, mass_scaling=False))
+    monitor = monitor_index(model, settings.monitor)
+    sim = Simulation(model)
+    settled = sim.cycle_to_equilibrium()
+    if not settled.converged:
+        raise DrydemError(f"{model.source}: no equilibrium under gravity within {settled.cycles} cycles: the shaking starts "
+                          "from rest, so it was not run (raise [solver] max_cycles)")
+    ratio, restitution = damping_ratio(model, monitor, settings)
+    sim.use_damping(Damping(0.0, ratio, settings.rayleigh_stiffness_s, settings.rayleigh_mass_per_s))
+    shaking = Shaking(sim, monitor, settings)
+    shaking.run(on_progress, on_frame)
+    return shaking.result(ratio, restitution, time.perf_counter() - start)
+
+
+def damping_ratio(model: Model, monitor: int, settings: ShakeSettings) -> tuple[float, float | None]:
+    """The contacts' damping ratio zeta and the restitution it gives (None when zeta is set)."""
+    target = settings.target_restitution
+    if target is None:
+        return settings.contact_damping_ratio, None
+    if target == HOUSNER:
+        target = housner_restitution(RockingBlock.of(model, monitor).alpha_rad)
+    return calibrated_damping_ratio(model, monitor, target), target
+
+
+class Shaking:
+    """Stage 2 as it runs: the Simulation at rest under gravity, the monitored block, the rest
+    state the response is measured from, the history's rows and the blocks fallen so far."""
+
+    def __init__(self, sim: Simulation, monitor: int, settings: ShakeSettings):
+        self.sim, self.monitor, self.settings = sim, monitor, settings
+        self.rest = sim.state.copy()
+        self.start_cycles = sim.cycles
+        self.timestep = sim.timestep
+        model = sim.model
+        heights = np.array([np.ptp(shape.vertices[:, 2]) for shape in model.block_shape])
+        self.lost_drop = settings.lost_drop_heights * heights
+        self.fall_rotation = np.radians(settings.fall_rotation_deg)
+        self.fallen: list[tuple[str, float, str]] = []
+        self.ended_by = DURATION
+        self.time_s = 0.0
+        self.rows: list[tuple[float, np.ndarray, np.ndarray, float]] = []
+        self._record(np.zeros(3))
+
+    def run(self, on_progress, on_frame) -> None:
+        """Cycle to the analysed time, one output interval at a time."""
+        settings, sim = self.settings, self.sim
+        end = settings.analysed_s
+        next_output = settings.output_interval_s
+        while self.time_s < end - TIME_ROUNDING * sim.timestep:
+            dt = sim.timestep
+            cycles = max(1, int(round((min(next_output, end) - self.time_s) / dt)))
+            ground = settings.motion.per_cycle(dt, cycles, self.time_s)
+            run = sim.cycle(cycles, ground_acceleration=ground, stop=lambda: sim.timestep != dt)
+            self.time_s += run.cycles * dt
+            if self.time_s < next_output - 0.5 * dt:
+                continue
+            next_output += settings.output_interval_s
+            self._record(ground[run.cycles - 1])
+            if on_progress is not None:
+                on_progress(self.time_s, sim.cycles, self.rows[-1][3])
+            if on_frame is not None:
+                on_frame(ShakeFrame(self.time_s, self.rows[-1][2][0], sim.state.copy(), sim.contacts.copy(), sim.active.copy()))
+            if self._falls():
+                self.ended_by = MONITOR_FELL
+                return
+
+    def _record(self, ground: np.ndarray) -> None:
+        """A row of the history: time, table acceleration, the monitored block's displacement
+        and rotation about y."""
+        b = self.monitor
+        moved = self.sim.state.position[b] - self.rest.position[b]
+        turn = rotation_vectors(self.rest.quaternion[b:b + 1], self.sim.state.quaternion[b:b + 1])[0, 1]
+        self.rows.append((self.time_s, np.array(ground, dtype=float), moved, float(turn)))
+
+    def _falls(self) -> bool:
+        """Note the blocks that fell since the last look, take out those that dropped out of the
+        model; whether the monitored block fell."""
+        sim, model = self.sim, self.sim.model
+        named = {name for name, _, _ in self.fallen}
+        turned = np.linalg.norm(rotation_vectors(self.rest.quaternion, sim.state.quaternion), axis=1) > self.fall_rotation
+        dropped = self.rest.position[:, 2] - sim.state.position[:, 2] > self.lost_drop
+        candidates = model.block_movable & sim.active
+        for rule, hit in ((f"turned more than {self.settings.fall_rotation_deg:g} deg", turned), ("dropped out of the model", dropped)):
+            self.fallen += [(model.block_name[b], self.time_s, rule) for b in np.flatnonzero(hit & candidates) if model.block_name[b] not in named]
+            named |= {model.block_name[b] for b in np.flatnonzero(hit & candidates)}
+        out = np.flatnonzero(dropped & candidates)
+        if self.monitor in out or turned[self.monitor]:
+            return True
+        if out.size:
+            sim.remove_blocks(out)
+        return False
+
+    def result(self, ratio: float, restitution: float | None, runtime_s: float) -> ShakeResult:
+        """The :class:`ShakeResult` of the history run."""
+        times, ground, moved, turn = (np.array(column) for column in zip(*self.rows))
+        history = History(times, ground, moved[:, 0], moved[:, 1], moved[:, 2], turn)
+        horizontal = np.hypot(history.ux_m, history.uy_m)
+        return ShakeResult(
+            settings=self.settings, monitored_block=self.sim.model.block_name[self.monitor], overturned=bool(self.fallen),
+            fallen_blocks=list(self.fallen), max_rotation_rad=float(np.abs(turn).max()), max_displacement_m=float(horizontal.max()),
+            residual_displacement_m=float(horizontal[-1]), duration_s=float(self.time_s), cycles=self.sim.cycles - self.start_cycles,
+            runtime_s=runtime_s, contact_damping_ratio=ratio, restitution=restitution, timestep_s=self.timestep,
+            ended_by=self.ended_by, history=history, final_state=self.sim.state.copy(),
+        )

@@ -1,0 +1,389 @@
+"""The ground motion of ``drydem shake``: CSV and PEER .AT2 records, analytic pulses, baseline
+correction, scaling and the acceleration handed to each explicit cycle."""
+
+import math
+
+import numpy as np
+import pytest
+
+from drydem.analysis.shake.motion import PULSES, GroundMotion, pulse, read_at2, read_csv_motion, read_motion
+from drydem.errors import ModelError
+from drydem.model.parameters import G
+
+#: a synthetic record in the NGA-West2 layout: 7 values in g, 5 to a line, DT = 0.005 s
+AT2_VALUES_G = (0.0063, 0.00364, 0.00099, -0.0018, 0.0107, -0.02, 0.5)
+AT2_BODY = ("  .6300000E-02  .3640000E-02  .9900000E-03 -.1800000E-02  .1070000E-01\n"
+            " -.2000000E-01  .5000000E+00\n")
+AT2_NEW = ("PEER NGA STRONG MOTION DATABASE RECORD\n"
+           "Synthetic event, 1/1/2000, Test station, 090\n"
+           "ACCELERATION TIME SERIES IN UNITS OF G\n"
+           "NPTS=     7, DT=   .0050 SEC\n") + AT2_BODY
+#: the same record in the older NGA layout (NPTS and DT first, then their names)
+AT2_OLD = ("PEER STRONG MOTION DATABASE RECORD. PROCESSING BY PACIFIC ENGINEERING.\n"
+           "SYNTHETIC 1/1/00 0000, TEST STATION, 090\n"
+           "ACCELERATION TIME HISTORY IN UNITS OF G\n"
+           "    7   0.0050    NPTS, DT\n") + AT2_BODY
+
+
+def written(tmp_path, name: str, text: str):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def refused(call, *messages: str):
+    """``call()`` must raise a ModelError saying each of ``messages``."""
+    with pytest.raises(ModelError) as error:
+        call()
+    for message in messages:
+        assert message in str(error.value)
+
+
+def motion(time_s, acceleration_x_m_s2, acceleration_y_m_s2=0.0) -> GroundMotion:
+    acceleration = np.zeros((len(time_s), 3))
+    acceleration[:, 0], acceleration[:, 1] = acceleration_x_m_s2, acceleration_y_m_s2
+    return GroundMotion(np.asarray(time_s, float), acceleration, "test record")
+
+
+# ---------------------------------------------------------------- CSV
+
+
+def test_a_csv_motion_reads_back_the_numbers_written(tmp_path):
+    rng = np.random.default_rng(1)
+    time = np.concatenate([[0.0], np.cumsum(rng.uniform(0.001, 0.02, 49))])  # strictly increasing from 0
+    acceleration = rng.normal(0.0, 2.0, (50, 3))
+    rows = "".join(",".join(repr(float(x)) for x in (t, *a)) + "\n" for t, a in zip(time, acceleration))
+    path = written(tmp_path, "table.csv", "time_s,acc_x_m_s2,acc_y_m_s2,acc_z_m_s2\n" + rows)
+    read = read_csv_motion(path)
+    np.testing.assert_array_equal(read.time_s, time)  # repr writes a float exactly
+    np.testing.assert_array_equal(read.acceleration_m_s2, acceleration)
+    assert read.name == "table.csv"
+    assert read_motion(path).acceleration_m_s2.shape == (50, 3)
+
+
+def test_csv_columns_come_in_any_order_and_a_missing_component_is_zero(tmp_path):
+    path = written(tmp_path, "two.csv", " acc_y_m_s2 , time_s, acc_x_m_s2\n0.5,0,1\n-0.5,0.01,2\n")
+    read = read_csv_motion(path)
+    np.testing.assert_array_equal(read.acceleration_m_s2, [[1.0, 0.5, 0.0], [2.0, -0.5, 0.0]])
+    np.testing.assert_array_equal(read.time_s, [0.0, 0.01])
+
+
+def test_a_csv_from_a_spreadsheet_with_bom_crlf_and_blank_lines_reads(tmp_path):
+    path = tmp_path / "excel.csv"
+    path.write_bytes(b"\xef\xbb\xbftime_s,acc_x_m_s2\r\n0,1\r\n\r\n0.1,2\r\n\r\n")
+    np.testing.assert_array_equal(read_motion(path).acceleration_m_s2[:, 0], [1.0, 2.0])
+
+
+def test_a_csv_record_starting_after_zero_is_shifted_to_start_at_zero(tmp_path):
+    path = written(tmp_path, "late.csv", "time_s,acc_x_m_s2\n2.0,1\n2.5,2\n3.0,3\n")
+    read = read_csv_motion(path)
+    np.testing.assert_array_equal(read.time_s, [0.0, 0.5, 1.0])  # 2.0, 2.5, 3.0 less 2.0: exact
+    assert read.duration_s == 1.0
+
+
+@pytest.mark.parametrize("name, text, message", [
+    ("notime.csv", "acc_x_m_s2,acc_y_m_s2\n1,2\n3,4\n", "line 1: missing columns 'time_s'"),
+    ("nox.csv", "time_s,acc_y_m_s2\n0,2\n1,4\n", "line 1: missing columns 'acc_x_m_s2'"),
+    ("extra.csv", "time_s,acc_x_m_s2,acc_w_m_s2,notes\n0,1,2,a\n1,3,4,b\n", "line 1: unknown columns 'acc_w_m_s2', 'notes'"),
+    ("twice.csv", "time_s,acc_x_m_s2,acc_x_m_s2\n0,1,2\n1,3,4\n", "line 1: repeated columns 'acc_x_m_s2'"),
+    ("word.csv", "time_s,acc_x_m_s2\n0,1\n0.1,one\n", "line 3: acc_x_m_s2: 'one' is not a number"),
+    ("nan.csv", "time_s,acc_x_m_s2\n0,1\n0.1,nan\n", "line 3: acc_x_m_s2: 'nan' is not a finite number"),
+    ("inf.csv", "time_s,acc_x_m_s2\n0,1\ninf,2\n", "line 3: time_s: 'inf' is not a finite number"),
+    ("short.csv", "time_s,acc_x_m_s2\n0,1\n0.1\n", "line 3: 1 values; the header has 2 columns"),
+    ("back.csv", "time_s,acc_x_m_s2\n0,1\n0.2,2\n0.1,3\n", "line 4: time_s = 0.1 is not after 0.2 (line 3): times must increase strictly"),
+    ("same.csv", "time_s,acc_x_m_s2\n0,1\n0,2\n", "line 3: time_s = 0 is not after 0 (line 2)"),
+    ("negative.csv", "time_s,acc_x_m_s2\n-0.1,1\n0,2\n", "line 2: time_s = -0.1: times must be >= 0 s"),
+    ("one.csv", "time_s,acc_x_m_s2\n0,1\n", "1 rows of samples; a motion needs at least 2"),
+    ("header.csv", "time_s,acc_x_m_s2\n", "0 rows of samples; a motion needs at least 2"),
+    ("empty.csv", "", "empty: no header line; expected the columns time_s, acc_x_m_s2"),
+])
+def test_a_bad_csv_motion_is_refused_naming_the_file_and_the_problem(tmp_path, name, text, message):
+    path = written(tmp_path, name, text)
+    refused(lambda: read_motion(path), f"{path}: ", message)
+
+
+def test_a_binary_file_named_csv_is_refused(tmp_path):
+    path = tmp_path / "binary.csv"
+    path.write_bytes(b"\xff\xfe\x00\x01")
+    refused(lambda: read_motion(path), f"{path}: not a text file")
+
+
+def test_a_folder_a_missing_file_and_an_unknown_suffix_are_refused(tmp_path):
+    folder = tmp_path / "record.csv"
+    folder.mkdir()
+    refused(lambda: read_motion(folder), f"{folder}: is a folder")
+    refused(lambda: read_csv_motion(folder), f"{folder}: is a folder")
+    refused(lambda: read_motion(tmp_path / "gone.at2"), f"{tmp_path / 'gone.at2'}: no such file")
+    refused(lambda: read_at2(tmp_path / "gone.at2"), "gone.at2: no such file")
+    text = written(tmp_path, "record.txt", "time_s,acc_x_m_s2\n0,1\n1,2\n")
+    refused(lambda: read_motion(text), f"{text}: unknown motion file type '.txt'; supported: .csv, .at2")
+
+
+def test_a_direction_is_refused_for_a_csv_motion(tmp_path):
+    path = written(tmp_path, "xy.csv", "time_s,acc_x_m_s2\n0,1\n1,2\n")
+    refused(lambda: read_motion(path, direction="y"), f"{path}: direction = 'y' applies to a single-component .AT2 record")
+
+
+# ---------------------------------------------------------------- PEER .AT2
+
+
+@pytest.mark.parametrize("text", [AT2_NEW, AT2_NEW.replace("SEC\n", "SEC,\n").replace("   .0050", " 0.005"),
+                                  AT2_NEW.replace("NPTS=     7, DT=   .0050 SEC", "NPTS=7 DT=.005SEC"), AT2_OLD],
+                         ids=["nga-west2", "trailing-comma", "no-comma", "old-nga"])
+def test_an_at2_record_reads_in_either_header_style_with_g_converted_to_m_s2(tmp_path, text):
+    read = read_motion(written(tmp_path, "RSN1_TEST090.AT2", text))
+    # a_i = value_i (g) x 9.81 m/s2 per g, along x only
+    np.testing.assert_allclose(read.acceleration_m_s2[:, 0], np.array(AT2_VALUES_G) * 9.81, rtol=1e-15)
+    assert G == 9.81
+    assert not read.acceleration_m_s2[:, 1:].any()
+    np.testing.assert_allclose(read.time_s, np.arange(7) * 0.005, rtol=1e-15)  # t_k = k DT
+    assert read.duration_s == pytest.approx(0.03)  # (NPTS - 1) DT = 6 x 0.005
+    assert read.pga_g == pytest.approx(0.5)  # the largest |value|, in g
+    assert read.name == "RSN1_TEST090.AT2"
+
+
+@pytest.mark.parametrize("direction, axis", [("y", 1), ("z", 2)])
+def test_an_at2_record_drives_the_direction_asked_for(tmp_path, direction, axis):
+    path = written(tmp_path, "r.at2", AT2_NEW)
+    read = read_motion(path, direction=direction)
+    np.testing.assert_allclose(read.acceleration_m_s2[:, axis], np.array(AT2_VALUES_G) * G, rtol=1e-15)
+    assert np.count_nonzero(read.acceleration_m_s2) == np.count_nonzero(AT2_VALUES_G)
+
+
+@pytest.mark.parametrize("text, message", [
+    (AT2_NEW.replace(" -.2000000E-01  .5000000E+00\n", ""), "line 4 gives NPTS = 7, but the file holds 5 values (truncated?)"),
+    (AT2_NEW + "  .1000000E-01\n", "line 4 gives NPTS = 7, but the file holds 8 values"),
+    (AT2_NEW.replace("UNITS OF G", "UNITS OF CM/S").replace("ACCELERATION", "VELOCITY"),
+     "line 3: 'VELOCITY TIME SERIES IN UNITS OF CM/S': expected 'ACCELERATION TIME SERIES IN UNITS OF G'"),
+    (AT2_NEW.replace("NPTS=     7, DT=   .0050 SEC", "7 points every 5 ms"),
+     "line 4: '7 points every 5 ms': expected 'NPTS=  5590, DT=   .0050 SEC' or '5590    0.0050    NPTS, DT'"),
+    (AT2_NEW.replace("DT=   .0050", "DT=   0.000"), "line 4: DT = 0.0: must be a number in (0, inf) s"),
+    (AT2_NEW.replace("DT=   .0050", "DT=   fast"), "line 4: DT: 'fast' is not a number"),
+    (AT2_NEW.replace("NPTS=     7", "NPTS=   7.5"), "line 4: NPTS = '7.5': must be an integer in [2, inf)"),
+    (AT2_NEW.replace(".5000000E+00", ".5000000E+0x"), "line 6: '.5000000E+0x' is not a number"),
+    (AT2_NEW.replace(".5000000E+00", "NaN"), "line 6: 'NaN' is not a finite number"),
+    ("PEER NGA STRONG MOTION DATABASE RECORD\n", "1 lines; a PEER .AT2 file has 4 header lines"),
+], ids=["truncated", "too-long", "velocity", "no-npts", "zero-dt", "word-dt", "fractional-npts", "word-value", "nan", "short"])
+def test_a_bad_at2_record_is_refused_naming_the_file_and_the_problem(tmp_path, text, message):
+    path = written(tmp_path, "bad.AT2", text)
+    refused(lambda: read_motion(path), f"{path}: ", message)
+
+
+def test_an_at2_direction_other_than_x_y_z_is_refused(tmp_path):
+    path = written(tmp_path, "r.AT2", AT2_NEW)
+    refused(lambda: read_at2(path, direction="north"), f"{path}: direction = 'north': must be one of ('x', 'y', 'z')")
+
+
+def test_the_suffix_is_read_in_either_case(tmp_path):
+    assert read_motion(written(tmp_path, "r.At2", AT2_OLD)).time_s.size == 7
+    assert read_motion(written(tmp_path, "r.CSV", "time_s,acc_x_m_s2\n0,1\n1,2\n")).time_s.size == 2
+
+
+# ---------------------------------------------------------------- pulses
+
+
+def test_pulses_are_the_three_kinds():
+    assert PULSES == ("one-sine", "sine", "ricker")
+
+
+@pytest.mark.parametrize("amplitude", [2.0, -2.0])
+def test_a_one_sine_pulse_peaks_at_a_quarter_period_and_ends_at_zero_velocity(amplitude):
+    f = 2.5
+    one = pulse("one-sine", amplitude_m_s2=amplitude, frequency_hz=f)
+    assert one.duration_s == pytest.approx(1 / f, rel=1e-15)  # one period
+    a = one.acceleration_m_s2[:, 0]
+    k = int(np.argmax(np.abs(a)))
+    assert one.time_s[k] == pytest.approx(1 / (4 * f), rel=1e-15)  # sin(2 pi f t) = 1 at t = 1/(4f)
+    assert a[k] == pytest.approx(amplitude, rel=1e-15) and one.pga_m_s2 == pytest.approx(abs(amplitude), rel=1e-15)
+    v = one.velocity_m_s()[:, 0]
+    # v(t) = A/(2 pi f) (1 - cos 2 pi f t): 0 after a full period, A/(pi f) at its middle
+    assert abs(v[-1]) < 1e-12 * abs(amplitude) / f
+    assert v.max(initial=0) - v.min(initial=0) == pytest.approx(abs(amplitude) / (math.pi * f), rel=1e-4)
+    # d(1/f) = A / (2 pi f^2) (the integral of v); the trapezoidal rule's relative error is (2 pi / 200)^2 / 12 = 8e-5
+    assert one.displacement_m()[-1, 0] == pytest.approx(amplitude / (2 * math.pi * f**2), rel=1e-4)
+
+
+def test_a_sine_of_n_cycles_lasts_n_periods_and_ends_at_zero_velocity():
+    sine = pulse("sine", amplitude_m_s2=1.5, frequency_hz=4.0, cycles=3, samples_per_period=40)
+    assert sine.duration_s == pytest.approx(3 / 4.0, rel=1e-15)  # N / f
+    assert sine.time_s.size == 3 * 40 + 1  # samples_per_period per period, both ends
+    assert abs(sine.velocity_m_s()[-1, 0]) < 1e-12  # a whole number of periods: zero mean
+    # drift d(N/f) = A N / (2 pi f^2) = 1.5 x 3 / (2 pi 16), less the trapezoidal rule's relative
+    # error on the sine, (2 pi / 40)^2 / 12 = 2.1e-3
+    assert sine.displacement_m()[-1, 0] == pytest.approx(1.5 * 3 / (2 * math.pi * 16), rel=2.5e-3)
+
+
+def test_a_ricker_pulse_peaks_at_t0_and_ends_at_rest():
+    f, amplitude = 2.0, 3.0
+    ricker = pulse("ricker", amplitude_m_s2=amplitude, frequency_hz=f, direction="y")
+    t0 = 1.5 / f  # the wavelet's centre
+    a = ricker.acceleration_m_s2[:, 1]
+    k = int(np.argmax(a))
+    assert ricker.time_s[k] == pytest.approx(t0, rel=1e-15) and a[k] == pytest.approx(amplitude, rel=1e-15)  # (1 - 0) e^0
+    assert ricker.duration_s == pytest.approx(2 * t0, rel=1e-15)
+    # ends: A (1 - 2 u0^2) exp(-u0^2), u0 = 1.5 pi: -1.0e-8 A
+    u0 = 1.5 * math.pi
+    assert a[0] == pytest.approx(amplitude * (1 - 2 * u0**2) * math.exp(-u0**2), rel=1e-12)
+    assert not ricker.acceleration_m_s2[:, [0, 2]].any()
+    # the velocity ends at 2 u0 exp(-u0^2) A / (pi f) = 7e-10 A / f, the displacement at
+    # 2 u0^2 exp(-u0^2) A / (pi f)^2 = 1e-9 A / f^2 (plus the trapezoidal rule's error)
+    assert abs(ricker.velocity_m_s()[-1, 1]) < 1e-8 * amplitude / f
+    assert abs(ricker.displacement_m()[-1, 1]) < 1e-8 * amplitude / f**2
+
+
+@pytest.mark.parametrize("kind, arguments, message", [
+    ("square", {}, "pulse kind = 'square': must be one of ('one-sine', 'sine', 'ricker')"),
+    ("sine", {"frequency_hz": 0.0}, "pulse frequency_hz = 0.0: must be a number in (0, inf) Hz"),
+    ("sine", {"frequency_hz": -1.0}, "pulse frequency_hz = -1.0: must be a number in (0, inf) Hz"),
+    ("sine", {"frequency_hz": math.inf}, "pulse frequency_hz = inf"),
+    ("sine", {"amplitude_m_s2": True}, "pulse amplitude_m_s2 = True: must be a number"),
+    ("sine", {"amplitude_m_s2": math.nan}, "pulse amplitude_m_s2 = nan: must be a number"),
+    ("sine", {"cycles": 0}, "pulse cycles = 0: must be an integer in [1, 1000]"),
+    ("sine", {"cycles": 1.5}, "pulse cycles = 1.5: must be an integer"),
+    ("sine", {"cycles": True}, "pulse cycles = True: must be an integer"),
+    ("one-sine", {"cycles": 2}, "pulse cycles = 2: a one-sine pulse has no cycles to repeat"),
+    ("ricker", {"cycles": 3}, "pulse cycles = 3: a ricker pulse has no cycles to repeat"),
+    ("sine", {"direction": "up"}, "pulse direction = 'up': must be one of ('x', 'y', 'z')"),
+    ("sine", {"samples_per_period": 10}, "pulse samples_per_period = 10: must be an integer in [20, 1e+04]"),
+])
+def test_a_bad_pulse_is_refused_naming_the_parameter_and_rule(kind, arguments, message):
+    settings = {"amplitude_m_s2": 1.0, "frequency_hz": 1.0} | arguments
+    refused(lambda: pulse(kind, **settings), message)
+
+
+def test_every_bad_pulse_parameter_is_named_at_once():
+    refused(lambda: pulse("sine", amplitude_m_s2=math.inf, frequency_hz=0), "amplitude_m_s2 = inf", "frequency_hz = 0")
+
+
+# ---------------------------------------------------------------- the motion's samples
+
+
+def test_velocity_and_displacement_integrate_a_constant_acceleration_exactly():
+    time = np.array([0.0, 0.1, 0.3, 0.6, 1.0])
+    table = motion(time, 2.0)
+    # v = a t; d = a t^2 / 2, exact: the trapezoidal rule integrates the linear v exactly
+    np.testing.assert_allclose(table.velocity_m_s()[:, 0], 2.0 * time, rtol=1e-14)
+    np.testing.assert_allclose(table.displacement_m()[:, 0], time**2, rtol=1e-14)
+
+
+@pytest.mark.parametrize("time, acceleration, message", [
+    ([0.1, 0.2], np.zeros((2, 3)), "time_s must start at 0 s; it starts at 0.1 s"),
+    ([0.0, 0.2, 0.2], np.zeros((3, 3)), "sample 2 (t = 0.2 s) is not after sample 1 (t = 0.2 s)"),
+    ([0.0], np.zeros((1, 3)), "time_s must be a list of at least 2 times"),
+    ([0.0, 1.0], np.zeros((2, 2)), "acceleration_m_s2 must have shape (2, 3)"),
+    ([0.0, 1.0], [[0, 0, 0], [0, np.nan, 0]], "must be finite numbers"),
+])
+def test_a_motion_with_bad_samples_is_refused_naming_it(time, acceleration, message):
+    refused(lambda: GroundMotion(time, acceleration, "my record"), "my record: ", message)
+
+
+def test_the_samples_of_a_motion_cannot_be_changed():
+    table = motion([0.0, 1.0], [1.0, 2.0])
+    with pytest.raises(ValueError):
+        table.acceleration_m_s2[0, 0] = 5.0
+
+
+# ---------------------------------------------------------------- PGA and scaling
+
+
+def test_the_pga_is_the_peak_of_the_horizontal_norm():
+    table = motion([0.0, 0.1, 0.2], [3.0, -4.5, 0.0], [4.0, 0.0, -1.0])
+    table = GroundMotion(table.time_s, table.acceleration_m_s2 + [0.0, 0.0, 100.0], "with vertical")
+    assert table.pga_m_s2 == 5.0  # sqrt(3^2 + 4^2) at t = 0 beats |-4.5| at t = 0.1; z is not horizontal
+    assert table.pga_g == 5.0 / 9.81
+    assert table.peaks_m_s2 == (4.5, 4.0, 100.0)
+
+
+@pytest.mark.parametrize("factor", [2.5, -0.5, 0])
+def test_scaling_multiplies_every_acceleration_and_the_pga(factor):
+    table = motion([0.0, 0.1, 0.2], [3.0, -4.5, 0.0], [4.0, 0.0, -1.0])
+    scaled = table.scaled(factor)
+    np.testing.assert_array_equal(scaled.acceleration_m_s2, table.acceleration_m_s2 * factor)
+    assert scaled.pga_m_s2 == pytest.approx(abs(factor) * table.pga_m_s2, rel=1e-15)  # |k a| = |k| |a|
+    np.testing.assert_array_equal(scaled.time_s, table.time_s)
+
+
+@pytest.mark.parametrize("factor", [True, math.nan, math.inf, "2"])
+def test_a_bad_scale_factor_is_refused(factor):
+    refused(lambda: motion([0.0, 1.0], [1.0, 2.0]).scaled(factor), "test record: scale factor = ", "must be a number")
+
+
+# ---------------------------------------------------------------- baseline correction
+
+
+def test_a_baseline_corrected_record_with_an_offset_ends_at_rest():
+    sine = pulse("sine", amplitude_m_s2=1.0, frequency_hz=2.0, cycles=3)
+    offset = GroundMotion(sine.time_s, sine.acceleration_m_s2 + [0.1, 0.0, 0.0], "sine + 0.1 m/s2")
+    # before: v_end = 0.1 m/s2 x 1.5 s, the offset's integral (the sine's whole periods add 0)
+    assert offset.velocity_m_s()[-1, 0] == pytest.approx(0.15, rel=1e-9)
+    corrected = offset.baseline_corrected()
+    pga, duration = offset.pga_m_s2, offset.duration_s
+    assert abs(corrected.velocity_m_s()[-1, 0]) < 1e-9 * pga * duration
+    assert abs(corrected.displacement_m()[-1, 0]) < 1e-9 * pga * duration**2
+    assert not corrected.acceleration_m_s2[:, 1:].any()
+    assert corrected.name == "sine + 0.1 m/s2, baseline-corrected"
+
+
+def test_a_baseline_correction_takes_a_constant_offset_off_a_record_at_rest():
+    ricker = pulse("ricker", amplitude_m_s2=3.0, frequency_hz=2.0)  # ends at rest (2e-8 of its peaks)
+    offset = GroundMotion(ricker.time_s, ricker.acceleration_m_s2 + [0.1, 0.0, 0.0], "ricker + 0.1 m/s2")
+    corrected = offset.baseline_corrected()
+    # the baseline c0 + c1 t / T is the offset: c0 = 0.1, c1 = 0; the PGA goes back from 3.1 to 3
+    np.testing.assert_allclose(corrected.acceleration_m_s2, ricker.acceleration_m_s2, rtol=0, atol=1e-8 * 3.0)
+    assert offset.pga_m_s2 == pytest.approx(3.1, rel=1e-15)  # A + 0.1 at t0
+    assert corrected.pga_m_s2 == pytest.approx(3.0, rel=1e-8)
+
+
+def test_a_record_already_at_rest_is_left_practically_unchanged():
+    ricker = pulse("ricker", amplitude_m_s2=3.0, frequency_hz=2.0)  # ends at rest (2e-8 of its peaks)
+    corrected = ricker.baseline_corrected()
+    np.testing.assert_allclose(corrected.acceleration_m_s2, ricker.acceleration_m_s2, rtol=0, atol=1e-8 * 3.0)
+    assert corrected.pga_m_s2 == pytest.approx(ricker.pga_m_s2, rel=1e-8)
+
+
+def test_a_baseline_correction_of_two_samples_is_refused():
+    refused(lambda: motion([0.0, 1.0], [1.0, 2.0]).baseline_corrected(), "test record: a baseline correction needs at least 3 samples")
+
+
+# ---------------------------------------------------------------- per explicit cycle
+
+
+def test_the_acceleration_per_cycle_is_exact_at_the_sample_times():
+    dt = 0.01
+    acceleration = np.random.default_rng(2).normal(0.0, 1.0, 30)
+    table = motion(np.arange(30) * dt, acceleration, -acceleration)
+    rows = table.per_cycle(dt, 30)
+    assert rows.shape == (30, 3)
+    np.testing.assert_array_equal(rows, table.acceleration_m_s2)  # t_k = k dt is sample k
+
+
+def test_the_acceleration_per_cycle_is_linear_between_samples_and_zero_after_the_end():
+    table = motion([0.0, 0.1, 0.2], [0.0, 1.0, -1.0])
+    rows = table.per_cycle(0.025, 12)
+    # t = 0, 0.025, ..., 0.275: the line 0 -> 1 -> -1 over 0, 0.1, 0.2, then 0 after 0.2 s
+    expected = [0.0, 0.25, 0.5, 0.75, 1.0, 0.5, 0.0, -0.5, -1.0, 0.0, 0.0, 0.0]
+    np.testing.assert_allclose(rows[:, 0], expected, atol=1e-15)
+    assert not rows[:, 1:].any()
+
+
+def test_consecutive_excerpts_per_cycle_match_one_long_call():
+    sine = pulse("sine", amplitude_m_s2=1.0, frequency_hz=3.0, cycles=2, direction="z")
+    dt = 1.3e-3  # not a divisor of the sampling step
+    whole = sine.per_cycle(dt, 600)  # runs past the end (0.667 s) into zeros
+    parts = np.concatenate([sine.per_cycle(dt, 7), sine.per_cycle(dt, 393, start_s=7 * dt), sine.per_cycle(dt, 200, 400 * dt)])
+    # t = 7 dt + k dt against (7 + k) dt: the same times to round-off, so the same rows to round-off
+    np.testing.assert_allclose(parts, whole, rtol=0, atol=1e-12)
+    assert not whole[int(sine.duration_s / dt) + 1:].any()
+    assert sine.per_cycle(dt, 0).shape == (0, 3)
+
+
+@pytest.mark.parametrize("arguments, message", [
+    ((0.0, 10), "per_cycle dt_s = 0.0: must be a number in (0, inf) s"),
+    ((math.nan, 10), "per_cycle dt_s = nan"),
+    ((1e-3, -1), "per_cycle cycles = -1: must be an integer in [0, inf)"),
+    ((1e-3, 10.0), "per_cycle cycles = 10.0: must be an integer"),
+    ((1e-3, 10, True), "per_cycle start_s = True: must be a number"),
+    ((1e-3, 10, -1.0), "per_cycle start_s = -1.0: must be a number in [0, inf) s"),
+])
+def test_bad_per_cycle_arguments_are_refused(arguments, message):
+    refused(lambda: motion([0.0, 1.0], [1.0, 2.0]).per_cycle(*arguments), message)
