@@ -51,6 +51,9 @@ def test_rotation_vectors_undo_the_update():
     for q, p in zip(end, phi):
         rotate_by_vector(q, *p)
     np.testing.assert_allclose(rotation_vectors(start, end), phi, atol=1e-13)
+    scipy_phi = (Rotation.from_quat(end[:, [1, 2, 3, 0]]) * Rotation.from_quat(start[:, [1, 2, 3, 0]]).inv()).as_rotvec()
+    np.testing.assert_allclose(rotation_vectors(start, end), scipy_phi, atol=1e-13)
+    np.testing.assert_array_equal(rotation_vectors(start, start), 0.0)
 
 
 def test_rotation_about_y_of_in_plane_blocks_is_the_general_update():

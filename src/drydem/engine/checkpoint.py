@@ -26,7 +26,8 @@ _PARTS = {"state": State, "contacts": SubContacts, "neighbours": NeighbourList, 
 def save_checkpoint(path: Path, snapshot: Snapshot, progress: dict) -> None:
     """Write ``snapshot`` and ``progress`` (name -> array or scalar) to ``path`` atomically."""
     arrays = {f"{part}.{name}": value for part in _PARTS for name, value in getattr(snapshot, part)._asdict().items()}
-    arrays |= {"active": snapshot.active, "cycles": snapshot.cycles, "scaled_timestep": np.nan if snapshot.scaled_timestep is None else snapshot.scaled_timestep}
+    arrays |= {"active": snapshot.active, "cycles": snapshot.cycles, "time_s": snapshot.time_s,
+               "scaled_timestep": np.nan if snapshot.scaled_timestep is None else snapshot.scaled_timestep}
     arrays |= {f"progress.{name}": np.asarray(value) for name, value in progress.items()}
     with replaced_atomically(path) as partial:
         np.savez(partial, **arrays)
@@ -39,7 +40,10 @@ def load_checkpoint(path: Path) -> tuple[Snapshot, dict]:
         with np.load(path) as data:
             parts = {part: cls(**{name: data[f"{part}.{name}"] for name in cls._fields}) for part, cls in _PARTS.items()}
             scaled = float(data["scaled_timestep"])
-            snapshot = Snapshot(**parts, active=data["active"], cycles=int(data["cycles"]), scaled_timestep=None if np.isnan(scaled) else scaled)
+            # checkpoints written before the model time was kept have none: 0 s
+            time_s = float(data["time_s"]) if "time_s" in data.files else 0.0
+            snapshot = Snapshot(**parts, active=data["active"], cycles=int(data["cycles"]), time_s=time_s,
+                                scaled_timestep=None if np.isnan(scaled) else scaled)
             progress = {key.removeprefix("progress."): data[key] for key in data.files if key.startswith("progress.")}
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
         # np.load raises each of these for a missing, empty, truncated or foreign file

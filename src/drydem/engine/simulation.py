@@ -74,7 +74,7 @@ class EquilibriumResult:
 class Snapshot:
     """A saved point of a :class:`Simulation`: state, contacts with their shear history,
     neighbour list, the state at the last broad phase, the blocks still in the analysis, cycles
-    run, the timestep kept by mass scaling (s)."""
+    run, model time (s), the timestep kept by mass scaling (s)."""
 
     state: State
     contacts: SubContacts
@@ -82,6 +82,7 @@ class Snapshot:
     broad_state: State
     active: np.ndarray
     cycles: int
+    time_s: float
     scaled_timestep: float | None
 
 
@@ -98,7 +99,8 @@ class Simulation:
     Public arrays: ``state``; ``contacts``, ``neighbours`` and ``active`` (the blocks still in the
     analysis) of the ``tracker``; ``blocks``, the constants the cycle runs with
     (:class:`~drydem.engine.inertia.BlockConstants`); ``timestep`` (s); ``run_cycles``, the
-    cycle function; ``cycles`` run so far.
+    cycle function; ``cycles`` run so far and the model time they span, ``time_s`` (the sum of
+    their timesteps, s).
     """
 
     def __init__(self, model: Model, *, state: State | None = None, engine: str | Callable = "numba", timestep: float | None = None,
@@ -110,6 +112,7 @@ class Simulation:
         self.tracker = ContactTracker(model, self.state)
         self.blocks: BlockConstants | None = None
         self.cycles = 0
+        self.time_s = 0.0
         self._fixed_timestep = timestep
         self._scaled_timestep: float | None = None
         self._update_inertia()
@@ -166,7 +169,7 @@ class Simulation:
         t = self.tracker
         return Snapshot(
             state=self.state.copy(), contacts=t.contacts.copy(), neighbours=t.neighbours.copy(), broad_state=t.broad_state.copy(),
-            active=t.active.copy(), cycles=self.cycles, scaled_timestep=self._scaled_timestep,
+            active=t.active.copy(), cycles=self.cycles, time_s=self.time_s, scaled_timestep=self._scaled_timestep,
         )
 
     def restore(self, snapshot: Snapshot) -> None:
@@ -175,7 +178,7 @@ class Simulation:
         t = self.tracker
         t.contacts, t.neighbours = snapshot.contacts.copy(), snapshot.neighbours.copy()
         t.broad_state, t.active = snapshot.broad_state.copy(), snapshot.active.copy()
-        self.cycles = snapshot.cycles
+        self.cycles, self.time_s = snapshot.cycles, snapshot.time_s
         self._scaled_timestep = snapshot.scaled_timestep
         self._update_inertia()
 
@@ -266,6 +269,7 @@ class Simulation:
             stats = StepStats(ratio, speed)
             done += n
             self.cycles += n
+            self.time_s += n * self.timestep
             if progress is not None:
                 progress(done, stats)
             if code == loop.DIVERGED:

@@ -113,7 +113,7 @@ class RockingBlock:
         side = math.copysign(1.0, theta0_rad)
         upright = State.at_rest(self.model.block_centroid[1:]).quaternion
         crossed, peak = False, 0.0
-        while sim.cycles * sim.timestep < max_seconds:
+        while sim.time_s < max_seconds:
             sim.cycle(CHUNK_CYCLES, gravity=gravity)
             theta = float(rotation_vectors(upright, sim.state.quaternion[1:])[0, 1]) * side
             crossed = crossed or theta < 0.0
