@@ -53,6 +53,8 @@ from scipy.optimize import brentq
 #: tolerances of the time integration (DOP853)
 RTOL = 1e-10
 ATOL = 1e-12
+#: a guard against an endless sequence of phases (rest, rocking, impact) in :func:`respond`
+MAX_PHASES = 100_000
 
 
 @dataclass(frozen=True)
@@ -129,8 +131,9 @@ def free_rocking_quarter_period_s(block: RockingBlock, theta0: float) -> float:
     for ``x = alpha - theta``), whose solution is ``theta = alpha - (alpha - theta0) cosh(p t)``.
     Valid for slender blocks (``alpha`` up to about 0.2-0.35 rad, Housner's own range "alpha less
     than about 20 degrees") and ``0 < |theta0| < alpha``; it grows without bound as
-    ``|theta0| -> alpha``. The linearisation makes it slightly long: see
-    :func:`free_rocking_first_impact_time_s` for the exact value.
+    ``|theta0| -> alpha``. The linearisation overstates the restoring moment (``sin x < x``), so
+    the closed form is slightly short: see :func:`free_rocking_first_impact_time_s` for the exact
+    value.
     """
     ratio = abs(theta0) / block.alpha_rad
     if not 0.0 < ratio < 1.0:
@@ -152,7 +155,7 @@ def free_rocking_first_impact_time_s(block: RockingBlock, theta0: float) -> floa
         return side * y[0]
 
     upright.terminal, upright.direction = True, -1
-    # an upper bound: the linearised time is longer than the exact one; add a margin
+    # the exact time is a little longer than the linearised one: a generous horizon
     horizon = 2.0 * free_rocking_quarter_period_s(block, theta0) + 10.0 / block.p_rad_s
     sol = solve_ivp(rhs, (0.0, horizon), [theta0, 0.0], method="DOP853", rtol=RTOL, atol=ATOL, events=upright)
     if not sol.t_events[0].size:
@@ -232,7 +235,8 @@ class RockingResponse:
     and rocking phase), the rotation and angular velocity there; ``overturned`` when
     ``|theta|`` reached pi/2 (the response then ends at that time, ``overturn_time_s``); the
     times of the impacts (``theta`` back to 0 while rocking) and of the uplifts (rest -> rocking).
-    :meth:`at` interpolates the integrator's dense output at any times."""
+    An impact's time appears twice in ``time_s``, with the angular velocity just before and just
+    after it. :meth:`at` interpolates the integrator's dense output at any times (0 at rest)."""
 
     time_s: np.ndarray
     theta_rad: np.ndarray
@@ -264,8 +268,8 @@ class RockingResponse:
 
 def _first_uplift(block: RockingBlock, ground_acc: Callable[[float], float], t0: float, t1: float, step: float) -> float | None:
     """The first time in [t0, t1] at which ``|u_g''|`` exceeds ``g tan(alpha)``: scanned on a grid
-    of spacing ``step`` and refined by Brent's method (an excursion shorter than ``step`` between
-    two grid points is missed)."""
+    of spacing ``step`` and refined by Brent's method, then nudged forward to where the excess is
+    strictly positive (an excursion shorter than ``step`` between two grid points is missed)."""
     limit = block.uplift_acceleration_m_s2
 
     def excess(t):
@@ -278,7 +282,11 @@ def _first_uplift(block: RockingBlock, ground_acc: Callable[[float], float], t0:
     before = t0
     for t in grid[1:]:
         if excess(t) > 0.0:
-            return brentq(excess, before, t, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+            root = brentq(excess, before, t, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+            nudge = 4 * np.finfo(float).eps * max(1.0, abs(root))
+            while root < t and excess(root) <= 0.0:
+                root, nudge = min(root + nudge, t), 2.0 * nudge
+            return root
         before = t
     return None
 
@@ -317,8 +325,8 @@ def respond(
 
     Overturning rule: ``overturned`` is True when ``|theta|`` reaches pi/2 within ``duration_s``.
     A block that ends the excitation with the energy to pass ``|theta| = alpha`` always falls, but
-    the closer to that limit, the longer it takes (the upright-unstable equilibrium at ``alpha``
-    repels at the rate ``p``): callers give it time after the excitation (``~ 10 / p`` or more).
+    the closer to that limit, the longer it takes (the unstable equilibrium at ``|theta| = alpha``,
+    centre of mass above the corner, repels at the rate ``p``): callers give it time after the excitation (``~ 10 / p`` or more).
 
     ``max_step`` defaults to ``0.05 / p``; keep it well below the shortest feature of the ground
     motion, which the rest-phase scan and the integrator must not step over.
@@ -344,7 +352,9 @@ def respond(
         thetas.extend(th)
         omegas.extend(om)
 
-    while t < duration_s:
+    for _ in range(MAX_PHASES):
+        if t >= duration_s:
+            break
         if side == 0:  # at rest
             start = _first_uplift(block, ground_acc, t, duration_s, max_step)
             end = duration_s if start is None else start
@@ -355,9 +365,8 @@ def respond(
                 break
             t = start
             uplifts.append(t)
-            # the direction: that of the acceleration just after the start
-            probe = ground_acc(min(t + 1e-9 * max_step, duration_s)) or ground_acc(t)
-            side = -1 if probe > 0.0 else 1
+            # on the corner away from the acceleration (|u_g''(t)| > g tan(alpha) > 0 here)
+            side = -1 if ground_acc(t) > 0.0 else 1
             theta = omega = 0.0
             continue
 
@@ -406,6 +415,8 @@ def respond(
         # the state just after the impact
         record([t], [0.0], [omega])
 
+    else:
+        raise RuntimeError(f"more than {MAX_PHASES} rest and rocking phases before t = {duration_s} s")  # pragma: no cover
     return RockingResponse(
         time_s=np.array(ts),
         theta_rad=np.array(thetas),
@@ -447,8 +458,9 @@ def minimum_overturning_amplitude(
     to within ``step_fraction`` (relative): the amplitudes ``start (1 + step_fraction)^k`` are tried
     upwards from ``start`` (default ``g tan(alpha)``, which cannot even lift the block) and the
     first that overturns (:func:`pulse_overturns`) is returned; None if none up to ``stop``
-    (default ``(4 + 2 omega_p / p) g tan(alpha)``, above the linearised mode-2 limit of
-    :func:`mode2_overturning_amplitude_ratio_linear` for slender blocks).
+    (default ``2 (1 + W + W^2 / (2 pi)) g tan(alpha)`` with ``W = omega_p / p``: twice the large-W
+    asymptote of the linearised mode-2 limit, :func:`mode2_overturning_amplitude_ratio_linear`,
+    and above it at every W).
 
     A scan, not a bisection: the set of amplitudes that overturn is not an interval. Above the
     smallest one (often overturning after one impact, Zhang & Makris's "mode 1") there can be a
@@ -459,7 +471,7 @@ def minimum_overturning_amplitude(
     limit = block.uplift_acceleration_m_s2
     ratio = 2.0 * math.pi * frequency_hz / block.p_rad_s
     amplitude = limit if start is None else float(start)
-    stop = (4.0 + 2.0 * ratio) * limit if stop is None else float(stop)
+    stop = 2.0 * (1.0 + ratio + ratio**2 / (2.0 * math.pi)) * limit if stop is None else float(stop)
     while amplitude <= stop:
         if pulse_overturns(block, amplitude, frequency_hz, free_time_s=free_time_s).overturned:
             return amplitude

@@ -1,9 +1,14 @@
 """Result files of an analysis, written as the run goes (a crash keeps what was written).
 
 ``pushover.csv``: one row per equilibrium state, appended and flushed as each is found.
+``history.csv`` (a shaking-table analysis): one row per output interval of the monitored
+block's response, appended and flushed as each comes (:class:`HistoryWriter`), then written
+whole from the analysis' :class:`~drydem.analysis.shake.History` at the end
+(:func:`write_history_csv`).
 ``summary.json``: collapse angle, load multiplier, model and analysis parameters, run time,
 drydem version (a tilting analysis adds drift-limit angles, cycles, lost blocks; a limit
-analysis its method and solver status); written at the end.
+analysis its method and solver status; a shaking-table analysis its own: :func:`shake_summary`);
+written at the end.
 """
 
 from __future__ import annotations
@@ -11,17 +16,23 @@ from __future__ import annotations
 import csv
 import json
 import shutil
-from dataclasses import asdict
+from collections.abc import Sequence
+from dataclasses import asdict, fields
 from pathlib import Path
+
+import numpy as np
 
 from drydem import __version__
 from drydem.errors import DrydemError
 from drydem.files import replaced_atomically, writable_folder
 from drydem.analysis.limit import LimitResult, LimitSettings
+from drydem.analysis.shake import History, ShakeResult, ShakeSettings
 from drydem.analysis.tilt import Record, TiltResult
 from drydem.model.assembly import Model
 
 PUSHOVER_COLUMNS = ("tilt_deg", "load_multiplier", "ux_m", "uz_m", "drift", "cycles")
+#: the columns of history.csv: the first five are the public interface, the others come after
+HISTORY_COLUMNS = ("time_s", "ground_acc_x_m_s2", "ux_m", "uz_m", "rotation_rad", "ground_acc_y_m_s2", "ground_acc_z_m_s2", "uy_m")
 
 
 class PushoverWriter:
@@ -40,6 +51,104 @@ class PushoverWriter:
                 [f"{record.tilt_deg:.6f}", f"{record.load_multiplier:.8g}", f"{record.ux_m:.8g}", f"{record.uz_m:.8g}",
                  f"{record.drift:.8g}", record.cycles]
             )
+
+
+def _history_cells(time_s: float, ground: Sequence[float | None], displacement: Sequence[float | None],
+                   rotation_rad: float | None) -> list[str]:
+    """A row of history.csv in the order of HISTORY_COLUMNS; a value not known (None) is an empty cell."""
+
+    def cell(value, digits=8):
+        return "" if value is None else f"{float(value):.{digits}g}"
+
+    (gx, gy, gz), (ux, uy, uz) = ground, displacement
+    return [cell(time_s, 10), cell(gx), cell(ux), cell(uz), cell(rotation_rad), cell(gy), cell(gz), cell(uy)]
+
+
+class HistoryWriter:
+    """Writes ``history.csv`` in ``folder`` anew (its header) and appends a row, flushed, at each
+    call of :meth:`row`, so that an interrupted run keeps the rows it reached."""
+
+    def __init__(self, folder: Path):
+        self.path = folder / "history.csv"
+        self.rows = 0
+        with self.path.open("w", newline="") as f:
+            csv.writer(f).writerow(HISTORY_COLUMNS)
+
+    def row(self, time_s: float, ground_acceleration_m_s2: Sequence[float | None], displacement_m: Sequence[float | None],
+            rotation_rad: float | None) -> None:
+        """One row: time (s), the table's acceleration (x, y, z; m/s2), the monitored block's
+        displacement relative to the table (x, y, z; m) and its rotation about y (rad); None
+        for a value not known (an empty cell)."""
+        with self.path.open("a", newline="") as f:
+            csv.writer(f).writerow(_history_cells(time_s, ground_acceleration_m_s2, displacement_m, rotation_rad))
+        self.rows += 1
+
+
+def write_history_csv(folder: Path, history: History) -> Path:
+    """``history`` as ``folder/history.csv`` (HISTORY_COLUMNS, one row per output interval),
+    written whole or not at all: it replaces the rows :class:`HistoryWriter` wrote as the run went."""
+    path = folder / "history.csv"
+    with replaced_atomically(path) as partial, partial.open("w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(HISTORY_COLUMNS)
+        for k, time_s in enumerate(history.time_s):
+            moved = (history.ux_m[k], history.uy_m[k], history.uz_m[k])
+            writer.writerow(_history_cells(time_s, history.ground_acceleration_m_s2[k], moved, history.rotation_rad[k]))
+    return path
+
+
+def fall_rule(settings: ShakeSettings) -> str:
+    """When a block has fallen in a shaking-table analysis, in words."""
+    return (f"a block has fallen when it turned more than {settings.fall_rotation_deg:g} deg from its orientation at rest, "
+            f"or its centroid dropped more than {settings.lost_drop_heights:g} of its heights below where it rested")
+
+
+def shake_settings_summary(settings: ShakeSettings) -> dict:
+    """The settings of a shaking-table analysis as plain JSON: the motion by its name (its
+    samples are in history.csv and its description in the summary's ``motion``)."""
+    plain = {f.name: getattr(settings, f.name) for f in fields(settings) if f.name != "motion"}
+    return {"motion": settings.motion.name, **plain, "analysed_s": settings.analysed_s}
+
+
+def shake_summary(result: ShakeResult, model: Model, *, scale: float = 1.0, baseline_corrected: bool = False) -> dict:
+    """The content of a shaking-table analysis' ``summary.json``. ``scale`` and
+    ``baseline_corrected`` say how the caller made the analysed motion from its source (a
+    record or pulse multiplied by ``scale``, then baseline-corrected or not); the peaks and the
+    PGA are those of the motion analysed."""
+    motion = result.settings.motion
+    fallen = [{"block": name, "time_s": time_s, "rule": rule} for name, time_s, rule in result.fallen_blocks]
+    return {
+        "overturned": result.overturned,
+        "overturn_rule": fall_rule(result.settings),
+        "fallen_blocks": fallen,
+        "first_fall_s": min((f["time_s"] for f in fallen), default=None),
+        "monitored_block": result.monitored_block,
+        "max_rotation_rad": result.max_rotation_rad,
+        "max_rotation_deg": float(np.degrees(result.max_rotation_rad)),
+        "max_displacement_m": result.max_displacement_m,
+        "residual_displacement_m": result.residual_displacement_m,
+        "duration_s": result.duration_s,
+        "ended_by": result.ended_by,
+        "cycles": result.cycles,
+        "runtime_s": round(result.runtime_s, 3),
+        "timestep_s": result.timestep_s,
+        "pga_m_s2": motion.pga_m_s2,
+        "pga_g": motion.pga_g,
+        "motion": {
+            "name": motion.name,
+            "duration_s": motion.duration_s,
+            "samples": int(motion.time_s.size),
+            "scale": scale,
+            "baseline_corrected": baseline_corrected,
+            "peaks_m_s2": list(motion.peaks_m_s2),
+        },
+        "contact_damping_ratio": result.contact_damping_ratio,
+        "restitution": result.restitution,
+        "history_rows": int(result.history.time_s.size),
+        "analysis": shake_settings_summary(result.settings),
+        "model": model_summary(model),
+        "drydem_version": __version__,
+    }
 
 
 def tilt_summary(result: TiltResult, model: Model) -> dict:

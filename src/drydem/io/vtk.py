@@ -10,6 +10,9 @@ Sub-contacts: one vertex cell per sub-contact at its incident material point, wi
 fields ``normal_force`` (N, compression positive), ``shear_force`` (N, on the incident block)
 and its magnitude, ``slip`` (0 open, 1 stuck, 2 sliding: the shear force at the Coulomb limit
 c A + mu N), ``gap`` (m, negative when closed) and the two blocks.
+
+Series: :class:`VtkSeries` (a tilting analysis' frames, indexed by frame number and tilt) and
+:class:`ShakeSeries` (a shaking-table analysis', indexed by model time).
 """
 
 from __future__ import annotations
@@ -113,16 +116,55 @@ class VtkSeries:
             if (self.equilibria - 1) % self.every:
                 return
         k = len(self.rows)
-        write_vtu(self.model, self.folder / f"blocks_{k:04d}.vtu", frame.state, frame.active)
-        write_contacts_vtu(self.model, self.folder / f"contacts_{k:04d}.vtu", frame.state, frame.contacts)
+        _write_frame(self.model, self.folder, k, frame)
         self.rows.append((k, frame.kind, frame.tilt_deg, frame.ux_m))
-        for series in ("blocks", "contacts"):
-            with replaced_atomically(self.folder / f"{series}.pvd") as partial:
-                partial.write_text(_pvd([f"{series}_{i:04d}.vtu" for i, *_ in self.rows]))
-        with replaced_atomically(self.folder / "frames.csv") as partial, partial.open("w", newline="") as f:
-            writer = csv.writer(f)
-            writer.writerow(("frame", "kind", "tilt_deg", "ux_m"))
-            writer.writerows((i, kind, f"{tilt:.6f}", f"{ux:.8g}") for i, kind, tilt, ux in self.rows)
+        _write_indexes(self.folder, len(self.rows), ("frame", "kind", "tilt_deg", "ux_m"),
+                       [(i, kind, f"{tilt:.6f}", f"{ux:.8g}") for i, kind, tilt, ux in self.rows])
+
+
+class ShakeSeries:
+    """Frames of a shaking-table analysis (drydem.analysis.shake.ShakeFrame) as the same two
+    VTK time series as :class:`VtkSeries` in ``folder`` (``blocks_NNNN.vtu`` and
+    ``contacts_NNNN.vtu``, indexed by ``blocks.pvd`` and ``contacts.pvd``, here with the model
+    time in seconds as each DataSet's time, so that ParaView plays them in time), and
+    ``frames.csv`` (frame, time_s, monitored ux_m). Every ``every``-th frame is kept, each
+    written as it comes, the indexes rewritten atomically. Use an instance as
+    ``shake_analysis(..., on_frame=series)``."""
+
+    def __init__(self, folder: Path, model: Model, *, every: int = 1):
+        SAVE_EVERY.check(every, "ShakeSeries every")
+        self.folder, self.model, self.every = Path(folder), model, every
+        self.folder.mkdir(parents=True, exist_ok=True)
+        self.rows: list[tuple[int, float, float]] = []
+        self.frames = 0
+
+    def __call__(self, frame) -> None:
+        self.frames += 1
+        if (self.frames - 1) % self.every:
+            return
+        k = len(self.rows)
+        _write_frame(self.model, self.folder, k, frame)
+        self.rows.append((k, frame.time_s, frame.ux_m))
+        _write_indexes(self.folder, len(self.rows), ("frame", "time_s", "ux_m"),
+                       [(i, f"{t:.9g}", f"{ux:.8g}") for i, t, ux in self.rows], times=[t for _, t, _ in self.rows])
+
+
+def _write_frame(model: Model, folder: Path, k: int, frame) -> None:
+    """Frame ``k``'s blocks and sub-contacts (any frame with ``state``, ``active`` and ``contacts``)."""
+    write_vtu(model, folder / f"blocks_{k:04d}.vtu", frame.state, frame.active)
+    write_contacts_vtu(model, folder / f"contacts_{k:04d}.vtu", frame.state, frame.contacts)
+
+
+def _write_indexes(folder: Path, count: int, header: tuple[str, ...], rows: list[tuple], *, times: list[float] | None = None) -> None:
+    """Rewrite, each atomically, the two ``.pvd`` indexes of the first ``count`` frames (times:
+    the frame numbers unless ``times`` is given) and ``frames.csv`` (``header`` and ``rows``)."""
+    for series in ("blocks", "contacts"):
+        with replaced_atomically(folder / f"{series}.pvd") as partial:
+            partial.write_text(_pvd([f"{series}_{i:04d}.vtu" for i in range(count)], times))
+    with replaced_atomically(folder / "frames.csv") as partial, partial.open("w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(header)
+        writer.writerows(rows)
 
 
 def _equilibrium_rows(index: Path) -> list[tuple[int, str, float, float]]:
@@ -142,7 +184,8 @@ def _equilibrium_rows(index: Path) -> list[tuple[int, str, float, float]]:
     return rows
 
 
-def _pvd(files: list[str]) -> str:
-    """A ParaView collection: one DataSet per file, time = its position."""
-    entries = "\n".join(f'    <DataSet timestep="{t}" part="0" file={quoteattr(name)}/>' for t, name in enumerate(files))
+def _pvd(files: list[str], times: list[float] | None = None) -> str:
+    """A ParaView collection: one DataSet per file, time = its position (or its ``times`` entry)."""
+    stamps = [str(t) for t in range(len(files))] if times is None else [f"{t:.9g}" for t in times]
+    entries = "\n".join(f'    <DataSet timestep="{t}" part="0" file={quoteattr(name)}/>' for t, name in zip(stamps, files))
     return f'<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n{entries}\n  </Collection>\n</VTKFile>\n'

@@ -1,7 +1,8 @@
 """A run's record on disk: ``RESULTS/runs/ID.json``, written atomically as soon as the run
 finishes, holds the parameters, the status ("ok" or "failed" with the error), the summary and
-the pushover curve. A record is checked when it is read: one that is not JSON, lacks a key, or
-whose parameters do not give its id is corrupt (:class:`RecordError`), and a sweep runs it again.
+the pushover curve (empty for limit and shake runs). A record is checked when it is read: one
+that is not JSON, lacks a key, or whose parameters do not give its id is corrupt
+(:class:`RecordError`), and a sweep runs it again.
 """
 
 from __future__ import annotations
@@ -41,7 +42,11 @@ def write_record(results: Path, record: dict) -> Path:
 #: the keys of a record, by status, and of its summary, by analysis: what the report and the
 #: calibration read (a record without them is corrupt)
 RECORD_KEYS = {"ok": {"id", "spec", "status", "summary", "pushover"}, "failed": {"id", "spec", "status", "error"}}
-SUMMARY_KEYS = {"tilt": {"collapse_angle_deg", "drift_limit_angles_deg", "wall_height_m"}, "limit": {"collapse_angle_deg", "method"}}
+SUMMARY_KEYS = {"tilt": {"collapse_angle_deg", "drift_limit_angles_deg", "wall_height_m"}, "limit": {"collapse_angle_deg", "method"},
+                "shake": {"overturned", "max_rotation_rad", "max_displacement_m", "residual_displacement_m", "pga_m_s2", "scale",
+                          "motion", "cycles", "runtime_s"}}
+#: the numbers of a shake run's summary (m, rad, m/s2, s; NaN and infinities allowed, as recorded)
+SHAKE_NUMBERS = ("max_rotation_rad", "max_displacement_m", "residual_displacement_m", "pga_m_s2", "scale", "runtime_s")
 #: the columns of a pushover curve: tilt (deg), ux, uz (m), drift, cycles
 CURVE_COLUMNS = 5
 
@@ -90,12 +95,32 @@ def _record_problem(record, run_id: str) -> str | None:
     summary, curve = record["summary"], record["pushover"]
     if not isinstance(summary, dict) or not SUMMARY_KEYS[spec.analysis] <= set(summary):
         return f"summary must hold {sorted(SUMMARY_KEYS[spec.analysis])}"
-    if not (summary["collapse_angle_deg"] is None or _numeric(summary["collapse_angle_deg"])):
+    if spec.analysis == "shake":
+        problem = _shake_problem(spec, summary)
+        if problem is not None:
+            return problem
+    elif not (summary["collapse_angle_deg"] is None or _numeric(summary["collapse_angle_deg"])):
         return f"summary collapse_angle_deg = {summary['collapse_angle_deg']!r}: must be a number (deg) or null"
     if spec.analysis == "tilt" and not isinstance(summary["drift_limit_angles_deg"], dict):
         return "summary drift_limit_angles_deg must map drift limits to angles"
     if not isinstance(curve, list) or not all(isinstance(row, list) and len(row) == CURVE_COLUMNS and all(map(_numeric, row)) for row in curve):
         return f"pushover must be a list of rows of {CURVE_COLUMNS} numbers (tilt, ux, uz, drift, cycles)"
+    return None
+
+
+def _shake_problem(spec: RunSpec, summary: dict) -> str | None:
+    """What is wrong with a shake run's spec and summary (the report reads them), or None."""
+    if not isinstance(spec.motion, str) or not (_numeric(spec.scale) and spec.scale > 0):
+        return f"spec motion = {spec.motion!r}, scale = {spec.scale!r}: a shake run has a motion (a string) and a scale (> 0)"
+    if not isinstance(summary["overturned"], bool):
+        return f"summary overturned = {summary['overturned']!r}: must be true or false"
+    bad = [key for key in SHAKE_NUMBERS if not _numeric(summary[key])]
+    if bad:
+        return f"summary {', '.join(f'{key} = {summary[key]!r}' for key in bad)}: must be numbers"
+    if not (isinstance(summary["cycles"], int) and not isinstance(summary["cycles"], bool)):
+        return f"summary cycles = {summary['cycles']!r}: must be a whole number"
+    if not isinstance(summary["motion"], str):
+        return f"summary motion = {summary['motion']!r}: must be the run's motion (a string)"
     return None
 
 

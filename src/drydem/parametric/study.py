@@ -16,10 +16,31 @@ A study file is TOML; each ``[[grid]]`` is a cartesian product, the study is the
     kn = [1e7, 3e7, 1e9]        # Pa/m
     ks = "kn"                   # ks = kn (default), or a list of values
     protocol = ["adaptive"]     # tilt: fixed, adaptive; limit: associative, non-associative
+    [[grid]]
+    name = "ida"                # incremental dynamic analysis: every motion at every scale
+    analysis = "shake"
+    targets = ["WD1"]
+    motions = ["records/a.csv", "records/b.AT2", "pulse:one-sine:2.0"]
+    scales = [0.5, 1.0, 1.5]    # factors on each motion (> 0)
+    duration_s = 3.0            # optional: analysed time, s (default: each motion's)
+    restitution = "housner"     # optional: Housner's, or a number in (0, 1], the contacts'
+    # contact_damping_ratio = 0.3  # damping calibrated to it; or their damping ratio set
+    #                           # directly; neither: ShakeSettings' default
+    # monitor = "block"         # optional: the block whose response is recorded
+    kn = [1e9]                  # optional overrides, as for tilt (ks, friction, points too)
+
+A shake grid's motions are files relative to the study file (CSV or PEER .AT2, along x,
+:func:`drydem.analysis.shake.read_motion`), baseline-corrected before they are scaled, or
+analytic pulses ``pulse:KIND:FREQUENCY_HZ`` (``pulse:sine:FREQUENCY_HZ:CYCLES``) of amplitude
+1 m/s2, so that the scale is the amplitude (:func:`drydem.analysis.shake.pulse`, not
+corrected). Its runs are the product of targets, motions, scales and overrides (no protocol,
+no increment). ``[defaults]`` may also give duration_s, restitution or contact_damping_ratio
+(a grid's own restitution or ratio replaces the default of the other).
 
 A study is checked whole when it is loaded: every target is loaded and every run's overrides
-applied to it (the parameter classes check the values), so that a bad value anywhere stops the
-study before its first run, with every problem named, rather than hours later as a failed run.
+applied to it (the parameter classes check the values), and every shake run's motion read and its
+settings built, so that a bad value anywhere stops the study before its first run, with every
+problem named, rather than hours later as a failed run.
 
 Every run has an id made of its parameters (and a hash of them): the name of its record
 (:mod:`drydem.parametric.records`).
@@ -36,20 +57,38 @@ from pathlib import Path
 from drydem.errors import DrydemError, ModelError
 from drydem.files import read_toml
 from drydem.model.assembly import Model
+from drydem.model.parameters import is_number
 from drydem.model.tables import no_unknown
 
-ANALYSES = {"tilt": ("fixed", "adaptive"), "limit": ("associative", "non-associative")}
-DEFAULT_PROTOCOL = {"tilt": "adaptive", "limit": "associative"}
-GRID_KEYS = {"name", "analysis", "targets", "kn", "ks", "friction", "points", "protocol", "increment_deg"}
-DEFAULT_KEYS = {"friction", "points", "increment_deg"}
+#: the analyses of a study and their protocols (a shake run has one: the time history)
+ANALYSES = {"tilt": ("fixed", "adaptive"), "limit": ("associative", "non-associative"), "shake": ("time-history",)}
+DEFAULT_PROTOCOL = {"tilt": "adaptive", "limit": "associative", "shake": "time-history"}
+#: the keys of a grid, by analysis
+COMMON_KEYS = {"name", "analysis", "targets", "kn", "ks", "friction", "points"}
+SHAKE_KEYS = {"motions", "scales", "duration_s", "restitution", "contact_damping_ratio", "monitor"}
+GRID_KEYS = {"tilt": COMMON_KEYS | {"protocol", "increment_deg"}, "limit": COMMON_KEYS | {"protocol", "increment_deg"},
+             "shake": COMMON_KEYS | SHAKE_KEYS}
+DEFAULT_KEYS = {"friction", "points", "increment_deg", "duration_s", "restitution", "contact_damping_ratio"}
 #: the RunSpec fields that override the target's parameters
 OVERRIDES = ("kn", "ks", "friction", "points")
+#: the RunSpec fields of shake runs only: None in the others, and then left out of the id's
+#: hash, so that the ids (the record names) of tilt and limit runs are those they always had
+SHAKE_FIELDS = ("motion", "scale", "duration_s", "restitution", "contact_damping_ratio", "monitor")
+#: a motion that is an analytic pulse: ``pulse:KIND:FREQUENCY_HZ[:CYCLES]``, amplitude 1 m/s2
+PULSE_PREFIX = "pulse:"
+#: m/s2: the amplitude of a study's pulse, so that a run's scale is its pulse's amplitude
+PULSE_AMPLITUDE_M_S2 = 1.0
 
 
 @dataclass(frozen=True)
 class RunSpec:
     """One run of a study. kn, ks (Pa/m), friction and points override the target's when given.
-    Grids that share a run (same parameters) share its record."""
+    Grids that share a run (same parameters) share its record.
+
+    A shake run (analysis "shake", protocol "time-history", increment_deg None) also has its
+    ``motion`` (a motion file's path or a pulse, module docstring), the ``scale`` on it, and
+    the settings of :class:`~drydem.analysis.shake.ShakeSettings` it changes (``duration_s``,
+    ``restitution``, ``contact_damping_ratio``, ``monitor``; None: the default)."""
 
     analysis: str
     target: str
@@ -58,13 +97,24 @@ class RunSpec:
     ks: float | None = None
     friction: float | None = None
     points: int | None = None
-    increment_deg: float = 0.1
+    increment_deg: float | None = 0.1
+    motion: str | None = None
+    scale: float | None = None
+    duration_s: float | None = None
+    restitution: float | str | None = None
+    contact_damping_ratio: float | None = None
+    monitor: str | None = None
 
     @property
     def id(self) -> str:
-        """Readable and unique: analysis, target, stiffnesses, protocol and a hash of everything."""
-        digest = hashlib.sha1(json.dumps(asdict(self), sort_keys=True).encode()).hexdigest()[:10]
+        """Readable and unique: analysis, target, (motion and scale,) stiffnesses, protocol and
+        a hash of everything (the shake fields left out when None, see :data:`SHAKE_FIELDS`)."""
+        fields = {key: value for key, value in asdict(self).items() if not (key in SHAKE_FIELDS and value is None)}
+        digest = hashlib.sha1(json.dumps(fields, sort_keys=True).encode()).hexdigest()[:10]
         stiffness = "" if self.kn is None else f"-kn{self.kn:.3g}-ks{self.ks:.3g}"
+        if self.analysis == "shake":
+            scale = "" if self.scale is None else f"-x{self.scale:.4g}"
+            return f"{self.analysis}-{Path(self.target).stem}-{motion_label(str(self.motion), compact=True)}{scale}{stiffness}-{digest}"
         return f"{self.analysis}-{Path(self.target).stem}{stiffness}-{self.protocol}-{digest}"
 
     @property
@@ -86,6 +136,69 @@ class RunSpec:
         from drydem.analysis.tilt import TiltSettings
 
         return TiltSettings(increment_deg=self.increment_deg, adaptive=self.protocol == "adaptive")
+
+    def shake_settings(self, motion=None):
+        """The shaking settings of this run: its motion (:func:`ground_motion`, or ``motion``,
+        that motion already read) times its scale, and its settings (ShakeSettings checks them);
+        ModelError for a motion that cannot be read or a value out of its range."""
+        from drydem.analysis.shake import ShakeSettings
+
+        motion = ground_motion(self.motion) if motion is None else motion
+        return ShakeSettings(motion=motion.scaled(self.scale), duration_s=self.duration_s, restitution=self.restitution,
+                             contact_damping_ratio=self.contact_damping_ratio, monitor=self.monitor)
+
+
+def ground_motion(motion: str):
+    """The motion of a shake run before it is scaled: the pulse ``pulse:KIND:FREQUENCY_HZ[:CYCLES]``
+    of amplitude 1 m/s2, or the record in the file ``motion`` baseline-corrected
+    (:meth:`~drydem.analysis.shake.GroundMotion.baseline_corrected`); ModelError naming the
+    motion and the problem."""
+    from drydem.analysis.shake import pulse, read_motion
+
+    if not isinstance(motion, str):
+        raise ModelError(f"{motion!r}: a motion is a file's path or a pulse {PULSE_PREFIX}KIND:FREQUENCY_HZ (a string)")
+    if not motion.startswith(PULSE_PREFIX):
+        return read_motion(motion).baseline_corrected()
+    kind, frequency_hz, cycles = _pulse_parts(motion)
+    try:
+        return pulse(kind, amplitude_m_s2=PULSE_AMPLITUDE_M_S2, frequency_hz=frequency_hz, cycles=cycles)
+    except ModelError as exc:
+        raise ModelError(f"{motion!r}: {exc}") from None
+
+
+def _pulse_parts(motion: str) -> tuple[str, float, int]:
+    """KIND, FREQUENCY_HZ and CYCLES (default 1) of ``pulse:KIND:FREQUENCY_HZ[:CYCLES]``, as
+    numbers where they are; ModelError naming the motion if it has not that form (the values
+    themselves are checked by :func:`~drydem.analysis.shake.pulse`)."""
+    parts = motion.split(":")[1:]
+    form = f"{motion!r}: a pulse is {PULSE_PREFIX}KIND:FREQUENCY_HZ or {PULSE_PREFIX}sine:FREQUENCY_HZ:CYCLES"
+    if len(parts) not in (2, 3):
+        raise ModelError(form)
+    kind, frequency, cycles = parts[0], parts[1], parts[2] if len(parts) == 3 else "1"
+    try:
+        frequency_hz = float(frequency)
+    except ValueError:
+        raise ModelError(f"{form}; the frequency {frequency!r} is not a number") from None
+    if not cycles.strip().isdigit():
+        raise ModelError(f"{form}; the cycles {cycles!r} are not a whole number")
+    return kind, frequency_hz, int(cycles)
+
+
+def motion_label(motion: str, *, compact: bool = False) -> str:
+    """A short name of a run's motion: the file's name, or ``one-sine 2 Hz`` (``sine 2 Hz, 3
+    cycles``) for a pulse; ``compact``: fit for a file name (``one-sine-2Hz``, ``sine-2Hz-3cycles``;
+    characters other than letters, digits and ``._-+`` as ``-``)."""
+    label = Path(motion).name
+    if motion.startswith(PULSE_PREFIX):
+        try:
+            kind, frequency_hz, cycles = _pulse_parts(motion)
+        except ModelError:
+            label = motion
+        else:
+            several = cycles != 1
+            label = (f"{kind}-{frequency_hz:g}Hz" + (f"-{cycles}cycles" if several else "") if compact
+                     else f"{kind} {frequency_hz:g} Hz" + (f", {cycles} cycles" if several else ""))
+    return "".join(c if c.isalnum() or c in "._-+" else "-" for c in label) if compact else label
 
 
 @dataclass(frozen=True)
@@ -112,12 +225,15 @@ def load_study(path: str | Path) -> Study:
     runs: list[RunSpec] = []
     problems: list[str] = []
     models: dict[str, object] = {}  # target -> its model, or the message saying why it cannot be loaded
+    motions: dict[str, object] = {}  # motion -> its unscaled GroundMotion, or the message saying why it cannot be read
     for k, grid in enumerate(grids):
         name = grid.get("name", "?") if isinstance(grid, dict) else "?"
         where = f"{source}: [[grid]] #{k} ({name!r})"
         try:
-            no_unknown(grid, GRID_KEYS, where, "the grid")
-            runs += _grid_runs(defaults | grid, path.parent, where, models, problems)
+            analysis = grid.get("analysis", "tilt") if isinstance(grid, dict) else None
+            keys = GRID_KEYS.get(analysis, set()) if isinstance(analysis, str) else set()
+            no_unknown(grid, keys or set().union(*GRID_KEYS.values()), where, f"the grid (a {analysis} analysis)" if keys else "the grid")
+            runs += _grid_runs(_with_defaults(defaults, grid), path.parent, where, models, problems, motions)
         except ModelError as exc:
             problems.append(str(exc))
     if problems:
@@ -126,12 +242,23 @@ def load_study(path: str | Path) -> Study:
     return Study(str(meta.get("name", path.stem)), str(meta.get("description", "")), list(dict.fromkeys(runs)), source)
 
 
-def _grid_runs(grid: dict, folder: Path, where: str, models: dict, problems: list[str]) -> list[RunSpec]:
+def _with_defaults(defaults: dict, grid: dict) -> dict:
+    """``grid`` over ``defaults``; a grid's own restitution or contact damping ratio replaces
+    the default of either (they are exclusive)."""
+    exclusive = {"restitution", "contact_damping_ratio"}
+    if exclusive & set(grid):
+        defaults = {key: value for key, value in defaults.items() if key not in exclusive}
+    return defaults | grid
+
+
+def _grid_runs(grid: dict, folder: Path, where: str, models: dict, problems: list[str], motions: dict) -> list[RunSpec]:
     """The runs of one grid, each checked on its target; a problem found is appended to
     ``problems`` (ModelError when the grid cannot even be expanded)."""
     analysis = grid.get("analysis", "tilt")
     if not isinstance(analysis, str) or analysis not in ANALYSES:
         raise ModelError(f"{where}: analysis = {analysis!r}: must be one of {list(ANALYSES)}")
+    if analysis == "shake":
+        return _shake_runs(grid, folder, where, models, problems, motions)
     values = {key: _list(grid.get(key, default)) for key, default in
               (("protocol", DEFAULT_PROTOCOL[analysis]), ("targets", []), ("kn", None), ("friction", None), ("points", None))}
     empty = [key for key, found in values.items() if not found]
@@ -141,25 +268,87 @@ def _grid_runs(grid: dict, folder: Path, where: str, models: dict, problems: lis
     bad = [p for p in values["protocol"] if p not in ANALYSES[analysis]]
     if bad:
         raise ModelError(f"{where}: protocol {bad} is not one of {list(ANALYSES[analysis])} for a {analysis} analysis")
-    names = [t for t in values["targets"] if not isinstance(t, str)]
+    targets = _targets(values["targets"], folder, where)
+    runs = [RunSpec(analysis=analysis, target=target, protocol=protocol, kn=kn, ks=ks, friction=friction, points=points,
+                    increment_deg=grid.get("increment_deg", 0.1))
+            for target, protocol, (kn, ks, friction, points) in itertools.product(targets, values["protocol"], _overrides(grid, values, where))]
+    return _checked(runs, where, models, problems, {})
+
+
+def _targets(targets: list, folder: Path, where: str) -> list[str]:
+    """The grid's targets: built-in walls' names, or files relative to the study's folder."""
+    names = [t for t in targets if not isinstance(t, str)]
     if names:
         raise ModelError(f"{where}: targets {names}: each must be a built-in wall's name or a file (a string)")
-    targets = [t if not (folder / t).is_file() else str(folder / t) for t in values["targets"]]
+    return [t if not (folder / t).is_file() else str(folder / t) for t in targets]
+
+
+def _overrides(grid: dict, values: dict, where: str) -> list[tuple]:
+    """Every (kn, ks, friction, points) of the grid."""
     ks_values = grid.get("ks", "kn")
     if isinstance(ks_values, list) and not ks_values:
         raise ModelError(f"{where}: ks = []: needs at least one value, or \"kn\" (ks = kn)")
-    runs = []
-    for target, protocol, kn, friction, points in itertools.product(targets, values["protocol"], values["kn"], values["friction"], values["points"]):
-        for ks in ([kn] if ks_values == "kn" else _list(ks_values)):
-            runs.append(RunSpec(analysis=analysis, target=target, protocol=protocol, kn=kn, ks=ks, friction=friction, points=points,
-                                increment_deg=grid.get("increment_deg", 0.1)))
+    return [(kn, ks, friction, points) for kn, friction, points in itertools.product(values["kn"], values["friction"], values["points"])
+            for ks in ([kn] if ks_values == "kn" else _list(ks_values))]
+
+
+def _shake_runs(grid: dict, folder: Path, where: str, models: dict, problems: list[str], motions: dict) -> list[RunSpec]:
+    """The runs of a shake grid: every target, motion, scale and override (module docstring)."""
+    values = {key: _list(grid.get(key, [] if key in ("targets", "motions", "scales") else None))
+              for key in ("targets", "motions", "scales", "kn", "friction", "points")}
+    empty = [key for key, found in values.items() if not found]
+    if empty:
+        raise ModelError(f"{where}: {', '.join(empty)} = []: needs at least one value"
+                         + (" (a shake grid needs targets, motions and scales)" if set(empty) & {"targets", "motions", "scales"} else ""))
+    bad = [scale for scale in values["scales"] if not (is_number(scale) and scale > 0)]
+    if bad:
+        raise ModelError(f"{where}: scales {bad}: each must be a finite number > 0 (a factor on every motion)")
+    targets = _targets(values["targets"], folder, where)
+    named = [m for m in values["motions"] if not isinstance(m, str)]
+    if named:
+        raise ModelError(f"{where}: motions {named}: each must be a file (CSV or .AT2) or a pulse {PULSE_PREFIX}KIND:FREQUENCY_HZ (a string)")
+    found = [_motion(m, folder) for m in values["motions"]]
+    shake = {key: grid.get(key) for key in ("duration_s", "restitution", "contact_damping_ratio", "monitor")}
+    runs = [RunSpec(analysis="shake", target=target, protocol=DEFAULT_PROTOCOL["shake"], kn=kn, ks=ks, friction=friction, points=points,
+                    increment_deg=None, motion=motion, scale=scale, **shake)
+            for target, motion, scale, (kn, ks, friction, points) in itertools.product(targets, found, values["scales"], _overrides(grid, values, where))]
+    return _checked(runs, where, models, problems, motions)
+
+
+def _motion(motion: str, folder: Path) -> str:
+    """A grid's motion as a run has it: a pulse as written (its numbers normalised, so that 2
+    and 2.0 are one run), or a file by its path from the study's folder."""
+    if motion.startswith(PULSE_PREFIX):
+        try:
+            kind, frequency_hz, cycles = _pulse_parts(motion)
+        except ModelError:
+            return motion
+        return f"{PULSE_PREFIX}{kind}:{frequency_hz!r}" + (f":{cycles}" if cycles != 1 else "")
+    return str(folder / motion)
+
+
+def _checked(runs: list[RunSpec], where: str, models: dict, problems: list[str], motions: dict) -> list[RunSpec]:
+    """``runs``, normalised, if each can run on its target (and its motion); otherwise []
+    with the problems appended to ``problems``."""
     found = len(problems)
     for spec in runs:
         if spec.target not in models:
             models[spec.target] = _load_model(spec.target)
         model = models[spec.target]
-        problems += [f"{where}: {problem}" for problem in ([model] if isinstance(model, str) else _problems(model, spec))]
+        if spec.motion is not None and spec.motion not in motions:
+            motions[spec.motion] = _read_motion(spec.motion)
+        motion = motions.get(spec.motion)
+        found_here = [model, *([motion] if isinstance(motion, str) else [])] if isinstance(model, str) else _problems(model, spec, motion)
+        problems += [f"{where}: {problem}" for problem in found_here]
     return [] if len(problems) > found else [_normalised(spec) for spec in runs]
+
+
+def _read_motion(motion: str):
+    """The unscaled motion ``motion`` (:func:`ground_motion`), or the message saying why it cannot be read."""
+    try:
+        return ground_motion(motion)
+    except DrydemError as exc:
+        return f"motions: {exc}"
 
 
 def _load_model(target: str):
@@ -172,13 +361,21 @@ def _load_model(target: str):
         return f"targets: {exc}"
 
 
-def _problems(model, spec: RunSpec) -> list[str]:
+def _problems(model, spec: RunSpec, motion=None) -> list[str]:
     """Why ``spec`` cannot run on ``model``: its overrides applied to the model and its tilt
-    step, as the run itself builds them (the rules are the parameter classes', written once),
-    each override alone so that one bad value does not hide another."""
+    step, or its shaking settings on ``motion`` (its motion read, or the message saying why it
+    cannot be), as the run itself builds them (the rules are the parameter classes', written
+    once), each override alone so that one bad value does not hide another."""
     checks = [lambda key=key: model.parameter_changes(**{key: getattr(spec, key)}) for key in OVERRIDES]
+    if spec.analysis != "shake":
+        checks.append(spec.tilt_settings)  # a limit run's increment is unused, but is part of its id
+    else:
+        if isinstance(motion, str):  # the settings are checked all the same, on a stand-in motion
+            checks.append(lambda message=motion: _raise(message))
+            motion = ground_motion(f"{PULSE_PREFIX}one-sine:1.0")
+        checks += [lambda: spec.shake_settings(motion), lambda: _monitored(model, spec)]
     found = []
-    for check in [*checks, spec.tilt_settings]:  # a limit run's increment is unused, but is part of its id
+    for check in checks:
         try:
             check()
         except ModelError as exc:
@@ -186,12 +383,43 @@ def _problems(model, spec: RunSpec) -> list[str]:
     return found
 
 
+def _raise(message: str):
+    raise ModelError(message)
+
+
+def _monitored(model, spec: RunSpec) -> None:
+    """ModelError unless the run's monitor (None: the default block) names a movable block of
+    ``model`` that can rock if its restitution is Housner's (r = 1 - 1.5 sin^2 alpha > 0)."""
+    import math
+
+    from drydem.analysis.shake import HOUSNER, housner_restitution
+    from drydem.analysis.shake.restitution import slenderness
+    from drydem.analysis.tilt.settings import monitor_index
+
+    monitor = spec.monitor
+    if not (monitor is None or isinstance(monitor, str)):
+        return  # ShakeSettings refuses it
+    try:
+        block = monitor_index(model, monitor)
+    except ModelError as exc:
+        raise ModelError(f"monitor = {monitor!r}: {exc}") from None
+    if spec.restitution == HOUSNER:
+        alpha = math.atan2(*slenderness(model.block_shape[block]))
+        if housner_restitution(alpha) <= 0.0:
+            raise ModelError(f"restitution = {HOUSNER!r}: the monitored block {model.block_name[block]!r} is too squat to rock: "
+                             f"alpha = atan(b / h) = {math.degrees(alpha):.1f} deg gives 1 - 1.5 sin^2(alpha) = "
+                             f"{housner_restitution(alpha):.2f} <= 0; give contact_damping_ratio, or monitor a slender block")
+
+
 def _normalised(spec: RunSpec) -> RunSpec:
     """``spec`` with its checked numbers as floats (1e7 and 10000000 are one run)."""
     def number(value):
         return None if value is None else float(value)
 
-    return replace(spec, kn=number(spec.kn), ks=number(spec.ks), friction=number(spec.friction), increment_deg=float(spec.increment_deg))
+    restitution = spec.restitution if isinstance(spec.restitution, str) else number(spec.restitution)
+    return replace(spec, kn=number(spec.kn), ks=number(spec.ks), friction=number(spec.friction), increment_deg=number(spec.increment_deg),
+                   scale=number(spec.scale), duration_s=number(spec.duration_s), restitution=restitution,
+                   contact_damping_ratio=number(spec.contact_damping_ratio))
 
 
 def _list(value) -> list:

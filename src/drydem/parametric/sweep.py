@@ -19,12 +19,12 @@ import time
 import traceback
 from collections.abc import Callable, Iterable
 from concurrent.futures import FIRST_COMPLETED, Executor, Future, wait
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 
 from drydem.errors import DrydemError
 from drydem.parametric.records import RecordError, read_record, record_path, write_record
-from drydem.parametric.study import RunSpec
+from drydem.parametric.study import PULSE_PREFIX, RunSpec, ground_motion
 
 
 class SweepError(DrydemError):
@@ -46,6 +46,12 @@ def _analyse(spec: RunSpec) -> dict:
     from drydem.io.results import limit_summary, tilt_summary
 
     model = spec.model()
+    if spec.analysis == "shake":
+        from drydem.analysis.shake import shake_analysis
+
+        motion = ground_motion(spec.motion)
+        settings = spec.shake_settings(motion)
+        return {"summary": shake_summary(shake_analysis(model, settings), spec, motion, model), "pushover": []}
     if spec.analysis == "limit":
         from drydem.analysis.limit import LimitSettings, limit_analysis
 
@@ -58,6 +64,43 @@ def _analyse(spec: RunSpec) -> dict:
     result = tilt_analysis(model, spec.tilt_settings())
     curve = [[r.tilt_deg, r.ux_m, r.uz_m, r.drift, r.cycles] for r in result.records]
     return {"summary": tilt_summary(result, model), "pushover": curve}
+
+
+def shake_summary(result, spec: RunSpec, motion, model) -> dict:
+    """The summary of a shake run's record: the response (:class:`~drydem.analysis.shake.ShakeResult`),
+    the motion (``spec.motion`` as the study gives it, the analysed motion's name, and the PGA
+    of ``motion``, the motion before its scale) and the scale, the settings, the model. The
+    report's IDA reads it (:mod:`drydem.report.ida`); records.SUMMARY_KEYS are checked."""
+    from drydem import __version__
+    from drydem.io.results import model_summary
+    from drydem.model.parameters import G
+
+    settings = {field.name: getattr(result.settings, field.name) for field in fields(result.settings) if field.name != "motion"}
+    return {
+        "overturned": result.overturned,
+        "max_rotation_rad": result.max_rotation_rad,
+        "max_displacement_m": result.max_displacement_m,
+        "residual_displacement_m": result.residual_displacement_m,
+        "pga_m_s2": result.pga_m_s2,
+        "pga_g": result.pga_m_s2 / G,
+        "scale": spec.scale,
+        "motion": spec.motion,
+        "motion_name": result.settings.motion.name,
+        "motion_pga_m_s2": motion.pga_m_s2,
+        "baseline_corrected": not spec.motion.startswith(PULSE_PREFIX),
+        "fallen_blocks": [{"block": name, "time_s": time_s, "rule": rule} for name, time_s, rule in result.fallen_blocks],
+        "monitored_block": result.monitored_block,
+        "ended_by": result.ended_by,
+        "duration_s": result.duration_s,
+        "cycles": result.cycles,
+        "timestep_s": result.timestep_s,
+        "contact_damping_ratio": result.contact_damping_ratio,
+        "restitution": result.restitution,
+        "runtime_s": round(result.runtime_s, 3),
+        "analysis": settings,
+        "model": model_summary(model),
+        "drydem_version": __version__,
+    }
 
 
 @dataclass(frozen=True)

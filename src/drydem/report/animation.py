@@ -1,6 +1,8 @@
 """Videos of a tilting analysis from its VTK series (drydem.io.vtk.VtkSeries), as the paper's
 supplementary videos: the wall in its plane coloured by displacement magnitude, the tilt angle
-and the monitored displacement on every frame, the states past collapse at the end.
+and the monitored displacement on every frame, the states past collapse at the end; and of a
+shaking-table analysis from its series (drydem.io.vtk.ShakeSeries): the model time and the
+monitored displacement on every frame. The captions follow the columns of ``frames.csv``.
 
 Frames are drawn by the renderer of ``mechanism.png`` (drydem.report.plots.draw_displacements),
 so pictures and videos agree. MP4 through imageio-ffmpeg (the ffmpeg binary ships in that
@@ -43,7 +45,7 @@ def series_frames(folder: Path) -> list[VideoFrame]:
     folder = Path(folder)
     index = folder / "frames.csv"
     if not index.is_file():
-        raise DrydemError(f"{folder}: no frames.csv: not a VTK series of drydem tilt --vtk")
+        raise DrydemError(f"{folder}: no frames.csv: not a VTK series of drydem tilt or shake --vtk")
     with index.open() as f:
         rows = list(csv.DictReader(f))
     if not rows:
@@ -52,9 +54,9 @@ def series_frames(folder: Path) -> list[VideoFrame]:
     for line, row in enumerate(rows, start=2):
         try:
             file = folder / f"blocks_{int(row['frame']):04d}.vtu"
-            caption = f"{row['kind']}: tilt {float(row['tilt_deg']):.2f} deg, monitored ux {float(row['ux_m']) * 1e3:.2f} mm"
+            caption = _caption(row)
         except (KeyError, TypeError, ValueError) as exc:
-            raise DrydemError(f"{index}: line {line}: not a frame of drydem tilt --vtk ({exc!r})") from None
+            raise DrydemError(f"{index}: line {line}: not a frame of drydem tilt or shake --vtk ({exc!r})") from None
         try:
             mesh = meshio.read(file)
             active = np.concatenate(mesh.cell_data["active"]).astype(bool)
@@ -65,6 +67,15 @@ def series_frames(folder: Path) -> list[VideoFrame]:
         outlines = [xz_outline(mesh.points[np.unique(np.concatenate(faces))]) for faces, on in zip(cells, active) if on]
         frames.append(VideoFrame(outlines, magnitude[active], caption))
     return frames
+
+
+def _caption(row: dict) -> str:
+    """A frame's caption from its row of ``frames.csv``: a shaking-table frame (a ``time_s``
+    column) gives the model time, a tilting one its kind and tilt; both the monitored ux."""
+    ux = f"monitored ux {float(row['ux_m']) * 1e3:.2f} mm"
+    if row.get("time_s") is not None:
+        return f"t = {float(row['time_s']):.3f} s, {ux}"
+    return f"{row['kind']}: tilt {float(row['tilt_deg']):.2f} deg, {ux}"
 
 
 def render_video(folder: Path, path: Path, *, fps: float = 8.0) -> Path:

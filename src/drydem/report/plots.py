@@ -1,4 +1,5 @@
-"""Figures of a tilting analysis: pushover curve (paper Figs 9-11) and mechanism (Figs 7-8).
+"""Figures of a tilting analysis: pushover curve (paper Figs 9-11) and mechanism (Figs 7-8);
+of a shaking-table analysis: the response history (:func:`history_figure`).
 
 matplotlib is imported inside the functions, so the engine does not load it. Figures are
 :class:`matplotlib.figure.Figure` objects made by :func:`new_figure`, outside pyplot: drawing
@@ -13,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from drydem.analysis.drift import EC8_DRIFT_LIMITS
+from drydem.analysis.shake import History
 from drydem.analysis.tilt import TiltResult
 from drydem.errors import DrydemError
 from drydem.model.assembly import Model
@@ -61,6 +63,47 @@ def pushover_figure(result: TiltResult, path: Path, *, title: str = "") -> Path:
     ax.set_ylim(bottom=0.0)
     ax.grid(alpha=0.3)
     ax.legend(loc="lower right", fontsize="small")
+    fig.savefig(path, dpi=150)
+    return path
+
+
+def history_figure(history: History, path: Path, *, title: str = "", monitored: str = "",
+                   fallen: list[tuple[str, float, str]] = ()) -> Path:
+    """The time history of a shaking-table analysis in three panels on one time axis: the
+    table's acceleration (m/s2; each component that is not zero throughout), the monitored
+    block's displacement relative to the table (ux, uz and a uy that is not zero, mm) and its
+    rotation about y (rad). The first fall among ``fallen`` (block, time in s, rule) is marked
+    on every panel."""
+    fig = new_figure(figsize=(7.2, 6.4), layout="constrained")
+    ground_ax, moved_ax, turn_ax = fig.subplots(3, 1, sharex=True)
+    t = history.time_s
+    ground = history.ground_acceleration_m_s2
+    shown = [k for k in range(3) if np.any(ground[:, k])] or [0]
+    for k in shown:
+        ground_ax.plot(t, ground[:, k], color=("tab:gray", "tab:olive", "tab:brown")[k], label=f"a_{'xyz'[k]}")
+    ground_ax.set(ylabel="table acceleration (m/s2)", title=title)
+    moved_ax.plot(t, history.ux_m * 1e3, color="tab:blue", label="ux")
+    if np.any(history.uy_m):
+        moved_ax.plot(t, history.uy_m * 1e3, color="tab:green", label="uy")
+    moved_ax.plot(t, history.uz_m * 1e3, color="tab:orange", label="uz")
+    who = f" of {monitored}" if monitored else ""
+    moved_ax.set(ylabel=f"displacement{who}\nrelative to the table (mm)")
+    turn_ax.plot(t, history.rotation_rad, color="tab:purple", label="rotation about y")
+    turn_ax.set(xlabel="time (s)", ylabel=f"rotation{who} (rad)")
+    span = max(t[-1] - t[0], 1e-9)
+    right = t[0] + span
+    if len(fallen):
+        first = min(time_s for _, time_s, _ in fallen)
+        names = [name for name, time_s, _ in fallen if time_s == first]
+        label = f"{', '.join(names[:3])}{', ...' if len(names) > 3 else ''} fell at {first:.3f} s"
+        for ax in (ground_ax, moved_ax, turn_ax):
+            ax.axvline(first, color="tab:red", linestyle="--", linewidth=1.2, label=label if ax is ground_ax else None)
+        right = max(right, first + 0.03 * span)  # a fall at the end stays in sight
+    for ax in (ground_ax, moved_ax, turn_ax):
+        ax.axhline(0.0, color="0.6", linewidth=0.6)
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper right", fontsize="small")
+    turn_ax.set_xlim(t[0], right)
     fig.savefig(path, dpi=150)
     return path
 

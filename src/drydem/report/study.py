@@ -1,6 +1,7 @@
 """The report of a parametric study (``drydem report RESULTS_DIR``), in the style of the seed
 paper: its figures (3, 6, 9-13) and tables (2-4) from the study's run records, drydem's values
-beside the paper's (drydem.masonry.published), in Markdown and HTML with PNG figures.
+beside the paper's (drydem.masonry.published), in Markdown and HTML with PNG figures; and when
+the study has shake runs, their incremental dynamic analysis (:mod:`drydem.report.ida`).
 
 A figure or table whose runs are missing says so instead of failing: a report can be built
 from a study still running. A corrupt record is left out, and the report names its file.
@@ -131,6 +132,7 @@ def build_report(results: Path, out: Path | None = None) -> Report:
                   lambda axes, designs=designs: _pushover(axes, runs, designs), panels=len(designs)) for name, designs in PUSHOVER_FIGURES.items()),
         _figure(figures, "fig12_dls", "Fig. 12: tilt angle at 1 % drift (damage limit state) against kn = ks", lambda ax: _dls(ax, runs)),
         _figure(figures, "fig13_ks", "Fig. 13: WD6, influence of ks on the pushover curve (panels: kn)", lambda axes: _ks(axes, runs), panels=4),
+        *(_ida(figures, runs) if any(r["spec"]["analysis"] == "shake" for r in records.valid) else []),
     ]
     text = "\n\n".join(sections) + "\n"
     (out / "report.md").write_text(text)
@@ -139,6 +141,18 @@ def build_report(results: Path, out: Path | None = None) -> Report:
                                      f"<style>table{{border-collapse:collapse}}td,th{{border:1px solid #999;padding:2px 6px}}</style>"
                                      f"</head><body>\n{body}\n</body></html>\n")
     return Report(out / "report.md", out / "report.html", records.corrupt)
+
+
+def _ida(figures: Path, runs: Runs) -> list[str]:
+    """The sections of the study's shake runs (:mod:`drydem.report.ida`): the collapse table
+    and the IDA figure."""
+    from drydem.report.ida import FIGURE_CAPTION, TABLE_NOTE, TABLE_TITLE, collapse_table, draw_ida, ida_curves
+
+    curves = ida_curves(runs.ok)
+    failed = sum(r["spec"]["analysis"] == "shake" for r in runs.failed)
+    note = f"\n\n{failed} failed shake runs left out." if failed else ""
+    return [_table(TABLE_TITLE, *collapse_table(curves)) + f"\n\n{TABLE_NOTE}{note}",
+            _figure(figures, "ida_rotation", FIGURE_CAPTION, lambda ax: draw_ida(ax, curves))]
 
 
 def _corrupt(errors: list[RecordError]) -> str:

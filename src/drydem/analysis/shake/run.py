@@ -14,6 +14,9 @@ directly. Mass scaling is off (it would change the dynamics). The motion is samp
 every cycle (:meth:`~drydem.analysis.shake.motion.GroundMotion.per_cycle`); a change of the
 timestep at a re-detection ends the chunk, so each cycle's time is exact.
 
+Rows of the history are written every ``output_interval_s`` and at the end; falls are looked
+for at each row, so a fall's time is known to within one output interval.
+
 A block has fallen when it turned more than ``fall_rotation_deg`` from its orientation at rest
 (overturned), or when its centroid dropped more than ``lost_drop_heights`` of its own heights
 below where it rested (it fell out of the model; it is then taken out of the analysis, as in
@@ -22,6 +25,7 @@ the tilting analysis). The analysis stops when the monitored block has fallen.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import replace
 from collections.abc import Callable
@@ -36,10 +40,6 @@ from drydem.engine.simulation import Simulation
 from drydem.errors import DrydemError
 from drydem.model.assembly import Model
 from drydem.model.rotation import rotation_vectors
-
-#: a chunk shorter than this fraction of a timestep is not run (the end of the analysis)
-TIME_ROUNDING = 1e-6
-
 
 def shake_analysis(
     model: Model, settings: ShakeSettings, *, on_progress: Callable[[float, int, float], None] | None = None,
@@ -66,13 +66,25 @@ def shake_analysis(
 
 
 def damping_ratio(model: Model, monitor: int, settings: ShakeSettings) -> tuple[float, float | None]:
-    """The contacts' damping ratio zeta and the restitution it gives (None when zeta is set)."""
-    target = settings.target_restitution
-    if target is None:
-        return settings.contact_damping_ratio, None
-    if target == HOUSNER:
-        target = housner_restitution(RockingBlock.of(model, monitor).alpha_rad)
+    """The contacts' damping ratio zeta and the restitution it was calibrated to (None when zeta is set)."""
+    if settings.damping_ratio is not None:
+        return settings.damping_ratio, None
+    target = housner_target(model, monitor) if settings.restitution == HOUSNER else settings.restitution
     return calibrated_damping_ratio(model, monitor, target), target
+
+
+def housner_target(model: Model, monitor: int) -> float:
+    """Housner's restitution of the monitored block; DrydemError if the block is too squat to
+    rock (r = 1 - 1.5 sin^2(alpha) <= 0: alpha >= 54.7 deg), with what to give instead."""
+    alpha = RockingBlock.of(model, monitor).alpha_rad
+    target = housner_restitution(alpha)
+    if target <= 0.0:
+        raise DrydemError(
+            f"{model.source}: the monitored block {model.block_name[monitor]!r} is too squat for Housner's restitution: alpha = "
+            f"atan(b / h) = {math.degrees(alpha):.1f} deg gives 1 - 1.5 sin^2(alpha) = {target:.2f} (it rocks only below "
+            "54.7 deg); set the contact damping directly with --damping-ratio Z (contact_damping_ratio), or monitor a slender block"
+        )
+    return target
 
 
 class Shaking:
@@ -92,38 +104,45 @@ class Shaking:
         self.ended_by = DURATION
         self.time_s = 0.0
         self.rows: list[tuple[float, np.ndarray, np.ndarray, float]] = []
-        self._record(np.zeros(3))
+        self._record()
 
     def run(self, on_progress, on_frame) -> None:
-        """Cycle to the analysed time, one output interval at a time."""
+        """Cycle to the analysed time, one output interval at a time; the end is always a row."""
         settings, sim = self.settings, self.sim
+        self._report(on_progress, on_frame)
         end = settings.analysed_s
         next_output = settings.output_interval_s
-        while self.time_s < end - TIME_ROUNDING * sim.timestep:
+        while self.time_s < end - 0.5 * sim.timestep:
             dt = sim.timestep
             cycles = max(1, int(round((min(next_output, end) - self.time_s) / dt)))
             ground = settings.motion.per_cycle(dt, cycles, self.time_s)
             run = sim.cycle(cycles, ground_acceleration=ground, stop=lambda: sim.timestep != dt)
             self.time_s += run.cycles * dt
-            if self.time_s < next_output - 0.5 * dt:
+            if self.time_s < min(next_output, end) - 0.5 * dt:
                 continue
             next_output += settings.output_interval_s
-            self._record(ground[run.cycles - 1])
-            if on_progress is not None:
-                on_progress(self.time_s, sim.cycles, self.rows[-1][3])
-            if on_frame is not None:
-                on_frame(ShakeFrame(self.time_s, self.rows[-1][2][0], sim.state.copy(), sim.contacts.copy(), sim.active.copy()))
+            self._record()
+            self._report(on_progress, on_frame)
             if self._falls():
                 self.ended_by = MONITOR_FELL
                 return
 
-    def _record(self, ground: np.ndarray) -> None:
-        """A row of the history: time, table acceleration, the monitored block's displacement
-        and rotation about y."""
+    def _report(self, on_progress, on_frame) -> None:
+        """Hand the last row to ``on_progress`` and ``on_frame``."""
+        sim = self.sim
+        if on_progress is not None:
+            on_progress(self.time_s, sim.cycles - self.start_cycles, self.rows[-1][3])
+        if on_frame is not None:
+            on_frame(ShakeFrame(*self.rows[-1], sim.state.copy(), sim.contacts.copy(), sim.active.copy()))
+
+    def _record(self) -> None:
+        """A row of the history: time, the table's acceleration then, the monitored block's
+        displacement and rotation about y."""
         b = self.monitor
         moved = self.sim.state.position[b] - self.rest.position[b]
         turn = rotation_vectors(self.rest.quaternion[b:b + 1], self.sim.state.quaternion[b:b + 1])[0, 1]
-        self.rows.append((self.time_s, np.array(ground, dtype=float), moved, float(turn)))
+        ground = self.settings.motion.per_cycle(1.0, 1, self.time_s)[0]
+        self.rows.append((self.time_s, ground, moved, float(turn)))
 
     def _falls(self) -> bool:
         """Note the blocks that fell since the last look, take out those that dropped out of the

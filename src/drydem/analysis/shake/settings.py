@@ -18,6 +18,9 @@ from drydem.model.state import State
 DURATION, MONITOR_FELL = "duration", "monitored block fell"
 #: the named restitution: Housner's rigid-block value for the monitored block
 HOUSNER = "housner"
+#: the contacts' damping ratio when neither it nor a restitution is given: about what gives
+#: Housner's r to a slender block on stiff joints (0.58 for 2b x 2h = 0.2 x 0.8 m at kn = 1e9 Pa/m)
+DEFAULT_CONTACT_DAMPING_RATIO = 0.5
 
 #: the allowed values of ShakeSettings' numbers
 SETTING_RULES = {
@@ -43,8 +46,11 @@ class ShakeSettings:
     restitution : target coefficient of restitution of the monitored block's rocking impacts
     (angular velocity after / before), a number in (0, 1] or "housner" (1 - 1.5 sin^2 alpha),
     from which the contacts' damping ratio is calibrated
-    (:mod:`drydem.analysis.shake.restitution`); or contact_damping_ratio : zeta, set directly
-    (:mod:`drydem.engine.damping`). Neither given: "housner". rayleigh_mass_per_s (1/s),
+    (:mod:`drydem.analysis.shake.restitution`: it needs a block that rocks, alpha < 54.7 deg
+    for Housner's r > 0); or contact_damping_ratio : zeta, set directly
+    (:mod:`drydem.engine.damping`). Neither given: zeta = DEFAULT_CONTACT_DAMPING_RATIO (the
+    monitored block of a brick wall is a squat brick, which does not rock on its own: its
+    restitution cannot be calibrated). rayleigh_mass_per_s (1/s),
     rayleigh_stiffness_s (s) : Rayleigh damping C = alpha_R M + beta K.
     monitor : block name (default: the top block nearest the middle). fall_rotation_deg : a
     block turned more than this has overturned. lost_drop_heights : a block whose centroid
@@ -82,11 +88,11 @@ class ShakeSettings:
         return self.motion.duration_s if self.duration_s is None else self.duration_s
 
     @property
-    def target_restitution(self) -> float | str | None:
-        """The restitution the contacts' damping is calibrated to (None: the ratio is given)."""
-        if self.contact_damping_ratio is not None:
+    def damping_ratio(self) -> float | None:
+        """The contacts' damping ratio unless it is to be calibrated (None)."""
+        if self.restitution is not None:
             return None
-        return HOUSNER if self.restitution is None else self.restitution
+        return DEFAULT_CONTACT_DAMPING_RATIO if self.contact_damping_ratio is None else self.contact_damping_ratio
 
 
 @dataclass(frozen=True)
@@ -106,14 +112,21 @@ class History:
 
 @dataclass(frozen=True)
 class ShakeFrame:
-    """A state to show: model time (s), the monitored horizontal displacement (m), the blocks'
-    State, their sub-contacts and the blocks still in the analysis."""
+    """A state to show, and the history's row of it: model time (s), the table's acceleration
+    ((3,) m/s2), the monitored block's displacement ((3,) m) and rotation about y (rad) as in
+    :class:`History`, the blocks' State, their sub-contacts and the blocks still in the analysis."""
 
     time_s: float
-    ux_m: float
+    ground_acceleration_m_s2: np.ndarray
+    displacement_m: np.ndarray
+    rotation_rad: float
     state: State = field(repr=False)
     contacts: SubContacts = field(repr=False)
     active: np.ndarray = field(repr=False)
+
+    @property
+    def ux_m(self) -> float:
+        return float(self.displacement_m[0])
 
 
 @dataclass

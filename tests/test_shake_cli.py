@@ -1,0 +1,251 @@
+"""The command line of the shaking-table analysis: drydem shake, its results folder
+(summary.json, history.csv, history.png, the VTK series) and its refusals.
+
+One slender block (25 x 100 mm, b/h = 1/4, in-plane) on a fixed base, kn = 1e8: a few
+hundred cycles per run. The runs are shared by module-scoped fixtures (the first compiles the
+dynamic kernels when the cache is cold)."""
+
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import drydem as dd
+from drydem.cli import PULSE_KINDS, main
+from conftest import stack_model
+
+#: the first five columns of history.csv: a public interface
+HISTORY_HEADER = ["time_s", "ground_acc_x_m_s2", "ux_m", "uz_m", "rotation_rad"]
+#: what every summary.json of drydem shake holds
+SUMMARY_KEYS = {
+    "overturned", "overturn_rule", "fallen_blocks", "monitored_block", "max_rotation_rad", "max_displacement_m",
+    "residual_displacement_m", "duration_s", "cycles", "runtime_s", "pga_m_s2", "pga_g", "motion", "contact_damping_ratio",
+    "restitution", "timestep_s", "ended_by", "analysis", "model", "drydem_version",
+}
+#: a pulse that rocks the block without overturning it, sampled every 10 ms for 0.3 s
+PULSE = ["--pulse", "one-sine", "--amplitude", "8", "--frequency", "5", "--duration", "0.3", "--output-interval", "0.01"]
+#: a small record: two triangles of 2 m/s2, one each way (ends at rest only after correction)
+RECORD = "time_s,acc_x_m_s2\n0,0\n0.025,2\n0.05,0\n0.075,-1\n0.1,0\n0.125,1\n0.15,0\n"
+
+
+def shake(*arguments):
+    result = CliRunner().invoke(main, ["shake", *map(str, arguments)])
+    assert "Traceback" not in result.output
+    assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
+    return result
+
+
+def history(folder):
+    with (folder / "history.csv").open(newline="") as f:
+        rows = list(csv.reader(f))
+    return rows[0], np.array([[float(cell) for cell in row] for row in rows[1:]])
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    from drydem.io.model_file import save_model
+
+    folder = tmp_path_factory.mktemp("shake_inputs")
+    block = stack_model([0.1], size_xy=(0.025, 0.012), joint=dd.JointMaterial(kn=1e8, ks=1e8, friction=0.5),
+                        supports=dd.Supports(fix_y=True), points=2)
+    squat = stack_model([0.0055], supports=dd.Supports(fix_y=True), points=2)
+    paths = {"block": folder / "block.toml", "squat": folder / "squat.toml", "record": folder / "record.csv",
+             "bad": folder / "bad.csv", "missing": folder / "nosuch.csv"}
+    save_model(block, paths["block"])
+    save_model(squat, paths["squat"])
+    paths["record"].write_text(RECORD)
+    paths["bad"].write_text("time_s,acc_x_m_s2\n0,0\n0.1,oops\n")
+    return paths
+
+
+@pytest.fixture(scope="module")
+def pulse_run(files, tmp_path_factory):
+    """The pulse under the block, the contacts' damping calibrated to Housner's restitution, with the VTK series."""
+    out = tmp_path_factory.mktemp("pulse") / "run"
+    result = shake(files["block"], *PULSE, "--restitution", "housner", "--vtk", "--out", out)
+    assert result.exit_code == 0, result.output
+    return result, out
+
+
+def test_the_command_offers_the_analysis_pulses():
+    from drydem.analysis.shake import PULSES
+
+    assert PULSE_KINDS == PULSES
+
+
+def test_a_pulse_run_writes_summary_history_and_figure(pulse_run):
+    result, out = pulse_run
+    summary = json.loads((out / "summary.json").read_text())
+    assert SUMMARY_KEYS <= set(summary)
+    assert summary["overturned"] is False and summary["fallen_blocks"] == [] and summary["ended_by"] == "duration"
+    assert summary["overturn_rule"] == ("a block has fallen when it turned more than 80 deg from its orientation at rest, or its "
+                                        "centroid dropped more than 2 of its heights below where it rested")
+    assert summary["monitored_block"] == "block0"
+    assert summary["pga_m_s2"] == pytest.approx(8.0) and summary["pga_g"] == pytest.approx(8.0 / dd.G)
+    assert summary["motion"] | {"name": None} == {"name": None, "duration_s": 0.2, "samples": 201, "scale": 1.0,
+                                                  "baseline_corrected": False, "peaks_m_s2": [8.0, 0.0, 0.0]}
+    # Housner's restitution of a block with b/h = 1/4, and the damping ratio calibrated to it
+    assert summary["restitution"] == pytest.approx(1.0 - 1.5 * math.sin(math.atan(0.25)) ** 2)
+    assert summary["analysis"]["restitution"] == "housner" and summary["contact_damping_ratio"] > 0.0
+    assert summary["analysis"]["motion"] == summary["motion"]["name"] and summary["analysis"]["duration_s"] == 0.3
+    assert summary["model"]["joint"]["kn"] == 1e8 and summary["timestep_s"] > 0 and summary["cycles"] > 0
+
+    header, rows = history(out)
+    assert header[:5] == HISTORY_HEADER
+    time_s, ground, ux, uz, rotation = rows[:, :5].T
+    # a row at rest, then one every output interval (to the timestep) up to the duration
+    assert time_s[0] == 0.0 and len(rows) == 31 == summary["history_rows"]
+    np.testing.assert_allclose(time_s, 0.01 * np.arange(31), atol=summary["timestep_s"])
+    assert np.abs(ground).max() <= 8.0 and np.abs(ground).max() > 7.0
+    assert summary["max_rotation_rad"] == pytest.approx(np.abs(rotation).max(), rel=1e-6)
+    assert summary["max_displacement_m"] == pytest.approx(np.hypot(ux, rows[:, 7]).max(), rel=1e-6)
+    assert summary["residual_displacement_m"] == pytest.approx(abs(ux[-1]), rel=1e-6)
+    assert 0.05 < summary["max_rotation_rad"] < 1.4  # it rocked, and did not overturn
+    assert (out / "history.png").stat().st_size > 10_000
+
+    for printed in ("overturned      no", "rad (", "deg)", "mm", "PGA 8 m/s2 (0.815 g)", "calibrated to the restitution 0.9118, Housner's",
+                    "cycles", str(out)):
+        assert printed in result.output
+
+
+def test_the_vtk_series_is_in_model_time(pulse_run):
+    import meshio
+
+    from drydem.report.animation import series_frames
+
+    _, out = pulse_run
+    with (out / "vtk" / "frames.csv").open() as f:
+        frames = list(csv.DictReader(f))
+    _, rows = history(out)
+    assert list(frames[0]) == ["frame", "time_s", "ux_m"] and len(frames) == len(rows)  # the first at rest, t = 0
+    np.testing.assert_allclose([float(f["time_s"]) for f in frames], rows[:, 0], rtol=1e-8)
+    np.testing.assert_allclose([float(f["ux_m"]) for f in frames], rows[:, 2], rtol=1e-6, atol=1e-12)
+    for series in ("blocks", "contacts"):
+        assert (out / "vtk" / f"{series}.pvd").read_text().count("<DataSet") == len(frames)
+    assert f'timestep="{frames[-1]["time_s"]}"' in (out / "vtk" / "blocks.pvd").read_text()
+    mesh = meshio.read(out / "vtk" / f"blocks_{len(frames) - 1:04d}.vtu")
+    assert sum(len(c.data) for c in mesh.cells) == 2
+    captions = [frame.caption for frame in series_frames(out / "vtk")]
+    assert captions[1].startswith("t = 0.010 s, monitored ux") and len(captions) == len(frames)
+
+
+def test_a_csv_record_is_scaled_and_baseline_corrected(files, tmp_path):
+    from drydem.analysis.shake import read_motion
+
+    out = tmp_path / "record"
+    result = shake(files["block"], "--motion", files["record"], "--scale", "2", "--baseline", "--damping-ratio", "0.05",
+                   "--duration", "0.2", "--output-interval", "0.02", "--out", out)
+    assert result.exit_code == 0, result.output
+    summary = json.loads((out / "summary.json").read_text())
+    analysed = read_motion(files["record"]).baseline_corrected().scaled(2.0)
+    assert summary["motion"]["scale"] == 2.0 and summary["motion"]["baseline_corrected"] is True
+    assert summary["motion"]["name"] == "record.csv, baseline-corrected x 2" and summary["motion"]["samples"] == 7
+    assert summary["pga_m_s2"] == pytest.approx(analysed.pga_m_s2) and summary["pga_m_s2"] != pytest.approx(4.0)
+    assert summary["contact_damping_ratio"] == 0.05 and summary["restitution"] is None
+    header, rows = history(out)
+    assert header[:5] == HISTORY_HEADER and len(rows) == 11
+    assert np.abs(rows[:, 1]).max() <= analysed.pga_m_s2 * (1 + 1e-9)
+    assert "contact damping ratio 0.05 (given)" in result.output
+
+    # without the correction, the record is taken as it is (a pulse is never corrected)
+    plain = shake(files["block"], "--motion", files["record"], "--no-baseline", "--damping-ratio", "0.05", "--duration", "0.04",
+                  "--output-interval", "0.02", "--out", tmp_path / "plain")
+    assert plain.exit_code == 0, plain.output
+    summary = json.loads((tmp_path / "plain" / "summary.json").read_text())
+    assert summary["motion"]["baseline_corrected"] is False and summary["pga_m_s2"] == 2.0
+
+
+def test_an_overturning_pulse_names_the_block_and_overwrite_replaces_only_the_earlier_run(files, tmp_path):
+    out = tmp_path / "over"
+    out.mkdir()
+    for name in ("summary.json", "history.csv", "shake.mp4", "notes.txt"):
+        (out / name).write_text("earlier\n")
+    result = shake(files["block"], "--pulse", "one-sine", "--amplitude", "30", "--frequency", "5", "--duration", "0.3",
+                   "--damping-ratio", "0.05", "--output-interval", "0.01", "--out", out, "--overwrite")
+    assert result.exit_code == 0, result.output
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["overturned"] is True and summary["ended_by"] == "monitored block fell"
+    [fallen] = summary["fallen_blocks"]
+    assert fallen["block"] == "block0" and fallen["rule"] == "turned more than 80 deg"
+    assert summary["duration_s"] == pytest.approx(fallen["time_s"]) and fallen["time_s"] < 0.3
+    assert summary["max_rotation_rad"] > math.radians(80)
+    assert "overturned      yes: 1 block fell: 'block0' at" in result.output and "the monitored block 'block0' fell" in result.output
+    assert sorted(p.name for p in out.iterdir()) == ["history.csv", "history.png", "notes.txt", "summary.json"]
+    assert (out / "notes.txt").read_text() == "earlier\n"
+
+
+@pytest.mark.parametrize("arguments, message", [
+    ([], "no ground motion: give --motion FILE"),
+    (["--motion", "{record}", *PULSE], "--motion FILE (a record) or --pulse KIND, not both"),
+    (["--motion", "{missing}"], "nosuch.csv: no such file"),
+    (["--motion", "{bad}"], "bad.csv: line 3: acc_x_m_s2: 'oops' is not a number"),
+    ([*PULSE, "--restitution", "1.5"], "--restitution = 1.5: must be a number in (0, 1]"),
+    ([*PULSE, "--restitution", "foo"], "'--restitution': 'foo' is neither a number nor 'housner'"),
+    ([*PULSE, "--damping-ratio", "0.1", "--restitution", "0.5"], "--damping-ratio and --restitution both given"),
+    ([*PULSE, "--duration", "0"], "--duration = 0.0: must be a number in (0, 1e+06] s"),
+    ([*PULSE, "--duration", "-1"], "--duration = -1.0: must be"),
+    ([*PULSE, "--duration", "nan"], "--duration = nan: must be"),
+    ([*PULSE, "--output-interval", "0", "--rayleigh-mass", "-1"], "--output-interval = 0.0: must be a number in (0, 1000] s; --rayleigh-mass"),
+    (["--motion", "{record}", "--scale", "nan"], "--scale = nan: must be a number"),
+    (["--motion", "{record}", "--amplitude", "3"], "--amplitude applies to a --pulse only"),
+    (["--motion", "{record}", "--direction", "y"], "record.csv: direction = 'y' applies to a single-component .AT2 record"),
+    (["--pulse", "sine", "--amplitude", "3"], "--pulse sine needs --frequency F (Hz)"),
+    (["--pulse", "sine", "--amplitude", "nan", "--frequency", "-2"], "--amplitude = nan: must be a number in (-inf, inf) m/s2; --frequency"),
+    (["--pulse", "ricker", "--amplitude", "3", "--frequency", "2", "--cycles", "2"], "--cycles 2: a ricker pulse is one period"),
+    ([*PULSE, "--baseline"], "--baseline corrects a --motion record; a pulse is analytic"),
+    ([*PULSE, "--kn", "-1"], "[joint] kn = -1.0: must be a number in [1e+04, 1e+15] Pa/m"),
+    ([*PULSE, "--monitor", "nosuch"], "no block named 'nosuch'"),
+])
+def test_bad_input_is_refused_with_its_option_or_file_and_no_traceback(files, tmp_path, arguments, message):
+    out = tmp_path / "never"
+    result = shake(files["block"], *[a.format(**files) for a in arguments], "--out", out)
+    assert result.exit_code != 0 and message in result.output, result.output
+    assert not out.exists()  # refused before anything was written
+
+
+def test_housners_restitution_of_a_squat_block_is_refused_before_the_run(files, tmp_path):
+    result = shake(files["squat"], *PULSE, "--restitution", "housner", "--out", tmp_path / "never")
+    assert result.exit_code == 1
+    assert "the monitored block 'block0' is too squat for Housner's restitution" in result.output and "--damping-ratio" in result.output
+
+
+def test_an_existing_results_folder_is_kept_without_overwrite(files, tmp_path):
+    out = tmp_path / "taken"
+    out.mkdir()
+    (out / "summary.json").write_text("earlier\n")
+    result = shake(files["block"], *PULSE, "--out", out)
+    assert result.exit_code == 1 and "already holds another run (summary.json); pass --overwrite" in result.output
+    assert [p.name for p in out.iterdir()] == ["summary.json"] and (out / "summary.json").read_text() == "earlier\n"
+
+
+def test_an_interrupted_shake_keeps_the_rows_written_so_far(files, tmp_path):
+    # a real process and a real Ctrl-C (SIGINT at its default, as in a terminal: see test_cli)
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "run"
+    command = [sys.executable, "-c", "from drydem.cli import main; main()", "shake", str(files["block"]), "--pulse", "sine",
+               "--amplitude", "0.5", "--frequency", "5", "--duration", "1000", "--output-interval", "0.01", "--damping-ratio", "0.05",
+               "--out", str(out)]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    path = out / "history.csv"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and not (path.is_file() and len(path.read_text().splitlines()) >= 4):
+        time.sleep(0.2)
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 130, err[-500:]
+    assert "interrupted (SIGINT)" in err and "history.csv" in err and "Traceback" not in err
+    assert not (out / "summary.json").exists()
+    with path.open(newline="") as f:
+        rows = list(csv.reader(f))
+    assert rows[0][:5] == HISTORY_HEADER and len(rows) >= 4
+    assert all(len(row) == len(rows[0]) for row in rows) and [float(x) for x in rows[1]] == [0.0] * len(rows[0])
+    times = [float(row[0]) for row in rows[1:]]
+    assert times == sorted(times) and times[1] == pytest.approx(0.01, abs=1e-3)
