@@ -86,11 +86,11 @@ def test_free_rocking_reaches_its_first_impact_at_a_quarter_period(rocking, frac
     """Housner 1963, Eq. for slender blocks: released at rest from theta0, the block reaches
     theta = 0 after T/4 = arccosh(1 / (1 - theta0 / alpha)) / p. The formula linearises
     sin(alpha - theta) (alpha = 0.245 rad here); the exact nonlinear equation's time
-    (oracles.rocking) is within 1 % of it for these releases, and the DEM's within 2 % (the
-    joints' elastic closure lets the pivot sink)."""
+    (oracles.rocking) is within 0.2 % of it for these releases, and the DEM's within 0.3 %
+    (measured 0.25 %, 0.10 %, 0.02 %: the joints' elastic closure lets the pivot sink); 1 % asked."""
     theta0 = fraction * ALPHA
     expected = math.acosh(1.0 / (1.0 - theta0 / ALPHA)) / P
-    assert first_impact_time(rocking, theta0) == pytest.approx(expected, rel=0.02)
+    assert first_impact_time(rocking, theta0) == pytest.approx(expected, rel=0.01)
 
 
 def rocking_peaks(rocking, theta0: float, ratio: float, count: int) -> list[float]:
@@ -112,7 +112,8 @@ def test_rocking_peaks_decay_by_the_restitution_set(rocking):
     """Housner 1963: with a coefficient of restitution r (angular velocity kept at each impact)
     successive peaks obey cos(alpha - theta_n+1) - cos(alpha) = r^2 (cos(alpha - theta_n) - cos(alpha)).
     The contacts' damping ratio is calibrated to r = 0.93 from the first impact of a release
-    at alpha / 2; the next impacts, at smaller amplitudes, keep r within 0.02."""
+    at alpha / 2; the next impacts, at smaller amplitudes, keep r within 0.02 (measured 0.930,
+    0.927, 0.928, 0.930)."""
     r = 0.93
     ratio = calibrated_damping_ratio(rocking.model, 1, r)
     peaks = rocking_peaks(rocking, 0.5 * ALPHA, ratio, 4)
@@ -159,8 +160,8 @@ def test_slip_under_a_constant_acceleration_pulse_is_newmarks():
         d = (a - mu g) T^2 / 2 + ((a - mu g) T)^2 / (2 mu g)
 
     (relative acceleration -(a - mu g) during the pulse, then friction stops the relative
-    velocity (a - mu g) T at mu g). Here a = 5, mu g = 2.943 m/s2, T = 0.2 s: d = 75.0 mm
-    against the shear springs' elastic ~1e-6 m."""
+    velocity (a - mu g) T at mu g). Here a = 5, mu g = 2.943 m/s2, T = 0.2 s: d = 69.9 mm
+    (measured 70.3 mm) against the shear springs' elastic ~1e-6 m."""
     mu, a, duration = 0.3, 5.0, 0.2
     excess = a - mu * dd.G
     expected = excess * duration**2 / 2 + (excess * duration) ** 2 / (2 * mu * dd.G)
@@ -286,7 +287,8 @@ def test_the_least_overturning_one_sine_pulse_is_the_rigid_blocks(rocking, frequ
     upward in 1 % steps, as the safe region above the minimum requires: not bisected):
     3.02 m/s2 (1.23 g tan alpha) at omega_p / p = 2, 4.41 m/s2 (1.80) at 4 for this block. The
     DEM block (kn = 1e9, contacts damped to Housner's r, calibrated) is scanned upward in 2 %
-    steps from 90 % of it; agreement within 5 % (two scan steps and the joints' compliance)."""
+    steps from 90 % of it: measured 3.00 and 4.38 m/s2 (-0.6 %); agreement within 5 % asked
+    (two scan steps and the joints' compliance)."""
     frequency_hz = frequency_ratio * P / (2 * math.pi)
     expected = RIGID_MINIMUM_M_S2[frequency_ratio]
     ratio = calibrated_damping_ratio(rocking.model, 1, housner_restitution(ALPHA))

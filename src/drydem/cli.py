@@ -550,7 +550,8 @@ def _shake_outputs(found: Target, model: Model, result, folder: Path, series, *,
                "(horizontal, relative to the table)")
     click.echo(f"ground motion   PGA {motion.pga_m_s2:.4g} m/s2 ({motion.pga_g:.3g} g): {motion.name}, {motion.duration_s:g} s")
     if result.restitution is None:
-        damping = f"contact damping ratio {result.contact_damping_ratio:.4g} (given)"
+        given = "given" if settings.contact_damping_ratio is not None else "the default"
+        damping = f"contact damping ratio {result.contact_damping_ratio:.4g} ({given})"
     else:
         housner = ", Housner's" if settings.restitution == HOUSNER else ""
         damping = f"contact damping ratio {result.contact_damping_ratio:.4g}, calibrated to the restitution {result.restitution:.4g}{housner}"

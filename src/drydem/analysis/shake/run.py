@@ -41,6 +41,7 @@ from drydem.errors import DrydemError
 from drydem.model.assembly import Model
 from drydem.model.rotation import rotation_vectors
 
+
 def shake_analysis(
     model: Model, settings: ShakeSettings, *, on_progress: Callable[[float, int, float], None] | None = None,
     on_frame: Callable[[ShakeFrame], None] | None = None,
