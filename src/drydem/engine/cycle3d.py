@@ -134,17 +134,20 @@ def integrate(state, rot, blocks, force, moment, damping, dt):
         for k in range(3):
             f = force[i, k] * free[k]
             f2 += f * f
-            v = state.velocity[i, k]
-            state.velocity[i, k] += (local_damping(f, v, local) * blocks.inv_mass[i] - drag * v) * dt
+            if drag != 0.0:  # Rayleigh's mass term, explicit: a branch, so that statics round as before it
+                state.velocity[i, k] *= 1.0 - drag * dt
+            state.velocity[i, k] += local_damping(f, state.velocity[i, k], local) * blocks.inv_mass[i] * dt
             m = moment[i, k] * free[3 + k]
             m2 += m * m
             moment[i, k] = local_damping(m, state.angular_velocity[i, k], local)
         # world inertia I_w = R I_body R^T applied to omega, and the gyroscopic moment omega x I_w omega
         w = state.angular_velocity[i]
         lx, ly, lz = _world_tensor_apply(r, blocks.inertia_body[i], w[0], w[1], w[2])
-        tx = moment[i, 0] - (w[1] * lz - w[2] * ly) - drag * lx
-        ty = moment[i, 1] - (w[2] * lx - w[0] * lz) - drag * ly
-        tz = moment[i, 2] - (w[0] * ly - w[1] * lx) - drag * lz
+        tx = moment[i, 0] - (w[1] * lz - w[2] * ly)
+        ty = moment[i, 1] - (w[2] * lx - w[0] * lz)
+        tz = moment[i, 2] - (w[0] * ly - w[1] * lx)
+        if drag != 0.0:
+            tx, ty, tz = tx - drag * lx, ty - drag * ly, tz - drag * lz
         ax, ay, az = _world_tensor_apply(r, blocks.inv_inertia_body[i], tx, ty, tz)
         w[0] += ax * dt * free[3]
         w[1] += ay * dt * free[4]

@@ -126,10 +126,12 @@ def integrate(state, blocks, force, moment, damping, dt):
         free_x, free_z, free_ry = blocks.free[i, 0], blocks.free[i, 2], blocks.free[i, 4]
         v, p = state.velocity[i], state.position[i]
         fx, fz, my = force[i, 0] * free_x, force[i, 2] * free_z, moment[i, 1] * free_ry
-        v[0] = (v[0] + (local_damping(fx, v[0], local) * blocks.inv_mass[i] - drag * v[0]) * dt) * free_x
-        v[2] = (v[2] + (local_damping(fz, v[2], local) * blocks.inv_mass[i] - drag * v[2]) * dt) * free_z
         w = state.angular_velocity[i, 1]
-        w += (local_damping(my, w, local) * blocks.inv_inertia_body[i, 1, 1] - drag * w) * dt * free_ry
+        if drag != 0.0:  # Rayleigh's mass term, explicit: a branch, so that statics round as before it
+            v[0], v[2], w = v[0] * (1.0 - drag * dt), v[2] * (1.0 - drag * dt), w * (1.0 - drag * dt)
+        v[0] = (v[0] + local_damping(fx, v[0], local) * blocks.inv_mass[i] * dt) * free_x
+        v[2] = (v[2] + local_damping(fz, v[2], local) * blocks.inv_mass[i] * dt) * free_z
+        w += local_damping(my, w, local) * blocks.inv_inertia_body[i, 1, 1] * dt * free_ry
         state.angular_velocity[i, 1] = w
         p[0] += v[0] * dt
         p[2] += v[2] * dt

@@ -109,14 +109,15 @@ def matrices(quaternion: np.ndarray) -> np.ndarray:
 
 def rotation_vectors(q_from: np.ndarray, q_to: np.ndarray) -> np.ndarray:
     """(n, 3) world-frame rotation vectors phi (rad) with q_to = exp(phi / 2) (x) q_from (the
-    convention of :func:`rotate_by_vector`), for (n, 4) unit quaternions (w, x, y, z): the
-    relative quaternion q = q_to (x) q_from^-1, taken the shorter way round (w >= 0), gives
-    phi = 2 atan2(|v|, w) v / |v| (NumPy; the tests hold it to scipy's Rotation)."""
-    w0, v0 = q_from[:, 0], -q_from[:, 1:]  # the conjugate, the inverse of a unit quaternion
-    w1, v1 = q_to[:, 0], q_to[:, 1:]
-    w = w1 * w0 - np.einsum("ni,ni->n", v1, v0)
-    v = w1[:, None] * v0 + w0[:, None] * v1 + np.cross(v1, v0)
-    v = np.where(w[:, None] < 0.0, -v, v)
-    sine = np.linalg.norm(v, axis=1)
-    angle = 2.0 * np.arctan2(sine, np.abs(w))
-    return v * np.divide(angle, sine, out=np.full_like(angle, 2.0), where=sine > 0.0)[:, None]
+    convention of :func:`rotate_by_vector`), for (n, 4) unit quaternions (scipy's Rotation)."""
+    from scipy.spatial.transform import Rotation
+
+    scalar_last = [1, 2, 3, 0]
+    return (Rotation.from_quat(q_to[:, scalar_last]) * Rotation.from_quat(q_from[:, scalar_last]).inv()).as_rotvec()
+
+
+def turn_angles(q_from: np.ndarray, q_to: np.ndarray) -> np.ndarray:
+    """(n,) angles (rad, in [0, pi]) of the rotations from q_from to q_to, (n, 4) unit quaternions:
+    2 arccos |q_from . q_to|. Cheap, for comparing turns with a threshold (arccos loses digits
+    below ~1e-8 rad; :func:`rotation_vectors` does not)."""
+    return 2.0 * np.arccos(np.minimum(np.abs(np.einsum("ni,ni->n", q_from, q_to)), 1.0))

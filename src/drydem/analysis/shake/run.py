@@ -39,7 +39,7 @@ from drydem.engine.damping import Damping
 from drydem.engine.simulation import Simulation
 from drydem.errors import DrydemError
 from drydem.model.assembly import Model
-from drydem.model.rotation import rotation_vectors
+from drydem.model.rotation import rotation_vectors, turn_angles
 
 
 def shake_analysis(
@@ -150,7 +150,7 @@ class Shaking:
         model; whether the monitored block fell."""
         sim, model = self.sim, self.sim.model
         named = {name for name, _, _ in self.fallen}
-        turned = np.linalg.norm(rotation_vectors(self.rest.quaternion, sim.state.quaternion), axis=1) > self.fall_rotation
+        turned = turn_angles(self.rest.quaternion, sim.state.quaternion) > self.fall_rotation
         dropped = self.rest.position[:, 2] - sim.state.position[:, 2] > self.lost_drop
         candidates = model.block_movable & sim.active
         for rule, hit in ((f"turned more than {self.settings.fall_rotation_deg:g} deg", turned), ("dropped out of the model", dropped)):
