@@ -19,7 +19,7 @@ import time
 import traceback
 from collections.abc import Callable, Iterable
 from concurrent.futures import FIRST_COMPLETED, Executor, Future, wait
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from drydem.errors import DrydemError
@@ -67,39 +67,20 @@ def _analyse(spec: RunSpec) -> dict:
 
 
 def shake_summary(result, spec: RunSpec, motion, model) -> dict:
-    """The summary of a shake run's record: the response (:class:`~drydem.analysis.shake.ShakeResult`),
-    the motion (``spec.motion`` as the study gives it, the analysed motion's name, and the PGA
-    of ``motion``, the motion before its scale) and the scale, the settings, the model. The
-    report's IDA reads it (:mod:`drydem.report.ida`); records.SUMMARY_KEYS are checked."""
-    from drydem import __version__
-    from drydem.io.results import model_summary
-    from drydem.model.parameters import G
+    """The summary of a shake run's record: ``drydem shake``'s
+    (:func:`drydem.io.results.shake_summary`), with the motion as the study gives it
+    (``spec.motion``, which the report's IDA groups by: :mod:`drydem.report.ida`), the analysed
+    motion's name and the PGA of ``motion``, the motion before its scale; records.SUMMARY_KEYS
+    are checked."""
+    from drydem.io.results import shake_summary as command_summary
 
-    settings = {field.name: getattr(result.settings, field.name) for field in fields(result.settings) if field.name != "motion"}
-    return {
-        "overturned": result.overturned,
-        "max_rotation_rad": result.max_rotation_rad,
-        "max_displacement_m": result.max_displacement_m,
-        "residual_displacement_m": result.residual_displacement_m,
-        "pga_m_s2": result.pga_m_s2,
-        "pga_g": result.pga_m_s2 / G,
-        "scale": spec.scale,
+    corrected = not spec.motion.startswith(PULSE_PREFIX)
+    return command_summary(result, model, scale=spec.scale, baseline_corrected=corrected) | {
         "motion": spec.motion,
         "motion_name": result.settings.motion.name,
         "motion_pga_m_s2": motion.pga_m_s2,
-        "baseline_corrected": not spec.motion.startswith(PULSE_PREFIX),
-        "fallen_blocks": [{"block": name, "time_s": time_s, "rule": rule} for name, time_s, rule in result.fallen_blocks],
-        "monitored_block": result.monitored_block,
-        "ended_by": result.ended_by,
-        "duration_s": result.duration_s,
-        "cycles": result.cycles,
-        "timestep_s": result.timestep_s,
-        "contact_damping_ratio": result.contact_damping_ratio,
-        "restitution": result.restitution,
-        "runtime_s": round(result.runtime_s, 3),
-        "analysis": settings,
-        "model": model_summary(model),
-        "drydem_version": __version__,
+        "scale": spec.scale,
+        "baseline_corrected": corrected,
     }
 
 
