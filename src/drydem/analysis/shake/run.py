@@ -103,7 +103,7 @@ class Shaking:
         self.fall_rotation = np.radians(settings.fall_rotation_deg)
         self.fallen: list[tuple[str, float, str]] = []
         self.ended_by = DURATION
-        self.time_s = 0.0
+        self.start_s = sim.time_s
         self.rows: list[tuple[float, np.ndarray, np.ndarray, float]] = []
         self._record()
 
@@ -117,8 +117,7 @@ class Shaking:
             dt = sim.timestep
             cycles = max(1, int(round((min(next_output, end) - self.time_s) / dt)))
             ground = settings.motion.per_cycle(dt, cycles, self.time_s)
-            run = sim.cycle(cycles, ground_acceleration=ground, stop=lambda: sim.timestep != dt)
-            self.time_s += run.cycles * dt
+            sim.cycle(cycles, ground_acceleration=ground, stop=lambda: sim.timestep != dt)
             if self.time_s < min(next_output, end) - 0.5 * dt:
                 continue
             next_output += settings.output_interval_s
@@ -127,6 +126,11 @@ class Shaking:
             if self._falls():
                 self.ended_by = MONITOR_FELL
                 return
+
+    @property
+    def time_s(self) -> float:
+        """Model time since the shaking started, s."""
+        return self.sim.time_s - self.start_s
 
     def _report(self, on_progress, on_frame) -> None:
         """Hand the last row to ``on_progress`` and ``on_frame``."""
