@@ -24,7 +24,7 @@ import numpy as np
 import drydem as dd
 from drydem.engine import cycle3d, cycle_planar, loop
 from drydem.engine.damping import Damping
-from drydem.engine.joints import JointConstants
+from drydem.engine.joints import kernel_joint
 from drydem.engine.simulation import AT_REST
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the oracles and the wall live with the tests
@@ -39,9 +39,9 @@ def time_engine(run_cycles, sim, cycles: int, gravity) -> float:
         state = sim.state.copy()
         contacts = sim.contacts.copy()
         start = time.perf_counter()
-        settings = loop.LoopSettings(gravity, sim.timestep, Damping(0.8), cycles, loop.RATIO, -1.0, 1.0, 1.0, np.inf, AT_REST)
+        settings = loop.LoopSettings(gravity, sim.timestep, Damping(0.8), cycles, loop.RATIO, -1.0, 1.0, 1.0, np.inf, AT_REST, sim.stress_limit)
         unlimited = sim.neighbours._replace(limit=np.full(len(sim.neighbours.pairs), np.inf))
-        n, code, _, _ = run_cycles(state, sim.blocks, contacts, JointConstants.of(sim.model.joint), settings, state.copy(), unlimited)
+        n, code, _, _ = run_cycles(state, sim.blocks, contacts, kernel_joint(sim.model.joint), settings, state.copy(), unlimited)
         best = min(best, (time.perf_counter() - start) / n)
         assert code == loop.RUNNING and n == cycles
     return best

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from drydem.engine.joints import JointConstants, normal_law, shear_law
+from drydem.engine.joints import kernel_joint, normal_law, shear_law
 from drydem.model.parameters import JointMaterial
 
 AREA = 1e-4  # m2
@@ -11,7 +11,7 @@ AREA = 1e-4  # m2
 
 def law(closure, dus=(0.0, 0.0, 0.0), fs=(0.0, 0.0, 0.0), intact=True, **material):
     """(F_n, F_s x, F_s y, F_s z, intact) as the kernels apply the two laws."""
-    joint = JointConstants.of(JointMaterial(**({"kn": 1e8, "ks": 5e7, "friction": 0.5} | material)))
+    joint = kernel_joint(JointMaterial(**({"kn": 1e8, "ks": 5e7, "friction": 0.5} | material)))
     fn, carries = normal_law(closure, AREA, intact, joint)
     if not carries:
         return 0.0, 0.0, 0.0, 0.0, False

@@ -9,7 +9,7 @@ from drydem.engine import cycle3d
 from drydem.engine import cycle_planar
 from oracles import cycle as reference
 from drydem.engine.damping import Damping
-from drydem.engine.joints import JointConstants
+from drydem.engine.joints import kernel_joint
 from conftest import layout_blocks, tilted_gravity
 
 
@@ -67,7 +67,7 @@ def assert_same_cycle(step, oracle, sim, joint, gravity, components=(0, 1, 2), d
 
 @pytest.mark.parametrize("cohesion, tension", [(0.0, 0.0), (50.0, 20.0)])
 def test_one_step_gives_the_same_forces_and_motion(loaded_wall_3d, cohesion, tension):
-    joint = JointConstants.of(dd.JointMaterial(kn=3e7, ks=3e7, friction=0.5, cohesion=cohesion, tension=tension))
+    joint = kernel_joint(dd.JointMaterial(kn=3e7, ks=3e7, friction=0.5, cohesion=cohesion, tension=tension))
     assert not loaded_wall_3d.model.in_plane and np.abs(loaded_wall_3d.state.angular_velocity[:, [0, 2]]).max() > 0
     sub = assert_same_cycle(cycle3d.step, reference.step, loaded_wall_3d, joint, tilted_gravity(12.0, turn_deg=30.0))
     assert (sub.normal_force == 0).any() and (sub.normal_force > 0).any()  # open and closed joints
@@ -77,9 +77,26 @@ def test_planar_step_gives_the_3d_kernels_forces_and_motion(loaded_wall):
     """An in-plane wall (the benchmark wall): one planar cycle against one 3D cycle from the same
     state, to round-off; the 3D kernel leaves y, rx and rz untouched there (they are held)."""
     assert loaded_wall.model.in_plane
-    joint = JointConstants.of(loaded_wall.model.joint)
+    joint = kernel_joint(loaded_wall.model.joint)
     sub = assert_same_cycle(cycle_planar.step, cycle3d.step, loaded_wall, joint, tilted_gravity(12.0), components=[0, 2])
     assert (sub.shear_force != 0).any() and (sub.normal_force == 0).any()
+
+
+#: stress-dependent joints whose stiffness ranges over decades within the loaded walls' stresses
+#: (kn at 1 kPa = 3e7 Pa/m; the affine law's slope the seed paper's 17.52 per mm)
+STRESS_JOINTS = [
+    dict(model="power", kn=3e7, ks=2e7, kn_exponent=0.8, ks_exponent=0.5, stress_ref=1e3, kn_min=1e5, kn_max=1e10),
+    dict(model="affine", kn=1e6, ks=1e6, kn_per_stress=17520.0, ks_per_stress=8000.0, kn_max=1e9),
+]
+
+
+@pytest.mark.parametrize("law", STRESS_JOINTS, ids=lambda law: law["model"])
+def test_stress_dependent_joint_gives_the_oracles_forces_and_motion(loaded_wall_3d, loaded_wall, law):
+    """kn(sigma), ks(sigma): the 3D kernel against the NumPy oracle (its shear stiffness from
+    oracles.joints), the planar kernel against the 3D one, one cycle from the same states."""
+    joint = kernel_joint(dd.JointMaterial(friction=0.5, **law))
+    assert_same_cycle(cycle3d.step, reference.step, loaded_wall_3d, joint, tilted_gravity(12.0, turn_deg=30.0))
+    assert_same_cycle(cycle_planar.step, cycle3d.step, loaded_wall, joint, tilted_gravity(12.0), components=[0, 2])
 
 
 #: dynamics' damping: no local damping, contact dashpots (ratio and Rayleigh's stiffness term) and
@@ -90,9 +107,9 @@ VISCOUS = Damping(0.0, contact_ratio=0.3, stiffness_proportional=1e-4, mass_prop
 def test_viscous_damping_gives_the_oracles_forces_and_motion(loaded_wall_3d, loaded_wall):
     """The dashpots and the mass-proportional drag: the 3D kernel against the NumPy oracle, the
     planar kernel against the 3D one, one cycle from the same moving states."""
-    joint = JointConstants.of(loaded_wall_3d.model.joint)
+    joint = kernel_joint(loaded_wall_3d.model.joint)
     assert_same_cycle(cycle3d.step, reference.step, loaded_wall_3d, joint, tilted_gravity(12.0, turn_deg=30.0), damping=VISCOUS)
-    joint = JointConstants.of(loaded_wall.model.joint)
+    joint = kernel_joint(loaded_wall.model.joint)
     assert_same_cycle(cycle_planar.step, cycle3d.step, loaded_wall, joint, tilted_gravity(12.0), components=[0, 2], damping=VISCOUS)
 
 
@@ -145,8 +162,10 @@ def test_compiled_contact_stiffness_and_timestep_match_their_numpy_oracles(bench
 
     sim = dd.Simulation(benchmark_wall)
     m = benchmark_wall
-    fast = inertia.contact_stiffness(sim.contacts, 3e7, 1e7, m.n_blocks)
-    slow = contact_stiffness_reference(sim.contacts, 3e7, 1e7, m.n_blocks)
+    # per sub-contact stiffness varying over two decades, as a stress-dependent joint's
+    stiffness = np.geomspace(1e7, 1e9, sim.contacts.count)
+    fast = inertia.contact_stiffness(sim.contacts, stiffness, m.n_blocks)
+    slow = contact_stiffness_reference(sim.contacts, stiffness, m.n_blocks)
     np.testing.assert_allclose(fast[0], slow[0], rtol=1e-12)
     np.testing.assert_allclose(fast[1], slow[1], rtol=0, atol=1e-12 * np.abs(slow[1]).max())
     args = (m.block_mass, m.block_inertia_whitening, m.block_movable, *fast)

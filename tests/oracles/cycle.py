@@ -13,6 +13,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from drydem.engine.cycle3d import cycle_loop
+from drydem.engine.joints import StressJoint, normal_stress
+from oracles.joints import shear_stiffness
 
 
 def _apply(rot: np.ndarray, vec: np.ndarray) -> np.ndarray:
@@ -56,9 +58,16 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
 
     # joint law
     area = sub.area
-    fn = joint.kn * area * -gap
+    if isinstance(joint, StressJoint):
+        # the law's values from the closed form (itself held to oracles.joints' quadrature);
+        # the shear stiffness from oracles.joints at each sub-contact's stress
+        fn = np.array([normal_stress(u, joint) for u in -gap]) * area
+        shear_scale = np.array([shear_stiffness(sigma, joint) for sigma in fn / area]) * area
+    else:
+        fn = joint.kn * area * -gap
+        shear_scale = joint.ks * area
     opened = fn < -np.where(sub.intact, joint.tension * area, 0.0)
-    fs_new = fs_t - joint.ks * area[:, None] * dus
+    fs_new = fs_t - shear_scale[:, None] * dus
     limit = np.maximum(np.where(sub.intact, joint.cohesion * area, 0.0) + joint.friction * fn, 0.0)
     magnitude = _norm(fs_new)
     slip = magnitude > limit

@@ -8,9 +8,9 @@ import numpy as np
 from drydem.engine.contacts import SubContacts
 
 
-def contact_stiffness_reference(sub: SubContacts, kn: float, ks: float, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:
-    """The same as :func:`contact_stiffness`, with NumPy weighted bincounts."""
-    k = max(kn, ks) * sub.area
+def contact_stiffness_reference(sub: SubContacts, stiffness: np.ndarray, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:
+    """The same as :func:`contact_stiffness` (``stiffness`` (ns,) Pa/m), with NumPy weighted bincounts."""
+    k = stiffness * sub.area
     k_t = np.bincount(sub.block_ref, k, n_blocks) + np.bincount(sub.block_inc, k, n_blocks)
     second = np.zeros((n_blocks, 3, 3))
     for block, arm in ((sub.block_ref, sub.point_ref_body), (sub.block_inc, sub.point_inc_body)):

@@ -2,7 +2,8 @@
 
 Critical timestep. The central-difference scheme is stable for dt < 2 / omega_max
 (omega_max the highest natural frequency). Block i is touched by springs of stiffness
-k_s = max(kn, ks) A_s at lever arms r_s from its centroid; they give it the translational
+k_s = max(kn, ks) A_s (for a stress-dependent joint, at a stress above the one reached:
+:func:`stiffness_bound`) at lever arms r_s from its centroid; they give it the translational
 stiffness K_t = sum_s k_s (N/m) and the rotational stiffness matrix
 K_r = sum_s k_s (|r_s|^2 1 - r_s r_s^T) (N m). The block alone on fixed partners has
 omega^2 <= K_t / m + lambda_max(I^-1 K_r) (a positive block matrix is bounded by the sum
@@ -29,6 +30,7 @@ import numpy as np
 
 from drydem.engine.contacts import SubContacts
 from drydem.engine.damping import Damping, timestep_factor
+from drydem.engine.joints import JointConstants, StressJoint, kernel_joint, normal_stiffness, shear_stiffness
 from drydem.errors import ModelError
 from drydem.model.assembly import Model
 from drydem.model.parameters import G
@@ -55,20 +57,56 @@ class BlockConstants(NamedTuple):
     origin: np.ndarray
 
 
-def contact_stiffness(sub: SubContacts, kn: float, ks: float, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:
-    """Per-block K_t (nb,) N/m and K_r (nb, 3, 3) N m of its sub-contact springs (body frame):
-    K_t = sum_s k_s, K_r = trace(S) 1 - S with S = sum_s k_s r_s r_s^T, k_s = max(kn, ks) A_s.
-    Compiled (it runs at every re-detection); the tests hold it to a NumPy oracle."""
-    return _contact_stiffness(sub.pairs, sub.start, sub.point_ref_body, sub.point_inc_body, sub.area, max(kn, ks), n_blocks)
+#: a stress-dependent joint's timestep holds until a sub-contact's normal stress exceeds this
+#: many times its stress when the timestep was computed (plus STRESS_FLOOR_WEIGHTS)
+STRESS_HEADROOM = 2.0
+#: ... plus this many times the mean stress of the free blocks' weight over all the sub-contacts
+#: (a joint just made, at zero stress, may load up to it before the timestep is recomputed)
+STRESS_FLOOR_WEIGHTS = 1.0
+
+
+def stiffness_bound(joint: JointConstants | StressJoint, sub: SubContacts, weight_n: float) -> tuple[np.ndarray, np.ndarray]:
+    """The stiffness per area each sub-contact's springs are counted with in the critical
+    timestep, (ns,) Pa/m, and the normal stress up to which that holds, (ns,) Pa ((0,) for a
+    constant law: max(kn, ks) always holds).
+
+    Stress-dependent laws: the stress limit is sigma_lim = STRESS_HEADROOM sigma + STRESS_FLOOR_WEIGHTS
+    ``weight_n`` / sum A (N over m2: the free blocks' weight spread over every sub-contact) and the
+    stiffness max(kn(sigma_lim), ks(sigma_lim)), both laws growing with sigma. The cycles stop
+    (:data:`drydem.engine.loop.STIFFENED`) once a sub-contact's stress passes its limit, and the
+    timestep is computed again with the stiffness then reached.
+    """
+    if isinstance(joint, JointConstants):
+        return np.full(sub.count, max(joint.kn, joint.ks)), np.zeros(0)
+    floor = STRESS_FLOOR_WEIGHTS * weight_n / max(float(sub.area.sum()), 1e-300)
+    limit = STRESS_HEADROOM * np.maximum(sub.normal_force / sub.area, 0.0) + floor
+    return _law_stiffness(limit, joint), limit
 
 
 @numba.njit(cache=True)
-def _contact_stiffness(pairs, start, point_ref_body, point_inc_body, area, k_per_area, n_blocks):
+def _law_stiffness(stress, joint):
+    """max(kn(sigma), ks(sigma)) of each stress (ns,) Pa, Pa/m."""
+    out = np.empty_like(stress)
+    for s in range(stress.shape[0]):
+        out[s] = max(normal_stiffness(stress[s], joint), shear_stiffness(stress[s], joint))
+    return out
+
+
+def contact_stiffness(sub: SubContacts, stiffness: np.ndarray, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:
+    """Per-block K_t (nb,) N/m and K_r (nb, 3, 3) N m of its sub-contact springs (body frame):
+    K_t = sum_s k_s, K_r = trace(S) 1 - S with S = sum_s k_s r_s r_s^T, k_s = ``stiffness``_s A_s
+    (``stiffness`` (ns,) Pa/m: :func:`stiffness_bound`). Compiled (it runs at every
+    re-detection); the tests hold it to a NumPy oracle."""
+    return _contact_stiffness(sub.pairs, sub.start, sub.point_ref_body, sub.point_inc_body, sub.area, stiffness, n_blocks)
+
+
+@numba.njit(cache=True)
+def _contact_stiffness(pairs, start, point_ref_body, point_inc_body, area, stiffness, n_blocks):
     k_t = np.zeros(n_blocks)
     second = np.zeros((n_blocks, 3, 3))
     for c in range(pairs.shape[0]):
         for s in range(start[c], start[c + 1]):
-            k = k_per_area * area[s]
+            k = stiffness[s] * area[s]
             for side in range(2):
                 b = pairs[c, side]
                 arm = point_ref_body[s] if side == 0 else point_inc_body[s]
@@ -145,11 +183,21 @@ def scaled_inertia(
     return m, inertia
 
 
+class Inertia(NamedTuple):
+    """What the cycles run with for a set of contacts: the timestep, s; the blocks' constants;
+    the normal stress (ns,) Pa up to which the timestep holds ((0,): always; :func:`stiffness_bound`)."""
+
+    timestep: float
+    blocks: BlockConstants
+    stress_limit: np.ndarray
+
+
 def timestep_and_blocks(
     model: Model, contacts: SubContacts, active: np.ndarray, *, fixed_timestep: float | None, scaled_timestep: float | None,
     damping: Damping,
-) -> tuple[float, BlockConstants]:
-    """The timestep (s) and the blocks' constants with ``contacts``, blocks not ``active`` held.
+) -> Inertia:
+    """The timestep (s), the blocks' constants with ``contacts``, blocks not ``active`` held, and
+    the stress limit of a stress-dependent joint (:func:`stiffness_bound`).
 
     The timestep is ``fixed_timestep`` (ModelError if above the critical one), else
     ``solver.timestep_safety`` times the critical one (:func:`critical_timestep`, reduced for
@@ -159,15 +207,16 @@ def timestep_and_blocks(
     which is then the one to keep).
     """
     solver = model.solver
-    k_t, k_r = contact_stiffness(contacts, model.joint.kn, model.joint.ks, model.n_blocks)
     movable = model.block_movable & active
+    stiffness, stress_limit = stiffness_bound(kernel_joint(model.joint), contacts, G * float(model.block_mass[movable].sum()))
+    k_t, k_r = contact_stiffness(contacts, stiffness, model.n_blocks)
     critical = critical_timestep(model.block_mass, model.block_inertia_whitening, movable, k_t, k_r)
     critical *= timestep_factor(damping, critical) if np.isfinite(critical) else 1.0
     if fixed_timestep is not None:
         if fixed_timestep > critical:
             raise ModelError(
                 f"{model.source}: timestep {fixed_timestep:.3g} s exceeds the critical timestep "
-                f"{critical:.3g} s (kn = {model.joint.kn:.3g} Pa/m); the run would blow up"
+                f"{critical:.3g} s (joint stiffness up to {stiffness.max(initial=0.0):.3g} Pa/m); the run would blow up"
             )
         dt = fixed_timestep
     else:
@@ -176,7 +225,7 @@ def timestep_and_blocks(
     if solver.mass_scaling:
         dt = dt if scaled_timestep is None else scaled_timestep
         mass, inertia = scaled_inertia(mass, inertia, k_t, k_r, dt, solver.timestep_safety)
-    return float(dt), BlockConstants(
+    return Inertia(float(dt), BlockConstants(
         mass=model.block_mass,
         inv_mass=np.where(movable, 1.0 / mass, 0.0),
         inertia_body=inertia,
@@ -184,7 +233,7 @@ def timestep_and_blocks(
         free=(~model.block_fixed & movable[:, None]).astype(float),
         radius=model.block_radius,
         origin=model.block_centroid,
-    )
+    ), stress_limit)
 
 
 def free_flight_timestep(tolerance: float) -> float:

@@ -12,6 +12,11 @@ No tension by default: F_n = 0 and F_s = 0 once the joint opens. With a tensile
 strength T and cohesion c, F_n >= -T A while the sub-contact is intact; it fails
 (intact = False, c and T lost for good) when F_n < -T A or when it slips (Itasca
 3DEC, "Coulomb slip joint model with residual strength").
+
+Stress-dependent joints (``JointMaterial.model`` "power" or "affine"): k_n and k_s depend on
+the sub-contact's normal stress sigma = F_n / A; F_n = sigma(u_n) A with d sigma = k_n(sigma) d u_n
+integrated exactly (:func:`normal_stress`), and the shear increment uses the tangent k_s(sigma).
+The critical timestep follows the stiffness reached (:func:`drydem.engine.inertia.stiffness_bound`).
 """
 
 from __future__ import annotations
@@ -20,12 +25,13 @@ from typing import NamedTuple
 
 import numba
 import numpy as np
+from numba.extending import overload
 
 from drydem.model.parameters import JointMaterial
 
 
 class JointConstants(NamedTuple):
-    """The joint material as plain floats for the kernels (units as in :class:`JointMaterial`)."""
+    """A joint of constant stiffness as plain floats for the kernels (units as in :class:`JointMaterial`)."""
 
     kn: float
     ks: float
@@ -33,33 +39,247 @@ class JointConstants(NamedTuple):
     cohesion: float
     tension: float
 
-    @classmethod
-    def of(cls, joint: JointMaterial) -> JointConstants:
-        return cls(float(joint.kn), float(joint.ks), float(joint.friction), float(joint.cohesion), float(joint.tension))
+
+#: law codes of :class:`StressJoint`
+POWER, AFFINE = 1, 2
+
+
+class StressJoint(NamedTuple):
+    """A stress-dependent joint for the kernels: :class:`JointConstants`' fields, then the law.
+
+    law : POWER or AFFINE. exponent_n, exponent_s : the power law's exponents. per_stress_n,
+    per_stress_s : the affine law's slopes, 1/m. stress_ref : Pa. k_min, k_max : the clamp,
+    Pa/m. The breakpoints of the normal law (:func:`normal_stress`), where its tangent stiffness
+    reaches k_min (power law only) and k_max: stress_low, stress_high (Pa) and the closures
+    there, closure_low, closure_high (m).
+
+    A separate type, so that the kernels are compiled for each kind of joint
+    (:func:`normal_force`): a joint of constant stiffness runs exactly the arithmetic it always did.
+    """
+
+    kn: float
+    ks: float
+    friction: float
+    cohesion: float
+    tension: float
+    law: int
+    exponent_n: float = 0.0
+    exponent_s: float = 0.0
+    per_stress_n: float = 0.0
+    per_stress_s: float = 0.0
+    stress_ref: float = 1.0
+    k_min: float = 0.0
+    k_max: float = np.inf
+    stress_low: float = 0.0
+    closure_low: float = 0.0
+    stress_high: float = np.inf
+    closure_high: float = np.inf
+
+
+def kernel_joint(joint: JointMaterial) -> JointConstants | StressJoint:
+    """``joint`` for the kernels: :class:`JointConstants` when its stiffness is constant (a
+    stress-dependent law whose exponents or slopes are all zero is that law exactly), else
+    :class:`StressJoint` with its breakpoints."""
+    base = (float(joint.kn), float(joint.ks), float(joint.friction), float(joint.cohesion), float(joint.tension))
+    if not joint.stress_dependent:
+        return JointConstants(*base)
+    clamp = dict(k_min=float(joint.kn_min), k_max=float(joint.kn_max))
+    if joint.model == "affine":
+        law = StressJoint(*base, law=AFFINE, per_stress_n=float(joint.kn_per_stress), per_stress_s=float(joint.ks_per_stress), **clamp)
+    else:
+        law = StressJoint(*base, law=POWER, exponent_n=float(joint.kn_exponent), exponent_s=float(joint.ks_exponent),
+                          stress_ref=float(joint.stress_ref), **clamp)
+    return _with_breakpoints(law)
+
+
+def _with_breakpoints(joint: StressJoint) -> StressJoint:
+    """``joint`` with the stresses and closures where its normal tangent stiffness reaches
+    k_min and k_max (:func:`normal_stress`)."""
+    if joint.law == AFFINE:
+        a = joint.per_stress_n
+        if a == 0.0:
+            return joint
+        high = (joint.k_max - joint.kn) / a
+        return joint._replace(stress_high=high, closure_high=np.log(joint.k_max / joint.kn) / a)
+    e = joint.exponent_n
+    if e == 0.0:
+        return joint
+    low = joint.stress_ref * (joint.k_min / joint.kn) ** (1.0 / e)
+    high = joint.stress_ref * (joint.k_max / joint.kn) ** (1.0 / e)
+    joint = joint._replace(stress_low=low, closure_low=low / joint.k_min, stress_high=high)
+    return joint._replace(closure_high=joint.closure_low + _power_closure(high, joint))
+
+
+def _power_closure(stress, joint):
+    """u(sigma) - u(sigma_low) of the power law's middle part: (sigma_ref / k) (s^(1-e) -
+    s_low^(1-e)) / (1 - e) with s = sigma / sigma_ref (ln(s / s_low) for e = 1), in the form
+    that stays exact as e -> 1."""
+    e = joint.exponent_n
+    s_low = joint.stress_low / joint.stress_ref
+    log_ratio = np.log(stress / joint.stress_low)
+    growth = log_ratio if e == 1.0 else np.expm1((1.0 - e) * log_ratio) / (1.0 - e)
+    return joint.stress_ref / joint.kn * s_low ** (1.0 - e) * growth
+
+
+@numba.njit(cache=True, inline="always")
+def tangent_stiffness(stress, k, exponent, per_stress, joint):
+    """The law's stiffness at normal stress ``stress`` (Pa; below 0 taken as 0), Pa/m, for the
+    value ``k`` and ``exponent`` (power) or ``per_stress`` (affine) of kn or ks, clamped to
+    [k_min, k_max]."""
+    sigma = max(stress, 0.0)
+    value = k * (sigma / joint.stress_ref) ** exponent if joint.law == POWER else k + per_stress * sigma
+    return min(max(value, joint.k_min), joint.k_max)
+
+
+@numba.njit(cache=True, inline="always")
+def normal_stiffness(stress, joint):
+    """kn(sigma), Pa/m (:func:`tangent_stiffness`)."""
+    return tangent_stiffness(stress, joint.kn, joint.exponent_n, joint.per_stress_n, joint)
+
+
+@numba.njit(cache=True, inline="always")
+def shear_stiffness(stress, joint):
+    """ks(sigma), Pa/m (:func:`tangent_stiffness`)."""
+    return tangent_stiffness(stress, joint.ks, joint.exponent_s, joint.per_stress_s, joint)
+
+
+@numba.njit(cache=True, inline="always")
+def normal_stress(closure, joint):
+    """sigma(u_n), Pa, of a stress-dependent law: d sigma = kn(sigma) d u_n integrated exactly.
+
+    The law is non-linear elastic: unloading follows the loading curve back and re-loading it
+    again, so sigma depends on the closure alone and the integral from the unloaded joint
+    (u_n = 0, sigma = 0) is the exact value of every incremental path (an explicit increment
+    kn(sigma) du would drift off the curve and create energy over load-unload cycles).
+    Opening (u_n < 0, with a tensile strength): the stiffness at zero stress.
+
+    affine, kn = k0 + a sigma (k0 = ``kn``, a = ``per_stress_n``):
+        sigma = (k0 / a) (exp(a u) - 1), up to closure_high = ln(k_max / k0) / a;
+        so a block of weight W on area A settles by u = ln(1 + a W / (k0 A)) / a.
+    power, kn = k (sigma / sigma_ref)^e (k = ``kn``), clamped: sigma = k_min u up to
+        stress_low = sigma_ref (k_min / k)^(1/e); then u - u_low = integral of d sigma / kn =
+        (sigma_ref / k) (s^(1-e) - s_low^(1-e)) / (1 - e), s = sigma / sigma_ref (ln(s / s_low) at
+        e = 1), inverted below, up to stress_high = sigma_ref (k_max / k)^(1/e).
+    Above closure_high: sigma_high + k_max (u - u_high). (The continuously yielding joint of
+    Itasca 3DEC has the power form kn = a_n sigma^e_n; the affine one is the linear fit of
+    joint-closure tests, kn = 17.52 sigma per mm in Savalle et al. 2022, Section 4.3.)
+    """
+    if closure <= 0.0:
+        return normal_stiffness(0.0, joint) * closure
+    if closure >= joint.closure_high:
+        return joint.stress_high + joint.k_max * (closure - joint.closure_high)
+    if joint.exponent_n == 0.0 and joint.per_stress_n == 0.0:  # only ks depends on the stress
+        return joint.kn * closure
+    if joint.law == AFFINE:
+        a = joint.per_stress_n
+        return joint.kn / a * np.expm1(a * closure)
+    if closure <= joint.closure_low:
+        return joint.k_min * closure
+    e = joint.exponent_n
+    # s^(1-e) = s_low^(1-e) + (1 - e) x, x = (u - u_low) k / sigma_ref; s = s_low exp(y)
+    s_low = joint.stress_low / joint.stress_ref
+    t = (closure - joint.closure_low) * joint.kn / joint.stress_ref * s_low ** (e - 1.0)
+    y = t if e == 1.0 else np.log1p((1.0 - e) * t) / (1.0 - e)
+    return joint.stress_low * np.exp(y)
+
+
+@numba.njit(cache=True, inline="always")
+def _linear_normal_force(closure, area, joint):
+    return joint.kn * area * closure
+
+
+@numba.njit(cache=True, inline="always")
+def _law_normal_force(closure, area, joint):
+    return normal_stress(closure, joint) * area
+
+
+@numba.njit(cache=True, inline="always")
+def _linear_shear_scale(fn, area, joint):
+    return joint.ks * area
+
+
+@numba.njit(cache=True, inline="always")
+def _law_shear_scale(fn, area, joint):
+    return shear_stiffness(fn / area, joint) * area
+
+
+def _is_stress_joint(joint) -> bool:
+    """Whether ``joint`` (a value, or its numba type when compiling) is a :class:`StressJoint`."""
+    return isinstance(joint, StressJoint) or getattr(joint, "instance_class", None) is StressJoint
+
+
+def normal_force(closure, area, joint):
+    """F_n, N, of a sub-contact of area ``area`` (m2) closed by ``closure`` (m): kn A u_n, or
+    sigma(u_n) A for a :class:`StressJoint`. Compiled, the choice is made by ``joint``'s type
+    (the overload below)."""
+    return (_law_normal_force if _is_stress_joint(joint) else _linear_normal_force)(closure, area, joint)
+
+
+def shear_scale(fn, area, joint):
+    """ks A, N/m, of a sub-contact carrying ``fn`` (N): ks(F_n / A) for a :class:`StressJoint`
+    (the tangent at its normal stress); chosen by type when compiled."""
+    return (_law_shear_scale if _is_stress_joint(joint) else _linear_shear_scale)(fn, area, joint)
+
+
+@overload(normal_force, inline="always")
+def _normal_force_by_type(closure, area, joint):
+    chosen = _law_normal_force if _is_stress_joint(joint) else _linear_normal_force
+    return lambda closure, area, joint: chosen(closure, area, joint)
+
+
+@overload(shear_scale, inline="always")
+def _shear_scale_by_type(fn, area, joint):
+    chosen = _law_shear_scale if _is_stress_joint(joint) else _linear_shear_scale
+    return lambda fn, area, joint: chosen(fn, area, joint)
 
 
 @numba.njit(cache=True, inline="always")
 def normal_law(closure, area, intact, joint):
-    """(F_n, carries): the normal force and whether the sub-contact carries load at all.
+    """(F_n, carries): the normal force (:func:`normal_force`) and whether the sub-contact
+    carries load at all.
 
     It does not once opened beyond its tensile strength (any opening when T = 0 or failed);
     then F_n = F_s = 0 and the sub-contact has failed."""
-    fn = joint.kn * area * closure
+    fn = normal_force(closure, area, joint)
     return fn, fn >= -(joint.tension * area if intact else 0.0)
 
 
 @numba.njit(cache=True, inline="always")
 def shear_law(fn, dus_x, dus_y, dus_z, fs_x, fs_y, fs_z, area, intact, joint):
-    """New (F_s x, F_s y, F_s z, intact) of a loaded sub-contact; see module docstring.
+    """New (F_s x, F_s y, F_s z, intact) of a loaded sub-contact; see module docstring. The shear
+    stiffness is that of :func:`shear_scale` (for a stress-dependent law, the tangent at the
+    current normal stress: the shear force is incremental).
 
     ``fs_*`` is the previous shear force already rotated into the current tangent plane."""
-    shear_scale = joint.ks * area
-    fs_x -= shear_scale * dus_x
-    fs_y -= shear_scale * dus_y
-    fs_z -= shear_scale * dus_z
+    scale = shear_scale(fn, area, joint)
+    fs_x -= scale * dus_x
+    fs_y -= scale * dus_y
+    fs_z -= scale * dus_z
     limit = max((joint.cohesion * area if intact else 0.0) + joint.friction * fn, 0.0)
     magnitude_sq = fs_x * fs_x + fs_y * fs_y + fs_z * fs_z
     if magnitude_sq > limit * limit:
         scale = limit / np.sqrt(magnitude_sq)
         return fs_x * scale, fs_y * scale, fs_z * scale, False
     return fs_x, fs_y, fs_z, intact
+
+
+#: Gauss-Legendre nodes and weights on [0, 1] for :func:`normal_energies` (16 points integrate
+#: each smooth piece of sigma(u) to round-off)
+_NODES = 0.5 * (np.polynomial.legendre.leggauss(16)[0] + 1.0)
+_WEIGHTS = 0.5 * np.polynomial.legendre.leggauss(16)[1]
+
+
+@numba.njit(cache=True)
+def normal_energies(closure, joint):
+    """The elastic energy per area w(u) = integral from 0 to u of sigma(u') du' (J/m2) of each
+    closure (n,) m >= 0 of a :class:`StressJoint`: Gauss-Legendre quadrature of
+    :func:`normal_stress` over each of its smooth pieces (split at closure_low and closure_high)."""
+    out = np.zeros(closure.shape[0])
+    for i in range(closure.shape[0]):
+        u = closure[i]
+        edges = (0.0, min(u, joint.closure_low), min(u, joint.closure_high), u)
+        for piece in range(3):
+            lo, hi = edges[piece], max(edges[piece + 1], edges[piece])
+            for k in range(_NODES.shape[0]):
+                out[i] += _WEIGHTS[k] * (hi - lo) * normal_stress(lo + (hi - lo) * _NODES[k], joint)
+    return out

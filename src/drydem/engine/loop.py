@@ -17,8 +17,8 @@ from drydem.engine.damping import Damping
 DIVERGENCE_FACTOR = 10.0
 #: the energy test of divergence runs every this many cycles (a NaN is caught at every cycle)
 ENERGY_CHECK_EVERY = 16
-#: run_cycles exit codes
-RUNNING, CONVERGED, REDETECT, DIVERGED = 0, 1, 2, 3
+#: run_cycles exit codes (STIFFENED: a stress-dependent joint passed the stress its timestep holds to)
+RUNNING, CONVERGED, REDETECT, DIVERGED, STIFFENED = 0, 1, 2, 3, 4
 #: criterion codes
 RATIO, VELOCITY = 0, 1
 #: LLVM fast-math flags for the contact loops: reassociation and fused multiply-add, but
@@ -133,7 +133,9 @@ class LoopSettings(NamedTuple):
     kg m, of the divergence test. absolute_limit : m, of :func:`detection_slack`.
     ground_acceleration : (n, 3) m/s2, the table's acceleration a_g at each cycle (the body
     force of cycle k is m (g - a_g[k]): the blocks move in the frame of the table; the call
-    ends after n cycles if n < max_cycles), or (0, 3) for a table at rest.
+    ends after n cycles if n < max_cycles), or (0, 3) for a table at rest. stress_limit : (ns,)
+    Pa, the normal stress of each sub-contact up to which ``dt`` is stable
+    (:func:`drydem.engine.inertia.stiffness_bound`), or (0,) for a joint of constant stiffness.
     """
 
     gravity: np.ndarray
@@ -146,6 +148,16 @@ class LoopSettings(NamedTuple):
     travel_slack: float
     absolute_limit: float
     ground_acceleration: np.ndarray
+    stress_limit: np.ndarray
+
+
+@numba.njit(cache=True, inline="always")
+def stiffened(sub, stress_limit):
+    """Whether a sub-contact's normal force exceeds its ``stress_limit`` (ns,) Pa times its area."""
+    for s in range(stress_limit.shape[0]):
+        if sub.normal_force[s] > stress_limit[s] * sub.area[s]:
+            return True
+    return False
 
 
 @numba.njit(cache=True, inline="always")
@@ -153,7 +165,8 @@ def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neig
     """The cycling loop around ``step_function`` (a kernel's ``step``), shared by every engine,
     with the :class:`LoopSettings` ``loop``.
 
-    It cycles until converged, re-detection needed, diverged or ``loop.max_cycles``, and returns
+    It cycles until converged, re-detection needed, diverged, a stress-dependent joint stiffer
+    than the timestep allows (checked after every cycle) or ``loop.max_cycles``, and returns
     (cycles run, exit code, unbalanced-force ratio and max point speed of the last cycle) as
     plain numbers: boxing a NamedTuple on return calls Python, and a pending Ctrl-C raised
     there crashes numba. ``broad_state`` and ``neighbours`` go to :func:`detection_slack`, which
@@ -183,6 +196,7 @@ def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neig
     ratio, speed = np.inf, np.inf
     ground = loop.ground_acceleration
     shaking = ground.shape[0] > 0
+    stiffening = loop.stress_limit.shape[0] > 0
     body = gravity.copy()
     g = np.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
     max_cycles = loop.max_cycles
@@ -203,6 +217,8 @@ def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neig
             return cycle + 1, DIVERGED, ratio, speed
         if (criterion == RATIO and ratio < limit) or (criterion == VELOCITY and speed < limit):
             return cycle + 1, CONVERGED, ratio, speed
+        if stiffening and stiffened(sub, loop.stress_limit):
+            return cycle + 1, STIFFENED, ratio, speed
         if accumulate_motion(state, lever, dt, moved, slack):
             moved[:] = 0.0
             if detection_slack(state, broad_state, neighbours, blocks.radius, loop.absolute_limit, slack) <= 0.0:

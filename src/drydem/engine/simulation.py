@@ -26,7 +26,7 @@ from drydem.engine import cycle3d, cycle_planar, diagnostics, loop
 from drydem.engine.contacts import NeighbourList, SubContacts
 from drydem.engine.damping import Damping
 from drydem.engine.inertia import BlockConstants, keep_kinetic_energy, timestep_and_blocks
-from drydem.engine.joints import JointConstants
+from drydem.engine.joints import kernel_joint
 from drydem.engine.tracker import ContactTracker
 from drydem.errors import DivergenceError, ModelError
 from drydem.model.assembly import Model
@@ -98,7 +98,9 @@ class Simulation:
 
     Public arrays: ``state``; ``contacts``, ``neighbours`` and ``active`` (the blocks still in the
     analysis) of the ``tracker``; ``blocks``, the constants the cycle runs with
-    (:class:`~drydem.engine.inertia.BlockConstants`); ``timestep`` (s); ``run_cycles``, the
+    (:class:`~drydem.engine.inertia.BlockConstants`); ``timestep`` (s); ``stress_limit`` (ns,) Pa,
+    the sub-contact stresses up to which the timestep holds for a stress-dependent joint
+    (:func:`~drydem.engine.inertia.stiffness_bound`); ``run_cycles``, the
     cycle function; ``cycles`` run so far and the model time they span, ``time_s`` (the sum of
     their timesteps, s).
     """
@@ -141,7 +143,7 @@ class Simulation:
     def _update_inertia(self) -> None:
         """The timestep and block constants for the current contacts; with mass scaling, the
         velocities keep each block's kinetic energy through the change of fictitious masses."""
-        dt, blocks = timestep_and_blocks(
+        dt, blocks, self.stress_limit = timestep_and_blocks(
             self.model, self.tracker.contacts, self.tracker.active, fixed_timestep=self._fixed_timestep, scaled_timestep=self._scaled_timestep,
             damping=self.damping,
         )
@@ -253,7 +255,7 @@ class Simulation:
         weight = float(np.linalg.norm(g)) * float(m.block_mass[moving].sum()) / max(int(moving.sum()), 1)
         if criterion_name == "ratio" and weight == 0.0:
             raise ModelError("the 'ratio' criterion needs gravity (it divides by the mean weight); use 'velocity'")
-        joint = JointConstants.of(m.joint)
+        joint = kernel_joint(m.joint)
         if travel_slack is None:
             travel_slack = m.total_mass * m.contact_tolerance
         done, detections = 0, 0
@@ -262,7 +264,7 @@ class Simulation:
             chunk = min(CHUNK, max_cycles - done)
             settings = loop.LoopSettings(
                 g, self.timestep, self.damping, chunk, criterion, limit, max(weight, 1e-300), travel_slack, self.tracker.absolute_limit,
-                AT_REST if ground is None else ground[done:done + chunk],
+                AT_REST if ground is None else ground[done:done + chunk], self.stress_limit,
             )
             tracker = self.tracker
             n, code, ratio, speed = self.run_cycles(self.state, blocks or self.blocks, tracker.contacts, joint, settings, tracker.broad_state, tracker.neighbours)
@@ -282,8 +284,9 @@ class Simulation:
                 break
             if code == loop.REDETECT:
                 self.tracker.detect(self.state)
-                self._update_inertia()
                 detections += 1
+            if code in (loop.REDETECT, loop.STIFFENED):
+                self._update_inertia()
             if stop is not None and stop():
                 break
         return EquilibriumResult(code == loop.CONVERGED, done, criterion_name, float(stats.ratio), float(stats.max_speed), detections)

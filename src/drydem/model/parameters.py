@@ -150,18 +150,48 @@ DENSITY = Range(1.0, 25_000.0, unit="kg/m3")
 POINTS = Range(1, 32, integer=True)
 
 
-#: the rule of each field of :class:`JointMaterial`
-JOINT_RULES = {"kn": JOINT_STIFFNESS, "ks": JOINT_STIFFNESS, "friction": FRICTION, "cohesion": STRENGTH, "tension": STRENGTH}
+#: the joint laws: stiffness constant, a power of the normal stress, or affine in it
+JOINT_MODELS = ("constant", "power", "affine")
+#: exponent of the power law: 0 is the constant law; 3 stiffens a thousandfold per decade of
+#: stress, beyond any joint-closure test (Bandis et al. 1983 fit exponents below 1)
+JOINT_EXPONENT = Range(0.0, 3.0)
+#: reference stress of the power law, Pa: 1e-3 Pa is a millimetre of dust, 1e9 Pa crushes any unit
+REFERENCE_STRESS = Range(1e-3, 1e9, unit="Pa")
+#: stiffness gained per unit of normal stress, 1/m: >= 0 (joints stiffen as they close);
+#: 1e7 /m is 570 times the 17.52 /mm of the seed paper's joint-closure fit
+STIFFNESS_PER_STRESS = Range(0.0, 1e7, unit="1/m")
+
+#: the rule of each field of :class:`JointMaterial` (those of the laws may be None)
+JOINT_RULES = {"kn": JOINT_STIFFNESS, "ks": JOINT_STIFFNESS, "friction": FRICTION, "cohesion": STRENGTH, "tension": STRENGTH,
+               "model": OneOf(JOINT_MODELS), "kn_exponent": JOINT_EXPONENT, "ks_exponent": JOINT_EXPONENT,
+               "stress_ref": REFERENCE_STRESS, "kn_min": JOINT_STIFFNESS, "kn_max": JOINT_STIFFNESS,
+               "kn_per_stress": STIFFNESS_PER_STRESS, "ks_per_stress": STIFFNESS_PER_STRESS}
+#: the keys of each law beyond kn and ks: (required, optional)
+LAW_KEYS = {
+    "constant": ((), ()),
+    "power": (("kn_exponent", "stress_ref"), ("ks_exponent", "kn_min", "kn_max")),
+    "affine": (("kn_per_stress",), ("ks_per_stress", "kn_min", "kn_max")),
+}
 
 
 @dataclass(frozen=True, kw_only=True)
 class JointMaterial:
-    """Dry joint: linear springs per unit area plus Mohr-Coulomb slip.
+    """Dry joint: springs per unit area plus Mohr-Coulomb slip.
 
-    kn, ks : normal and shear stiffness, Pa/m (stress per unit relative displacement).
+    kn, ks : normal and shear stiffness, Pa/m (stress per unit relative displacement); with a
+        stress-dependent ``model``, their value at zero stress (affine) or at ``stress_ref`` (power).
     friction : Coulomb coefficient mu (tan of the friction angle), > 0.
     cohesion : c, Pa. tension : tensile strength, Pa. Both drop to zero for a
         sub-contact once it fails in shear or tension (3DEC's rule).
+    model : the joint law (:mod:`drydem.engine.joints`), with sigma the normal stress, Pa:
+
+        "constant"  kn, ks
+        "power"     kn (sigma / stress_ref)^kn_exponent, ks (sigma / stress_ref)^ks_exponent
+        "affine"    kn + kn_per_stress sigma,            ks + ks_per_stress sigma
+
+        each clamped to [kn_min, kn_max] (defaults: the whole range of :data:`JOINT_STIFFNESS`).
+        ks_exponent defaults to kn_exponent and ks_per_stress to kn_per_stress (ks follows kn,
+        as in the seed paper's kn = ks). The keys of one law are errors with another.
     """
 
     kn: float = 3e7
@@ -169,9 +199,60 @@ class JointMaterial:
     friction: float = 0.5
     cohesion: float = 0.0
     tension: float = 0.0
+    model: str = "constant"
+    kn_exponent: float | None = None
+    ks_exponent: float | None = None
+    stress_ref: float | None = None
+    kn_min: float | None = None
+    kn_max: float | None = None
+    kn_per_stress: float | None = None
+    ks_per_stress: float | None = None
 
     def __post_init__(self):
-        check_fields(self, JOINT_RULES, "[joint]")
+        check_fields(self, JOINT_RULES, "[joint]", optional=LAW_FIELDS)
+        refuse(_law_problems(self))
+        if self.model != "constant":
+            resolved = {"kn_min": JOINT_STIFFNESS.low, "kn_max": JOINT_STIFFNESS.high,
+                        "ks_exponent": self.kn_exponent, "ks_per_stress": self.kn_per_stress}
+            for key in LAW_KEYS[self.model][1]:
+                if getattr(self, key) is None:
+                    object.__setattr__(self, key, resolved[key])
+            refuse(_clamp_problems(self))
+
+    @property
+    def stress_dependent(self) -> bool:
+        """Whether the stiffness changes with the normal stress (a law other than constant
+        whose exponents or slopes are not all zero)."""
+        if self.model == "power":
+            return self.kn_exponent > 0 or self.ks_exponent > 0
+        return self.model == "affine" and (self.kn_per_stress > 0 or self.ks_per_stress > 0)
+
+
+#: the fields of the stress-dependent laws (None where the model has no such key)
+LAW_FIELDS = ("kn_exponent", "ks_exponent", "stress_ref", "kn_min", "kn_max", "kn_per_stress", "ks_per_stress")
+
+
+def _law_problems(joint: JointMaterial) -> list[str]:
+    """A key of another law given, or a key the law needs missing."""
+    if joint.model not in LAW_KEYS:
+        return []
+    required, optional = LAW_KEYS[joint.model]
+    problems = [f"[joint] {key} applies to model = {_law_of(key)}, not {joint.model!r}"
+                for key in LAW_FIELDS if getattr(joint, key) is not None and key not in required + optional]
+    problems += [f"[joint] model = {joint.model!r} needs {key}" for key in required if getattr(joint, key) is None]
+    return problems
+
+
+def _law_of(key: str) -> str:
+    return " or ".join(repr(law) for law, (required, optional) in LAW_KEYS.items() if key in required + optional)
+
+
+def _clamp_problems(joint: JointMaterial) -> list[str]:
+    """kn_min <= kn_max, and kn, ks (the stiffnesses at the law's origin) within them."""
+    if joint.kn_min > joint.kn_max:
+        return [f"[joint] kn_min = {joint.kn_min:.4g} exceeds kn_max = {joint.kn_max:.4g} Pa/m"]
+    return [f"[joint] {key} = {getattr(joint, key):.4g} Pa/m: must lie within [kn_min, kn_max] = [{joint.kn_min:.4g}, {joint.kn_max:.4g}] Pa/m"
+            for key in ("kn", "ks") if not joint.kn_min <= getattr(joint, key) <= joint.kn_max]
 
 
 #: contact tolerance, m: positive; its bound relative to the blocks is checked with the model

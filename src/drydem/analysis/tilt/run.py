@@ -15,7 +15,8 @@ from drydem.analysis.tilt.settings import (
     wall_height,
 )
 from drydem.engine.contacts import SubContacts
-from drydem.engine.inertia import contact_stiffness
+from drydem.engine.inertia import contact_stiffness, stiffness_bound
+from drydem.engine.joints import kernel_joint
 from drydem.engine.simulation import Simulation, Snapshot
 from drydem.model.assembly import Model
 from drydem.model.parameters import G
@@ -210,7 +211,8 @@ class TiltRun:
 def elastic_closure(model: Model, contacts: SubContacts) -> float:
     """Median over the sprung free blocks of m g / sum(k A), m, with the contacts of the model as
     drawn: how far a block's own weight closes its joints (the predictor's scale)."""
-    k_t, _ = contact_stiffness(contacts, model.joint.kn, model.joint.ks, model.n_blocks)
+    stiffness, _ = stiffness_bound(kernel_joint(model.joint), contacts, G * float(model.block_mass[model.block_movable].sum()))
+    k_t, _ = contact_stiffness(contacts, stiffness, model.n_blocks)
     sprung = model.block_movable & (k_t > 0)
     return float(np.median(model.block_mass[sprung] * G / k_t[sprung])) if sprung.any() else 0.0
 
