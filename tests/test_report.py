@@ -16,9 +16,11 @@ from drydem.report.study import DESIGNS, build_report
 FIGURES = ["fig03_contact_points", "fig06_stiffness", "fig09_pushover", "fig10_pushover", "fig11_pushover", "fig12_dls", "fig13_ks"]
 
 
-def tilt_record(design, kn, *, ks=None, points=None, protocol="adaptive"):
-    """A made-up record whose collapse angle grows with log kn (the report only reads records)."""
-    spec = RunSpec(analysis="tilt", target=design, protocol=protocol, kn=kn, ks=kn if ks is None else ks, points=points)
+def tilt_record(design, kn, *, ks=None, points=None, protocol="adaptive", joint_law=None):
+    """A made-up record whose collapse angle grows with log kn (the report only reads records);
+    ``joint_law``: RunSpec.joint_law (JSON text), None for constant joints."""
+    spec = RunSpec(analysis="tilt", target=design, protocol=protocol, kn=kn, ks=kn if ks is None else ks, points=points,
+                   joint_law=joint_law)
     angle = 5.0 + 3.0 * math.log10(kn / 1e7) + int(design[2])
     curve = [[t, 1e-4 * t * 1e9 / kn, 0.0, 1e-4 * t * 1e9 / kn / 0.1485, 1000] for t in range(int(angle) + 1)]
     summary = {"collapse_angle_deg": float(int(angle)), "drift_limit_angles_deg": {"0.005": 1.0, "0.0075": 1.5, "0.01": angle / 3},

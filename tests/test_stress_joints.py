@@ -168,7 +168,11 @@ def test_joint_laws_from_the_model_file():
     blocks = [{"name": "base", "box": {"min": [-0.2, -0.05, -0.02], "max": [0.2, 0.05, 0.0]}, "fixed": True},
               {"name": "b", "box": {"min": [-0.05, -0.05, 0.0], "max": [0.05, 0.05, 0.1]}}]
     model = model_from_dict({"block": blocks, "joint": {"model": "power", "kn": 3e7, "kn_exponent": 0.5, "stress_ref": 2e3}}, source="m.toml")
-    assert (model.joint.model, model.joint.ks_exponent, model.joint.kn_min) == ("power", 0.5, 1e4)
+    joint = model.joint
+    assert (joint.model, joint.ks_exponent, joint.law_value("ks_exponent"), joint.law_value("kn_min")) == ("power", None, 0.5, 1e4)
+    assert joint.changed(kn_exponent=1.0).law_value("ks_exponent") == 1.0  # ks follows kn unless given
+    assert joint.changed(model="affine", kn_per_stress=1e4) == JointMaterial(kn=3e7, model="affine", kn_per_stress=1e4)
+    assert model.overridden(joint_law={"model": "constant"}, kn=1e8).joint == JointMaterial(kn=1e8)
     bad = [
         ({"model": "power", "kn_exponent": 0.5}, "needs stress_ref"),
         ({"model": "affine", "kn_per_stress": 1e4, "kn_exponent": 0.5}, "kn_exponent applies to model = 'power'"),

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import functools
 import itertools
 import signal
 import time
 from contextlib import contextmanager
+from dataclasses import dataclass, fields
 from datetime import datetime
 from pathlib import Path
 
@@ -17,7 +19,8 @@ from drydem.masonry import designs
 from drydem.errors import DrydemError
 from drydem.io.target import Target, load_target
 from drydem.model.assembly import Model
-from drydem.model.parameters import CRITERIA
+from drydem.model.parameters import CRITERIA, JOINT_MODELS
+from drydem.masonry.imperfections import Imperfections
 from drydem.engine.simulation import Simulation
 
 #: the tilting analysis' checkpoint in its results folder, and the file it is written to first
@@ -34,6 +37,34 @@ unit_option = click.option("--unit", type=click.Choice(list(UNITS)), default="m"
 
 workers_option = click.option("--workers", type=click.IntRange(min=1), help="Local processes (default: all cores).")
 scheduler_option = click.option("--scheduler", help="Address of a Dask distributed scheduler to run on instead (tcp://host:8786).")
+#: the options of a joint law: option name -> ([joint] key, the option)
+JOINT_LAW_OPTIONS = {
+    "joint_model": ("model", click.option("--joint-model", type=click.Choice(JOINT_MODELS),
+                                          help="Joint law ([joint] model): constant, or kn and ks a power of the normal stress sigma or "
+                                               "affine in it (overrides the model file's law; the law's keys below)")),
+    "kn_exponent": ("kn_exponent", click.option("--kn-exponent", type=float, help="power: kn (sigma / stress_ref)^kn_exponent.")),
+    "ks_exponent": ("ks_exponent", click.option("--ks-exponent", type=float, help="power: ks (sigma / stress_ref)^ks_exponent "
+                                                                                       "(default: kn_exponent).")),
+    "stress_ref": ("stress_ref", click.option("--stress-ref", type=float, help="power: the stress at which kn and ks hold, Pa.")),
+    "kn_per_stress": ("kn_per_stress", click.option("--kn-per-stress", type=float, help="affine: kn + kn_per_stress sigma, 1/m.")),
+    "ks_per_stress": ("ks_per_stress", click.option("--ks-per-stress", type=float, help="affine: ks + ks_per_stress sigma, 1/m "
+                                                                                             "(default: kn_per_stress).")),
+    "joint_kn_min": ("kn_min", click.option("--joint-kn-min", type=float, help="The law's smallest stiffness, Pa/m ([joint] kn_min).")),
+    "joint_kn_max": ("kn_max", click.option("--joint-kn-max", type=float, help="The law's largest stiffness, Pa/m ([joint] kn_max).")),
+}
+
+
+def joint_law_options(command):
+    """The options of :data:`JOINT_LAW_OPTIONS`, handed to ``command`` as one ``joint_law``
+    argument: the ``[joint]`` keys given (None when none is)."""
+    @functools.wraps(command)
+    def bundled(**values):
+        law = {key: values.pop(name) for name, (key, _) in JOINT_LAW_OPTIONS.items()}
+        return command(joint_law={key: value for key, value in law.items() if value is not None} or None, **values)
+
+    for _, option in reversed(JOINT_LAW_OPTIONS.values()):
+        bundled = option(bundled)
+    return bundled
 
 
 def _target(target: str, unit: str = "m") -> Target:
@@ -83,7 +114,7 @@ def check(target: str, settle: bool, strict: bool, unit: str) -> None:
     density = model.contact_density
     click.echo(f"contacts        {len(c.pairs)} face contacts, {c.count} sub-contacts ({density.along} points per length, {density.across} across y)")
     click.echo(f"contact area    {c.area.sum():.6g} m2, tolerance {model.contact_tolerance:.3g} m")
-    click.echo(f"joint           kn {model.joint.kn:.3g} Pa/m, ks {model.joint.ks:.3g} Pa/m, friction {model.joint.friction:g}")
+    click.echo(f"joint           {model.joint.stiffness_text}, friction {model.joint.friction:g}")
     mass_note = " (mass scaled)" if model.solver.mass_scaling else ""
     click.echo(f"timestep        {sim.timestep:.4g} s{mass_note}")
     floating = [model.block_name[b] for b in unsupported(model, c)]
@@ -121,22 +152,81 @@ def _settle(sim: Simulation) -> None:
         raise SystemExit(1)
 
 
+@dataclass(frozen=True)
+class TiltOptions:
+    """The model and protocol options of ``drydem tilt``, bundled by :func:`tilt_options`
+    (``drydem montecarlo`` takes them too: each of its samples is a tilting analysis)."""
+
+    kn: float | None
+    ks: float | None
+    friction: float | None
+    points: int | None
+    density: float | None
+    criterion: str | None
+    joint_law: dict | None
+    increment: float
+    adaptive: bool
+    predictor: bool
+    stop_displacement: float
+    loading: str
+    monitor: str | None
+    max_angle: float
+
+    def model_overrides(self) -> dict:
+        """The keywords of :meth:`Model.overridden` these options give (None: the model's)."""
+        return dict(kn=self.kn, ks=self.ks, friction=self.friction, points=self.points, density=self.density, criterion=self.criterion,
+                    joint_law=self.joint_law)
+
+    def settings(self):
+        """The TiltSettings these options give (DrydemError for a value out of its range)."""
+        from drydem.analysis.tilt import TiltSettings
+
+        return TiltSettings(increment_deg=self.increment, adaptive=self.adaptive, predictor=self.predictor,
+                            stop_displacement_m=self.stop_displacement, loading=self.loading, monitor=self.monitor,
+                            max_angle_deg=self.max_angle)
+
+
+def tilt_options(*, adaptive: bool):
+    """The options of :class:`TiltOptions`, handed to the command as one ``tilt`` argument;
+    ``adaptive``: the protocol by default (--adaptive or --fixed)."""
+    protocol = "adaptive" if adaptive else "fixed"
+    options = [
+        click.option("--kn", type=float, help="Normal joint stiffness, Pa/m (overrides the model file)."),
+        click.option("--ks", type=float, help="Shear joint stiffness, Pa/m."),
+        click.option("--friction", type=float, help="Coulomb friction coefficient."),
+        click.option("--points", type=int, help="Sub-contact points per length."),
+        click.option("--density", type=float, help="Density of every block, kg/m3."),
+        click.option("--increment", type=float, default=0.1, show_default=True, help="Tilt step, deg."),
+        click.option("--adaptive/--fixed", default=adaptive,
+                     help=f"Coarse steps, then bisection down to the increment; or every step one increment (default: {protocol})."),
+        click.option("--predictor/--no-predictor", default=True, show_default=True,
+                     help="Start each step from the last two equilibria extrapolated (fewer cycles)."),
+        click.option("--stop-displacement", type=float, default=0.10, show_default=True,
+                     help="Monitored horizontal displacement that ends the run, m."),
+        click.option("--criterion", type=click.Choice(CRITERIA), help="Equilibrium criterion (default: the model file's)."),
+        click.option("--loading", type=click.Choice(["tilt", "multiplier"]), default="tilt", show_default=True,
+                     help="Tilt the gravity or add lambda g horizontally."),
+        click.option("--monitor", help="Block whose centroid is monitored (default: the top block nearest the middle)."),
+        click.option("--max-angle", type=float, default=80.0, show_default=True, help="Largest tilt tried, deg."),
+    ]
+    names = [f.name for f in fields(TiltOptions)]
+
+    def decorate(command):
+        @functools.wraps(command)
+        def bundled(**values):
+            return command(tilt=TiltOptions(**{name: values.pop(name) for name in names}), **values)
+
+        bundled = joint_law_options(bundled)
+        for option in reversed(options):
+            bundled = option(bundled)
+        return bundled
+
+    return decorate
+
+
 @main.command()
 @click.argument("target")
-@click.option("--kn", type=float, help="Normal joint stiffness, Pa/m (overrides the model file).")
-@click.option("--ks", type=float, help="Shear joint stiffness, Pa/m.")
-@click.option("--friction", type=float, help="Coulomb friction coefficient.")
-@click.option("--points", type=int, help="Sub-contact points per length.")
-@click.option("--density", type=float, help="Density of every block, kg/m3.")
-@click.option("--increment", type=float, default=0.1, show_default=True, help="Tilt step, deg.")
-@click.option("--adaptive", is_flag=True, help="Coarse steps, then bisection down to the increment.")
-@click.option("--predictor/--no-predictor", default=True, show_default=True,
-              help="Start each step from the last two equilibria extrapolated (fewer cycles).")
-@click.option("--stop-displacement", type=float, default=0.10, show_default=True, help="Monitored horizontal displacement that ends the run, m.")
-@click.option("--criterion", type=click.Choice(CRITERIA), help="Equilibrium criterion (default: the model file's).")
-@click.option("--loading", type=click.Choice(["tilt", "multiplier"]), default="tilt", show_default=True, help="Tilt the gravity or add lambda g horizontally.")
-@click.option("--monitor", help="Block whose centroid is monitored (default: the top block nearest the middle).")
-@click.option("--max-angle", type=float, default=80.0, show_default=True, help="Largest tilt tried, deg.")
+@tilt_options(adaptive=False)
 @click.option("--out", type=click.Path(path_type=Path), help="Results folder (default: results/TARGET-TIME).")
 @click.option("--resume", is_flag=True, help="Go on from the checkpoint in --out (same TARGET and options).")
 @click.option("--overwrite", is_flag=True, help="Replace the results of an earlier run in --out (they are kept otherwise).")
@@ -145,27 +235,23 @@ def _settle(sim: Simulation) -> None:
               help="With --vtk: keep every N-th equilibrium state (the states past collapse are all kept).")
 @click.option("--video", is_flag=True, help="Also render OUT/collapse.mp4 (GIF if ffmpeg is missing); implies --vtk.")
 @unit_option
-def tilt(target, kn, ks, friction, points, density, increment, adaptive, predictor, stop_displacement, criterion, loading, monitor, max_angle,
-         out, resume, overwrite, vtk, save_every, video, unit) -> None:
+def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, video, unit) -> None:
     """Tilting-table analysis of TARGET (a built-in wall, a wall or model file, or a
     .wrl/.obj/.stl): collapse angle, pushover curve, Eurocode 8 drift-limit angles, plots.
     Exits 1 when equilibrium could not be reached within max_cycles (no verdict), 130 or 143
     when interrupted (the last equilibrium is kept for --resume)."""
     from tqdm import tqdm
 
-    from drydem.analysis.tilt import NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY, TiltSettings, monitor_index, tilt_analysis
+    from drydem.analysis.tilt import NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY, monitor_index, tilt_analysis
     from drydem.engine.checkpoint import load_checkpoint
     from drydem.io.results import PushoverWriter
     from drydem.io.vtk import VtkSeries
 
     found = _target(target, unit)
     try:
-        model = found.model.overridden(kn=kn, ks=ks, friction=friction, points=points, density=density, criterion=criterion)
-        settings = TiltSettings(
-            increment_deg=increment, adaptive=adaptive, predictor=predictor, stop_displacement_m=stop_displacement, loading=loading,
-            monitor=monitor, max_angle_deg=max_angle,
-        )
-        monitor_index(model, monitor)
+        model = found.model.overridden(**tilt.model_overrides())
+        settings = tilt.settings()
+        monitor_index(model, tilt.monitor)
         if resume and overwrite:
             raise DrydemError("--resume goes on from the run in --out and --overwrite deletes it: give one of them")
         if resume and (out is None or not (out / CHECKPOINT).is_file()):
@@ -175,7 +261,7 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, predict
             _, saved = load_checkpoint(folder / CHECKPOINT)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
-    click.echo(f"{found.name} ({found.path}): {model.n_blocks} blocks, kn {model.joint.kn:.3g} Pa/m, ks {model.joint.ks:.3g} Pa/m, "
+    click.echo(f"{found.name} ({found.path}): {model.n_blocks} blocks, {model.joint.stiffness_text}, "
                f"mu {model.joint.friction:g}, {model.contacts.points_per_length} points per length -> {folder}")
     if resume:
         click.echo(f"resuming from {folder / CHECKPOINT}: last equilibrium at {float(saved['theta_deg']):g} deg "
@@ -213,10 +299,13 @@ def tilt(target, kn, ks, friction, points, density, increment, adaptive, predict
 
 #: what ``drydem shake`` writes in its results folder
 SHAKE_OUTPUTS = ("summary.json", "history.csv", "history.png", "vtk", "shake.mp4", "shake.gif")
-#: what ``drydem tilt``, ``drydem limit`` and ``drydem shake`` write in their results folders
-#: (deleted first by --overwrite, whichever of them wrote them)
+#: what ``drydem montecarlo`` writes in its results folder besides summary.json
+MONTECARLO_OUTPUTS = ("samples", "histogram.png")
+#: what ``drydem tilt``, ``drydem limit``, ``drydem shake`` and ``drydem montecarlo`` write in
+#: their results folders (deleted first by --overwrite, whichever of them wrote them)
 RUN_OUTPUTS = ("summary.json", "pushover.csv", "pushover.png", "mechanism.png", CHECKPOINT, CHECKPOINT_PARTIAL, "vtk",
-               "collapse.mp4", "collapse.gif") + tuple(name for name in SHAKE_OUTPUTS if name not in ("summary.json", "vtk"))
+               "collapse.mp4", "collapse.gif") + tuple(name for name in SHAKE_OUTPUTS if name not in ("summary.json", "vtk")) \
+    + MONTECARLO_OUTPUTS
 
 
 def _results_folder(out: Path | None, name: str, *, resume: bool | None = False, overwrite: bool = False) -> Path:
@@ -363,6 +452,7 @@ class _Restitution(click.ParamType):
 @click.option("--friction", type=float, help="Coulomb friction coefficient.")
 @click.option("--points", type=int, help="Sub-contact points per length.")
 @click.option("--density", type=float, help="Density of every block, kg/m3.")
+@joint_law_options
 @click.option("--monitor", help="Block whose response is recorded (default: the top block nearest the middle).")
 @click.option("--out", type=click.Path(path_type=Path), help="Results folder (default: results/TARGET-TIME).")
 @click.option("--overwrite", is_flag=True, help="Replace the results of an earlier run in --out (they are kept otherwise).")
@@ -373,8 +463,8 @@ class _Restitution(click.ParamType):
                                              f"{SHAKE_FPS:g} frames per second (--save-every thins them); implies --vtk.")
 @unit_option
 def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequency, cycles, duration, output_interval, restitution,
-          damping_ratio, rayleigh_mass, rayleigh_stiffness, kn, ks, friction, points, density, monitor, out, overwrite, vtk, save_every,
-          video, unit) -> None:
+          damping_ratio, rayleigh_mass, rayleigh_stiffness, kn, ks, friction, points, density, joint_law, monitor, out, overwrite, vtk,
+          save_every, video, unit) -> None:
     """Shaking-table analysis of TARGET (a built-in wall, a wall or model file, or a
     .wrl/.obj/.stl): the time history of the model under a ground motion, a --motion record or
     a --pulse (give one), from rest under gravity. Writes history.csv (the monitored block's
@@ -396,7 +486,7 @@ def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequenc
     found = _target(target, unit)
     try:
         ground, corrected = _shake_motion(motion, direction, scale, baseline, pulse, amplitude, frequency, cycles)
-        model = found.model.overridden(kn=kn, ks=ks, friction=friction, points=points, density=density)
+        model = found.model.overridden(kn=kn, ks=ks, friction=friction, points=points, density=density, joint_law=joint_law)
         values = dict(duration_s=duration, output_interval_s=output_interval, restitution=restitution, contact_damping_ratio=damping_ratio,
                       rayleigh_mass_per_s=rayleigh_mass, rayleigh_stiffness_s=rayleigh_stiffness, monitor=monitor)
         _check_shake_options(values)
@@ -407,7 +497,7 @@ def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequenc
         folder = _results_folder(out, found.name, resume=None, overwrite=overwrite)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
-    click.echo(f"{found.name} ({found.path}): {model.n_blocks} blocks, kn {model.joint.kn:.3g} Pa/m, ks {model.joint.ks:.3g} Pa/m, "
+    click.echo(f"{found.name} ({found.path}): {model.n_blocks} blocks, {model.joint.stiffness_text}, "
                f"mu {model.joint.friction:g}, {model.contacts.points_per_length} points per length; {ground.name}, "
                f"PGA {ground.pga_m_s2:.4g} m/s2, {settings.analysed_s:g} s -> {folder}")
     try:
@@ -716,17 +806,19 @@ def report(results_dir: Path, out: Path | None) -> None:
 @click.option("--kn-max", type=float, default=1e9, show_default=True, help="Largest kn searched, Pa/m.")
 @click.option("--ks-ratio", type=float, default=1.0, show_default=True, help="ks = ratio x kn.")
 @click.option("--increment", type=float, default=0.1, show_default=True, help="Tilt step of the (adaptive) runs, deg.")
+@joint_law_options
 @workers_option
 @scheduler_option
-def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, workers, scheduler) -> None:
+def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, joint_law, workers, scheduler) -> None:
     """Find the kn that best reproduces the experimental collapse angles (paper Table 1) of
     DESIGNS, reusing and adding runs in RESULTS_DIR (the paper's post-diction, Section 4.4);
-    every option is checked before anything runs."""
+    every option is checked before anything runs. With a stress-dependent joint law
+    (--joint-model and its keys), the law's shape is kept and its kn (ks = ratio x kn) fitted."""
     from drydem.parametric.calibrate import StiffnessSearch, calibrate_stiffness
     from drydem.files import writable_folder
     from drydem.parametric.workers import open_workers
 
-    search = StiffnessSearch(tuple(d.strip() for d in designs.split(",") if d.strip()), kn_min, kn_max, ks_ratio, increment)
+    search = StiffnessSearch(tuple(d.strip() for d in designs.split(",") if d.strip()), kn_min, kn_max, ks_ratio, increment, joint_law)
     problems = search.problems(name=lambda field: "--" + field.replace("_", "-"))
     if problems:
         raise click.ClickException("\n".join(problems))
@@ -734,7 +826,8 @@ def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, workers
         writable_folder(results_dir)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
-    click.echo(f"calibrating kn over [{kn_min:.3g}, {kn_max:.3g}] Pa/m on {', '.join(search.designs)} (runs kept in {results_dir})")
+    law = f" of the joint law {joint_law}" if joint_law else ""
+    click.echo(f"calibrating kn{law} over [{kn_min:.3g}, {kn_max:.3g}] Pa/m on {', '.join(search.designs)} (runs kept in {results_dir})")
 
     def evaluated(kn, error, outcome):
         for corrupt in outcome.corrupt:
@@ -770,26 +863,106 @@ def list_designs() -> None:
     click.echo("WD1-WD7 are reconstructions that obey the brief, not the original drawings (drydem show NAME draws one).")
 
 
+def _amplitude_mm(ctx, param, value):
+    """An imperfection amplitude, mm: not given (None), or a finite number >= 0."""
+    if value is not None and not (np.isfinite(value) and value >= 0.0):
+        raise click.BadParameter(f"{value!r}: must be a finite number >= 0 (mm)")
+    return value
+
+
+def _factor(ctx, param, value):
+    """A drawing factor: a finite number > 0."""
+    if not (np.isfinite(value) and value > 0.0):
+        raise click.BadParameter(f"{value!r}: must be a finite number > 0")
+    return value
+
+
+#: the option of each amplitude of drydem.masonry.imperfections.Imperfections
+IMPERFECTION_OPTIONS = {"height_sd_mm": "--height-sd", "flatness_sd_mm": "--flatness-sd", "misalignment_sd_mm": "--misalignment-sd"}
+
+
+def imperfection_options(command):
+    """Add the imperfect-brick options (drydem.masonry.imperfections) to ``command``: --seed,
+    --height-sd, --height-distribution, --flatness-sd and --misalignment-sd, passed as ``seed``,
+    ``height_sd``, ``height_distribution``, ``flatness_sd`` and ``misalignment_sd``; the amplitudes
+    are None where not given (:func:`imperfections_from_options` reads them)."""
+    options = [
+        click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the imperfections' random draws."),
+        click.option("--height-sd", type=float, metavar="MM", callback=_amplitude_mm,
+                     help="Imperfect bricks: standard deviation of each brick's height, mm."),
+        click.option("--height-distribution", type=click.Choice(["normal", "uniform"]), default="normal", show_default=True,
+                     help="Distribution of the heights (uniform: the same standard deviation)."),
+        click.option("--flatness-sd", type=float, metavar="MM", callback=_amplitude_mm,
+                     help="Imperfect bricks: each bed face tilted along the wall, its edges this standard deviation off its mid-line, mm."),
+        click.option("--misalignment-sd", type=float, metavar="MM", callback=_amplitude_mm,
+                     help="Imperfect bricks: standard deviation of each brick's placement along the wall, mm."),
+    ]
+    for option in reversed(options):
+        command = option(command)
+    return command
+
+
+def imperfections_from_options(height_sd: float | None, height_distribution: str, flatness_sd: float | None,
+                               misalignment_sd: float | None) -> Imperfections | None:
+    """The imperfections the options of :func:`imperfection_options` ask for (an amplitude not
+    given is zero); None where no amplitude is given: the perfect wall."""
+    amplitudes = {"height_sd_mm": height_sd, "flatness_sd_mm": flatness_sd, "misalignment_sd_mm": misalignment_sd}
+    if all(value is None for value in amplitudes.values()):
+        return None
+    try:
+        return Imperfections(height_distribution=height_distribution,
+                             **{name: 0.0 if value is None else value for name, value in amplitudes.items()})
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+
+
+def _imperfect_drawing(found: Target, imperfections: Imperfections, seed: int, factor: float) -> tuple[Model, str]:
+    """The wall of ``found`` with imperfect bricks, deviations ``factor`` times larger
+    (drydem.masonry.imperfections.exaggerated_model), and a line saying so for the title."""
+    from drydem.masonry.imperfections import exaggerated_model
+
+    if found.wall is None:
+        raise click.ClickException(f"{found.path}: imperfect bricks (--height-sd, --flatness-sd, --misalignment-sd) need a brick "
+                                   "layout: a wall file or a built-in wall, not a model file or a mesh")
+    try:
+        imperfections.check_for(found.wall.brick, found.wall.source, name=IMPERFECTION_OPTIONS.__getitem__)
+        model, used = exaggerated_model(found.wall, imperfections, seed, factor)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    capped = "" if used == factor else f" (not x{factor:g}: bricks keep half their height)"
+    return model, f"imperfect bricks, seed {seed}, deviations x{used:.3g}{capped}\n{imperfections}"
+
+
 @main.command()
 @click.argument("target")
 @click.option("--out", "-o", type=click.Path(dir_okay=False, path_type=Path), help="PNG file (default: TARGET.png here).")
 @click.option("--strict", is_flag=True, help="Fail if a wall breaks the competition brief.")
 @unit_option
-def show(target: str, out: Path | None, strict: bool, unit: str) -> None:
+@imperfection_options
+@click.option("--exaggerate", type=float, default=1.0, show_default=True, metavar="FACTOR", callback=_factor,
+              help="Draw the imperfections' deviations FACTOR times larger (the same draws), so that a 0.1 mm scatter shows.")
+def show(target: str, out: Path | None, strict: bool, unit: str, seed: int, height_sd: float | None, height_distribution: str,
+         flatness_sd: float | None, misalignment_sd: float | None, exaggerate: float) -> None:
     """Draw TARGET as built (bricks, half bricks, headers, lintel, voids, the monitored block) to
-    a PNG (or another format matplotlib writes, by the suffix), written whole or not at all."""
+    a PNG (or another format matplotlib writes, by the suffix), written whole or not at all.
+    With --height-sd, --flatness-sd or --misalignment-sd, draw a wall's bricks imperfect, drawn
+    from --seed (drydem.masonry.imperfections), their deviations --exaggerate times larger."""
     from drydem.analysis.tilt import monitored_block
     from drydem.masonry.brief import brief_violations
     from drydem.files import replaced_atomically, writable
     from drydem.report.plots import figure_path, layout_figure
 
+    imperfections = imperfections_from_options(height_sd, height_distribution, flatness_sd, misalignment_sd)
     found = _target(target, unit)
     model, wall = found.model, found.wall
+    title = found.name if wall is None else f"{wall.name} {wall.title}: {wall.layout.void_ratio:.1%} voids"
+    voids = wall.layout.void_outlines(wall.brick) if wall is not None else []
+    if imperfections is not None:
+        model, note = _imperfect_drawing(found, imperfections, seed, exaggerate)
+        title, voids = f"{title}\n{note}", []  # the voids' outlines are the perfect wall's
     monitored = model.block_name[monitored_block(model)]
     out = out or Path(f"{found.name}.png")
-    title = found.name if wall is None else f"{wall.name} {wall.title}: {wall.layout.void_ratio:.1%} voids"
     kinds = wall.layout.kinds() if wall is not None else None
-    voids = wall.layout.void_outlines(wall.brick) if wall is not None else []
     try:
         with replaced_atomically(writable(figure_path(out))) as partial:
             layout_figure(model, partial, kinds=kinds, voids=voids, monitored=monitored, title=title)
@@ -831,3 +1004,115 @@ def export(target: str, output: Path, unit: str) -> None:
     if writer is write_mesh:
         click.echo(f"note: {output} keeps the block names, shapes and fixed blocks, not the material, joint, contacts, "
                    "supports or solver settings (export to .toml for those)", err=True)
+
+
+@main.command()
+@click.argument("target")
+@click.option("--samples", type=click.IntRange(min=1), default=100, show_default=True,
+              help="Imperfect walls analysed; sample k's seed depends on --seed and k only, so more samples extend a run.")
+@imperfection_options
+@tilt_options(adaptive=True)
+@click.option("--out", type=click.Path(path_type=Path), help="Results folder (default: results/TARGET-montecarlo-TIME).")
+@click.option("--resume", is_flag=True, help="Go on with the run in --out (same TARGET and options; --samples may grow): the samples "
+                                              "recorded there are kept, the missing and corrupt ones run.")
+@click.option("--overwrite", is_flag=True, help="Replace the results of an earlier run in --out (they are kept otherwise).")
+@workers_option
+@scheduler_option
+def montecarlo(target, samples, seed, height_sd, height_distribution, flatness_sd, misalignment_sd, tilt: TiltOptions, out, resume,
+               overwrite, workers, scheduler) -> None:
+    """Monte Carlo tilting analyses of TARGET (a built-in wall or a wall file: imperfections are
+    drawn on its bricks): SAMPLES walls, each with its own imperfections drawn from its own
+    seed, each a tilting analysis (drydem tilt's options; adaptive by default). Writes
+    OUT/samples/NNNN (each sample's summary.json with its seed and imperfections, and
+    pushover.csv) as they finish, OUT/summary.json (every sample's collapse and DLS angles, and
+    their mean, std, CoV, 5th percentile) after each, and OUT/histogram.png at the end. Per
+    sample there are no figures, VTK series or videos (drydem tilt TARGET gives them for a
+    wall; no --vtk, --video, --unit). Exits 1 when no sample found a collapse angle, 130 or 143
+    when interrupted (--resume goes on)."""
+    from tqdm import tqdm
+
+    from drydem.parametric.montecarlo import MonteCarloSettings, check_resumable, experiment, monte_carlo, pending_samples, sample_model
+    from drydem.analysis.tilt import monitor_index
+    from drydem.parametric.workers import open_workers
+
+    imperfections = imperfections_from_options(height_sd, height_distribution, flatness_sd, misalignment_sd)
+    if imperfections is None or imperfections.is_zero:
+        raise click.ClickException("no imperfections: every sample would be the perfect wall; give --height-sd, --flatness-sd or "
+                                   "--misalignment-sd (mm, > 0)")
+    found = _target(target)
+    if found.wall is None:
+        raise click.ClickException(f"{target}: a model file has no brick layout, and imperfections are drawn on a wall's bricks: "
+                                   "give a built-in wall (drydem designs) or a wall file")
+    try:
+        imperfections.check_for(found.wall.brick, found.wall.source, name=IMPERFECTION_OPTIONS.__getitem__)
+        settings = MonteCarloSettings(samples=samples, seed=seed, imperfections=imperfections, tilt=tilt.settings(),
+                                      model_overrides=tilt.model_overrides())
+        monitor_index(sample_model(found.wall, settings, 0), tilt.monitor)  # the options checked on one sample, before any run
+        if resume and overwrite:
+            raise DrydemError("--resume goes on with the run in --out and --overwrite deletes it: give one of them")
+        if resume and (out is None or not (out / "summary.json").is_file()):
+            raise DrydemError("--resume needs --out DIR holding the summary.json of an earlier drydem montecarlo"
+                              + (f" ({out} has none)" if out else ""))
+        folder = _results_folder(out, f"{found.name}-montecarlo", resume=resume, overwrite=overwrite)
+        if resume:
+            check_resumable(folder, settings)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    measured = experiment(found.name) if designs.find(target) is not None else None
+    about = {"name": found.name, "path": str(found.path), "experiment": measured}
+    protocol = f"{'adaptive' if tilt.adaptive else 'fixed'} {tilt.increment:g} deg"
+    plan = pending_samples(folder, settings)
+    click.echo(f"{found.name} ({found.path}): {samples} samples ({imperfections}), seed {settings.seed}, {protocol}; "
+               f"{len(plan.recorded)} already recorded in {folder}")
+    for corrupt in plan.corrupt:
+        click.echo(f"corrupt sample, run again: {corrupt}", err=True)
+    try:
+        with open_workers(workers, scheduler) as pool, _signals_interrupt() as received, \
+                tqdm(total=len(plan.todo), desc="samples", unit=" sample") as bar:
+            bar.write(f"running on {pool.where}")
+
+            def done(entry):
+                bar.update(1)
+                angle = entry["collapse_angle_deg"]
+                bar.set_postfix_str(f"sample {entry['index']}: " + (f"{angle:.2f} deg" if angle is not None else entry["ended_by"] or "failed"))
+
+            try:
+                outcome = monte_carlo(found.wall, settings, folder, pool.executor, target=about, in_flight=pool.slots, on_sample=done)
+            except KeyboardInterrupt:
+                click.echo(f"\ninterrupted ({received.name}); the finished samples are recorded in {folder}; go on with the same "
+                           f"command plus {'' if out is not None else f'--out {folder} '}--resume", err=True)
+                raise SystemExit(128 + received.number) from None
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    _montecarlo_outputs(found.name, outcome.summary, folder, measured)
+    click.echo(f"{outcome.finished} samples run, {outcome.skipped} recorded before; results in {folder}")
+    if outcome.summary["collapse_angle_deg"]["count"] == 0:
+        raise SystemExit(1)
+
+
+def _montecarlo_outputs(name: str, summary: dict, folder: Path, measured: dict | None) -> None:
+    """Draw histogram.png of a Monte Carlo run and print its statistics."""
+    from drydem.report.plots import histogram_figure
+
+    collapse, dls = summary["collapse_angle_deg"], summary["dls_angle_deg"]
+    angles = [s["collapse_angle_deg"] for s in summary["samples"] if s["collapse_angle_deg"] is not None]
+    band = None if measured is None else (measured["mean_deg"], measured["cov"])
+    histogram_figure(angles, folder / "histogram.png", title=f"{name}: {len(angles)} imperfect walls", mean_deg=collapse["mean"],
+                     p05_deg=collapse["p05"], experiment=band)
+    for sample in summary["samples"]:
+        if sample["status"] == "failed":
+            click.echo(f"failed: sample {sample['index']} (seed {sample['seed']}): {sample['error']}", err=True)
+    excluded = summary["excluded"]["collapse_angle_deg"]
+    left_out = f"; left out: {', '.join(f'{n} {outcome}' for outcome, n in excluded.items())}" if excluded else ""
+    click.echo(f"collapse angle  {_statistics_line(collapse)}{left_out}")
+    click.echo(f"DLS angle       {_statistics_line(dls)} (drift 1 %)")
+    if measured is not None:
+        click.echo(f"experiment      {measured['mean_deg']:.1f} deg, CoV {measured['cov']:.1%} (Savalle et al. 2022, Table 1)")
+
+
+def _statistics_line(stats: dict) -> str:
+    """A statistic of drydem.parametric.montecarlo.statistics in words."""
+    if stats["count"] == 0:
+        return "no sample found one"
+    spread = "" if stats["std"] is None else f", std {stats['std']:.2f} deg" + ("" if stats["cov"] is None else f" (CoV {stats['cov']:.1%})")
+    return f"mean {stats['mean']:.2f} deg{spread}, 5th percentile {stats['p05']:.2f} deg, over {stats['count']} samples"

@@ -51,7 +51,8 @@ class StressJoint(NamedTuple):
     per_stress_s : the affine law's slopes, 1/m. stress_ref : Pa. k_min, k_max : the clamp,
     Pa/m. The breakpoints of the normal law (:func:`normal_stress`), where its tangent stiffness
     reaches k_min (power law only) and k_max: stress_low, stress_high (Pa) and the closures
-    there, closure_low, closure_high (m).
+    there, closure_low, closure_high (m); closure_scale = (kn / stress_ref) s_low^(e - 1), 1/m,
+    of the power law's inversion (:func:`normal_stress`).
 
     A separate type, so that the kernels are compiled for each kind of joint
     (:func:`normal_force`): a joint of constant stiffness runs exactly the arithmetic it always did.
@@ -74,6 +75,7 @@ class StressJoint(NamedTuple):
     closure_low: float = 0.0
     stress_high: float = np.inf
     closure_high: float = np.inf
+    closure_scale: float = 0.0
 
 
 def kernel_joint(joint: JointMaterial) -> JointConstants | StressJoint:
@@ -83,11 +85,12 @@ def kernel_joint(joint: JointMaterial) -> JointConstants | StressJoint:
     base = (float(joint.kn), float(joint.ks), float(joint.friction), float(joint.cohesion), float(joint.tension))
     if not joint.stress_dependent:
         return JointConstants(*base)
-    clamp = dict(k_min=float(joint.kn_min), k_max=float(joint.kn_max))
+    value = joint.law_value
+    clamp = dict(k_min=float(value("kn_min")), k_max=float(value("kn_max")))
     if joint.model == "affine":
-        law = StressJoint(*base, law=AFFINE, per_stress_n=float(joint.kn_per_stress), per_stress_s=float(joint.ks_per_stress), **clamp)
+        law = StressJoint(*base, law=AFFINE, per_stress_n=float(joint.kn_per_stress), per_stress_s=float(value("ks_per_stress")), **clamp)
     else:
-        law = StressJoint(*base, law=POWER, exponent_n=float(joint.kn_exponent), exponent_s=float(joint.ks_exponent),
+        law = StressJoint(*base, law=POWER, exponent_n=float(joint.kn_exponent), exponent_s=float(value("ks_exponent")),
                           stress_ref=float(joint.stress_ref), **clamp)
     return _with_breakpoints(law)
 
@@ -106,7 +109,8 @@ def _with_breakpoints(joint: StressJoint) -> StressJoint:
         return joint
     low = joint.stress_ref * (joint.k_min / joint.kn) ** (1.0 / e)
     high = joint.stress_ref * (joint.k_max / joint.kn) ** (1.0 / e)
-    joint = joint._replace(stress_low=low, closure_low=low / joint.k_min, stress_high=high)
+    joint = joint._replace(stress_low=low, closure_low=low / joint.k_min, stress_high=high,
+                           closure_scale=joint.kn / joint.stress_ref * (low / joint.stress_ref) ** (e - 1.0))
     return joint._replace(closure_high=joint.closure_low + _power_closure(high, joint))
 
 
@@ -127,7 +131,12 @@ def tangent_stiffness(stress, k, exponent, per_stress, joint):
     value ``k`` and ``exponent`` (power) or ``per_stress`` (affine) of kn or ks, clamped to
     [k_min, k_max]."""
     sigma = max(stress, 0.0)
-    value = k * (sigma / joint.stress_ref) ** exponent if joint.law == POWER else k + per_stress * sigma
+    if joint.law == AFFINE:
+        value = k + per_stress * sigma
+    elif exponent == 1.0:  # the linear law (joint-closure tests' kn proportional to sigma), without pow
+        value = k * sigma / joint.stress_ref
+    else:
+        value = k * (sigma / joint.stress_ref) ** exponent
     return min(max(value, joint.k_min), joint.k_max)
 
 
@@ -176,9 +185,9 @@ def normal_stress(closure, joint):
     if closure <= joint.closure_low:
         return joint.k_min * closure
     e = joint.exponent_n
-    # s^(1-e) = s_low^(1-e) + (1 - e) x, x = (u - u_low) k / sigma_ref; s = s_low exp(y)
-    s_low = joint.stress_low / joint.stress_ref
-    t = (closure - joint.closure_low) * joint.kn / joint.stress_ref * s_low ** (e - 1.0)
+    # s^(1-e) = s_low^(1-e) + (1 - e) x, x = (u - u_low) k / sigma_ref; s = s_low exp(y) with
+    # y = ln(1 + (1 - e) t) / (1 - e), t = x s_low^(e-1) (= x at e = 1)
+    t = (closure - joint.closure_low) * joint.closure_scale
     y = t if e == 1.0 else np.log1p((1.0 - e) * t) / (1.0 - e)
     return joint.stress_low * np.exp(y)
 

@@ -8,6 +8,7 @@ a run lives in :class:`drydem.model.state.State` and the engine's contacts (:mod
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -143,12 +144,14 @@ class Model:
         return (shape.vertices - shape.centroid) @ matrices(quaternion[None])[0].T + position
 
     def parameter_changes(self, *, kn: float | None = None, ks: float | None = None, friction: float | None = None,
-                          points: int | None = None, criterion: str | None = None) -> dict:
+                          points: int | None = None, criterion: str | None = None, joint_law: Mapping | None = None) -> dict:
         """The tables that the given values (None: unchanged) change, for :meth:`replace`: joint
-        kn, ks (Pa/m) and friction, contacts points_per_length, solver criterion. Building them
-        checks each value (ModelError naming it and its range) without building a model."""
-        joint = {k: v for k, v in (("kn", kn), ("ks", ks), ("friction", friction)) if v is not None}
-        changes = {"joint": dataclasses.replace(self.joint, **joint)} if joint else {}
+        kn, ks (Pa/m) and friction, its law (``joint_law``: model and the law's keys,
+        :meth:`~drydem.model.parameters.JointMaterial.changed`), contacts points_per_length,
+        solver criterion. Building them checks each value (ModelError naming it and its range)
+        without building a model."""
+        joint = {k: v for k, v in (("kn", kn), ("ks", ks), ("friction", friction)) if v is not None} | dict(joint_law or {})
+        changes = {"joint": self.joint.changed(**joint)} if joint else {}
         if points is not None:
             changes["contacts"] = dataclasses.replace(self.contacts, points_per_length=points)
         if criterion is not None:

@@ -16,6 +16,7 @@ switches, :class:`OneOf` for names) and :func:`check_fields`, which raises one
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, fields
@@ -191,7 +192,8 @@ class JointMaterial:
 
         each clamped to [kn_min, kn_max] (defaults: the whole range of :data:`JOINT_STIFFNESS`).
         ks_exponent defaults to kn_exponent and ks_per_stress to kn_per_stress (ks follows kn,
-        as in the seed paper's kn = ks). The keys of one law are errors with another.
+        as in the seed paper's kn = ks); a key not given stays None (:meth:`law_value` gives
+        the value in force). The keys of one law are errors with another.
     """
 
     kn: float = 3e7
@@ -212,20 +214,47 @@ class JointMaterial:
         check_fields(self, JOINT_RULES, "[joint]", optional=LAW_FIELDS)
         refuse(_law_problems(self))
         if self.model != "constant":
-            resolved = {"kn_min": JOINT_STIFFNESS.low, "kn_max": JOINT_STIFFNESS.high,
-                        "ks_exponent": self.kn_exponent, "ks_per_stress": self.kn_per_stress}
-            for key in LAW_KEYS[self.model][1]:
-                if getattr(self, key) is None:
-                    object.__setattr__(self, key, resolved[key])
             refuse(_clamp_problems(self))
+
+    def law_value(self, key: str) -> float | None:
+        """The value of the law's parameter ``key`` (one of :data:`LAW_FIELDS`): as given, or its
+        default (see the class docstring); None for a key of another law."""
+        value = getattr(self, key)
+        if value is not None or key not in sum(LAW_KEYS[self.model], ()):
+            return value
+        return {"kn_min": JOINT_STIFFNESS.low, "kn_max": JOINT_STIFFNESS.high,
+                "ks_exponent": self.kn_exponent, "ks_per_stress": self.kn_per_stress}[key]
+
+    def changed(self, **values) -> JointMaterial:
+        """This joint with ``values`` (any of its fields) changed: a new ``model`` drops the old
+        law's keys, the same model keeps those not given (ModelError for a key that is no field)."""
+        unknown = sorted(set(values) - {f.name for f in fields(self)})
+        if unknown:
+            raise ModelError(f"[joint] unknown key(s) {unknown}; allowed: {[f.name for f in fields(self)]}")
+        dropped = {key: None for key in LAW_FIELDS} if values.get("model", self.model) != self.model else {}
+        return dataclasses.replace(self, **(dropped | values))
+
+    @property
+    def stiffness_text(self) -> str:
+        """The stiffness in words: ``kn 3e+07 Pa/m, ks 3e+07 Pa/m``, and the law if not constant
+        (``power law: kn (sigma / 1000 Pa)^1, ks ...^1, in [1e+06, 1e+15] Pa/m``)."""
+        text = f"kn {self.kn:.3g} Pa/m, ks {self.ks:.3g} Pa/m"
+        if self.model == "constant":
+            return text
+        value = self.law_value
+        clamp = f"in [{value('kn_min'):.3g}, {value('kn_max'):.3g}] Pa/m"
+        if self.model == "power":
+            return (f"{text} at {self.stress_ref:.4g} Pa, power law: kn (sigma / {self.stress_ref:.4g} Pa)^{self.kn_exponent:g}, "
+                    f"ks (...)^{value('ks_exponent'):g}, {clamp}")
+        return f"{text} at zero stress, affine law: + {self.kn_per_stress:.4g} sigma, + {value('ks_per_stress'):.4g} sigma /m, {clamp}"
 
     @property
     def stress_dependent(self) -> bool:
         """Whether the stiffness changes with the normal stress (a law other than constant
         whose exponents or slopes are not all zero)."""
         if self.model == "power":
-            return self.kn_exponent > 0 or self.ks_exponent > 0
-        return self.model == "affine" and (self.kn_per_stress > 0 or self.ks_per_stress > 0)
+            return self.kn_exponent > 0 or self.law_value("ks_exponent") > 0
+        return self.model == "affine" and (self.kn_per_stress > 0 or self.law_value("ks_per_stress") > 0)
 
 
 #: the fields of the stress-dependent laws (None where the model has no such key)
@@ -249,10 +278,11 @@ def _law_of(key: str) -> str:
 
 def _clamp_problems(joint: JointMaterial) -> list[str]:
     """kn_min <= kn_max, and kn, ks (the stiffnesses at the law's origin) within them."""
-    if joint.kn_min > joint.kn_max:
-        return [f"[joint] kn_min = {joint.kn_min:.4g} exceeds kn_max = {joint.kn_max:.4g} Pa/m"]
-    return [f"[joint] {key} = {getattr(joint, key):.4g} Pa/m: must lie within [kn_min, kn_max] = [{joint.kn_min:.4g}, {joint.kn_max:.4g}] Pa/m"
-            for key in ("kn", "ks") if not joint.kn_min <= getattr(joint, key) <= joint.kn_max]
+    low, high = joint.law_value("kn_min"), joint.law_value("kn_max")
+    if low > high:
+        return [f"[joint] kn_min = {low:.4g} exceeds kn_max = {high:.4g} Pa/m"]
+    return [f"[joint] {key} = {getattr(joint, key):.4g} Pa/m: must lie within [kn_min, kn_max] = [{low:.4g}, {high:.4g}] Pa/m"
+            for key in ("kn", "ks") if not low <= getattr(joint, key) <= high]
 
 
 #: contact tolerance, m: positive; its bound relative to the blocks is checked with the model

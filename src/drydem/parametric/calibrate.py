@@ -22,10 +22,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
 
-from drydem.errors import DrydemError
-from drydem.model.parameters import JOINT_STIFFNESS, Range, field_problems, refuse
+from drydem.errors import DrydemError, ModelError
+from drydem.model.parameters import JOINT_STIFFNESS, JointMaterial, Range, field_problems, refuse
 from drydem.parametric.records import RecordError, read_record, record_path
-from drydem.parametric.study import RunSpec
+from drydem.parametric.study import RunSpec, joint_law_text
 from drydem.parametric.sweep import SweepOutcome, sweep
 
 GOLDEN = (math.sqrt(5) - 1) / 2
@@ -140,13 +140,18 @@ def calibration_error(records: Mapping[str, dict], experiment: Mapping[str, floa
 class StiffnessSearch:
     """What ``drydem calibrate`` fits: the kn (Pa/m) in [kn_min, kn_max] that best reproduces the
     experimental collapse angles of ``designs``, with ks = ks_ratio x kn, from adaptive tilting
-    runs down to steps of ``increment`` deg (the field names are the command's options)."""
+    runs down to steps of ``increment`` deg (the field names are the command's options).
+
+    ``joint_law``: a stress-dependent law (``[joint]`` keys: model and its parameters, e.g.
+    ``{"model": "power", "kn_exponent": 1.0, "stress_ref": 1000.0}``) whose kn and ks are then
+    the ones fitted: the law's shape given, its level calibrated; None: the walls' own joints."""
 
     designs: tuple[str, ...]
     kn_min: float = 1e7
     kn_max: float = 1e9
     ks_ratio: float = 1.0
     increment: float = 0.1
+    joint_law: dict | None = None
 
     def problems(self, name: Callable[[str], str] = str) -> list[str]:
         """Every invalid setting and the rule it breaks, each named by ``name(field)``: walls with
@@ -165,12 +170,25 @@ class StiffnessSearch:
         ks = (self.ks_ratio * self.kn_min, self.ks_ratio * self.kn_max)
         if not bounds and self.ks_ratio in KS_RATIO and not all(k in JOINT_STIFFNESS for k in ks):
             found.append(f"{name('ks_ratio')} = {self.ks_ratio!r}: ks = ratio x kn, {ks[0]:.3g} to {ks[1]:.3g} Pa/m, {JOINT_STIFFNESS}")
+        elif not bounds and self.joint_law:
+            found += _law_problems(self.joint_law, (self.kn_min, self.kn_max), self.ks_ratio)
         return found
 
     def runs(self, kn: float) -> list[RunSpec]:
         """The runs that evaluate ``kn``, one per design."""
-        return [RunSpec(analysis="tilt", target=d, protocol="adaptive", kn=kn, ks=self.ks_ratio * kn, increment_deg=self.increment)
-                for d in self.designs]
+        return [RunSpec(analysis="tilt", target=d, protocol="adaptive", kn=kn, ks=self.ks_ratio * kn, increment_deg=self.increment,
+                        joint_law=joint_law_text(self.joint_law)) for d in self.designs]
+
+
+def _law_problems(law: dict, kn_range: tuple[float, float], ks_ratio: float) -> list[str]:
+    """Why the joint ``law`` cannot take the kn at either end of ``kn_range`` (ks = ks_ratio x kn)."""
+    found = []
+    for kn in kn_range:
+        try:
+            JointMaterial(kn=kn, ks=ks_ratio * kn, **law)
+        except (ModelError, TypeError) as exc:
+            found.append(f"joint law {law} at kn = {kn:.4g} Pa/m: {exc}")
+    return sorted(set(found), key=found.index)
 
 
 def calibrate_stiffness(search: StiffnessSearch, results: Path, executor: Executor, *, in_flight: int | None = None,

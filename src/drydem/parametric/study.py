@@ -74,16 +74,27 @@ OVERRIDES = ("kn", "ks", "friction", "points")
 #: the RunSpec fields of shake runs only: None in the others, and then left out of the id's
 #: hash, so that the ids (the record names) of tilt and limit runs are those they always had
 SHAKE_FIELDS = ("motion", "scale", "duration_s", "restitution", "contact_damping_ratio", "monitor")
+#: the RunSpec fields left out of the id's hash when None: the shake fields and the joint law
+OPTIONAL_FIELDS = (*SHAKE_FIELDS, "joint_law")
 #: a motion that is an analytic pulse: ``pulse:KIND:FREQUENCY_HZ[:CYCLES]``, amplitude 1 m/s2
 PULSE_PREFIX = "pulse:"
 #: m/s2: the amplitude of a study's pulse, so that a run's scale is its pulse's amplitude
 PULSE_AMPLITUDE_M_S2 = 1.0
 
 
+def joint_law_text(law: dict | None) -> str | None:
+    """A joint law (``[joint]`` keys: model and the law's parameters) as :attr:`RunSpec.joint_law`:
+    JSON with sorted keys, so that one law has one text (and one run id)."""
+    return None if not law else json.dumps(law, sort_keys=True)
+
+
 @dataclass(frozen=True)
 class RunSpec:
     """One run of a study. kn, ks (Pa/m), friction and points override the target's when given.
     Grids that share a run (same parameters) share its record.
+
+    ``joint_law``: the joint's law, as a JSON object of ``[joint]`` keys (``model`` and the
+    law's parameters, :func:`joint_law_text`), replacing the target's; None: the target's.
 
     A shake run (analysis "shake", protocol "time-history", increment_deg None) also has its
     ``motion`` (a motion file's path or a pulse, module docstring), the ``scale`` on it, and
@@ -104,14 +115,16 @@ class RunSpec:
     restitution: float | str | None = None
     contact_damping_ratio: float | None = None
     monitor: str | None = None
+    joint_law: str | None = None
 
     @property
     def id(self) -> str:
-        """Readable and unique: analysis, target, (motion and scale,) stiffnesses, protocol and
-        a hash of everything (the shake fields left out when None, see :data:`SHAKE_FIELDS`)."""
-        fields = {key: value for key, value in asdict(self).items() if not (key in SHAKE_FIELDS and value is None)}
+        """Readable and unique: analysis, target, (motion and scale,) (the joint law's model,)
+        stiffnesses, protocol and a hash of everything (the fields of :data:`OPTIONAL_FIELDS` left out when None)."""
+        fields = {key: value for key, value in asdict(self).items() if not (key in OPTIONAL_FIELDS and value is None)}
         digest = hashlib.sha1(json.dumps(fields, sort_keys=True).encode()).hexdigest()[:10]
-        stiffness = "" if self.kn is None else f"-kn{self.kn:.3g}-ks{self.ks:.3g}"
+        law = "" if self.joint_law is None else f"-{json.loads(self.joint_law).get('model', 'law')}"
+        stiffness = law + ("" if self.kn is None else f"-kn{self.kn:.3g}-ks{self.ks:.3g}")
         if self.analysis == "shake":
             scale = "" if self.scale is None else f"-x{self.scale:.4g}"
             return f"{self.analysis}-{Path(self.target).stem}-{motion_label(str(self.motion), compact=True)}{scale}{stiffness}-{digest}"
@@ -121,7 +134,8 @@ class RunSpec:
     def overrides(self) -> dict:
         """The values this run changes in its target's model (None: the target's), as keywords of
         :meth:`drydem.model.assembly.Model.overridden` and ``parameter_changes``."""
-        return {key: getattr(self, key) for key in OVERRIDES}
+        law = None if self.joint_law is None else json.loads(self.joint_law)
+        return {key: getattr(self, key) for key in OVERRIDES} | {"joint_law": law}
 
     def model(self) -> Model:
         """The model this run analyses: its target's (:func:`drydem.io.target.load_target`) with

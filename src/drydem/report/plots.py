@@ -1,5 +1,6 @@
 """Figures of a tilting analysis: pushover curve (paper Figs 9-11) and mechanism (Figs 7-8);
-of a shaking-table analysis: the response history (:func:`history_figure`).
+of a shaking-table analysis: the response history (:func:`history_figure`); of a Monte Carlo
+run: the histogram of its angles (:func:`histogram_figure`).
 
 matplotlib is imported inside the functions, so the engine does not load it. Figures are
 :class:`matplotlib.figure.Figure` objects made by :func:`new_figure`, outside pyplot: drawing
@@ -190,5 +191,32 @@ def layout_figure(model: Model, path: Path, *, kinds: list[str] | None = None, v
     ax.set_aspect("equal")
     ax.set(title=title, xlabel="x (m)", ylabel="z (m)")
     ax.legend(handles=legend, loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize="small")
+    fig.savefig(path, dpi=150)
+    return path
+
+
+def histogram_figure(angles_deg, path: Path, *, title: str = "", mean_deg: float | None = None, p05_deg: float | None = None,
+                     experiment: tuple[float, float] | None = None, xlabel: str = "collapse angle (deg)") -> Path:
+    """Histogram of the samples' ``angles_deg`` (a Monte Carlo run), with their mean and 5th
+    percentile marked, and an ``experiment`` (mean in deg, coefficient of variation as a
+    fraction) drawn as its mean and the band mean (1 +- cov)."""
+    angles = np.asarray(angles_deg, dtype=float)
+    fig = new_figure(figsize=(6.4, 4.4), layout="constrained")
+    ax = fig.subplots()
+    if angles.size:
+        ax.hist(angles, bins="auto" if angles.size > 1 else 1, color="tab:blue", alpha=0.75, edgecolor="white",
+                label=f"{angles.size} samples")
+    if experiment is not None:
+        mean, cov = experiment
+        ax.axvspan(mean * (1.0 - cov), mean * (1.0 + cov), color="tab:green", alpha=0.15, zorder=0,
+                   label=f"experiment CoV {cov:.1%}")
+        ax.axvline(mean, color="tab:green", linewidth=1.5, label=f"experiment {mean:.1f} deg")
+    if mean_deg is not None:
+        ax.axvline(mean_deg, color="tab:red", linewidth=1.5, label=f"mean {mean_deg:.2f} deg")
+    if p05_deg is not None:
+        ax.axvline(p05_deg, color="tab:red", linestyle="--", linewidth=1.2, label=f"5th percentile {p05_deg:.2f} deg")
+    ax.set(xlabel=xlabel, ylabel="samples", title=title)
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize="small")
     fig.savefig(path, dpi=150)
     return path

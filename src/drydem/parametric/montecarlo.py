@@ -1,0 +1,342 @@
+"""Monte Carlo tilting analyses of an imperfect wall (issue 17): the collapse and DLS angles
+of many copies of one wall, each with its bricks' imperfections drawn from its own seed
+(:mod:`drydem.masonry.imperfections`), and their statistics.
+
+Sample k's seed is ``np.random.SeedSequence(seed, spawn_key=(k,))``'s first 32-bit word
+(:func:`sample_seed`): the k-th child numpy's ``SeedSequence(seed).spawn(n)`` would give, for
+any n > k. So sample k depends on the run's seed and on k only, never on the number of
+samples: a run of 200 samples extends one of 100 with the same first 100, and the children's
+streams are independent by SeedSequence's construction (not seed + k, whose streams are merely
+different).
+
+Results, written as they come (a killed run loses only the samples in flight):
+
+``OUT/samples/NNNN/``: sample NNNN's ``summary.json`` (``drydem tilt``'s,
+:func:`drydem.io.results.tilt_summary`, plus ``sample``: its index, seed, imperfections and
+status; a failed sample's holds its error instead) and ``pushover.csv``. A sample's folder is
+written beside its place and renamed into it, whole or not at all.
+
+``OUT/summary.json``: the settings, every recorded sample (index order) with its collapse and
+DLS angles and outcome, and the statistics (:func:`statistics`) of both angles; rewritten
+after each sample.
+
+A run started again with the same settings (:func:`check_resumable`) skips the samples validly
+recorded and runs the missing and the corrupt ones (:func:`pending_samples`). One run at a
+time works on a folder (:func:`hold_folder`).
+"""
+
+from __future__ import annotations
+
+import fcntl
+import json
+import os
+import shutil
+import time
+import traceback
+from collections.abc import Callable, Iterator, Mapping
+from concurrent.futures import FIRST_COMPLETED, Executor, Future, wait
+from contextlib import contextmanager
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from drydem import __version__
+from drydem.analysis.tilt import TiltSettings, tilt_analysis
+from drydem.errors import DrydemError
+from drydem.masonry.imperfections import Imperfections, imperfect_model
+from drydem.masonry.walls import Wall
+
+#: the drift whose angle is the DLS angle (EN 1998-1 4.4.3.2; Savalle et al. 2022, Section 5),
+#: a key of the tilt summary's ``drift_limit_angles_deg``
+DLS_DRIFT = "0.01"
+#: the percentile reported as ``p05``
+PERCENTILE = 5.0
+SAMPLES_FOLDER = "samples"
+LOCK_FILE = ".montecarlo.lock"
+
+
+class MonteCarloError(DrydemError):
+    """A Monte Carlo run that cannot go on as asked (another run on the folder, settings that
+    differ from the recorded run's, an executor that lost a sample)."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class MonteCarloSettings:
+    """What a Monte Carlo run is: ``samples`` tilting analyses (``tilt``) of the wall, each
+    with ``imperfections`` drawn from its own seed (:func:`sample_seed` of ``seed``), and the
+    ``model_overrides`` (keywords of :meth:`drydem.model.assembly.Model.overridden`: kn, ks,
+    friction, points, density, criterion) applied to every sample's model."""
+
+    samples: int
+    seed: int
+    imperfections: Imperfections
+    tilt: TiltSettings
+    model_overrides: Mapping[str, object] = field(default_factory=dict)
+
+    def __post_init__(self):
+        if isinstance(self.samples, bool) or not isinstance(self.samples, int) or self.samples < 1:
+            raise DrydemError(f"samples = {self.samples!r}: must be a whole number >= 1")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
+            raise DrydemError(f"seed = {self.seed!r}: must be a whole number >= 0")
+
+    def identity(self) -> dict:
+        """Everything that makes the samples what they are (all but their number), as JSON
+        values: a resumed run must have the same (:func:`check_resumable`)."""
+        return json.loads(json.dumps({
+            "seed": self.seed, "imperfections": asdict(self.imperfections), "tilt": asdict(self.tilt),
+            "model_overrides": {key: value for key, value in self.model_overrides.items() if value is not None},
+        }))
+
+
+def sample_seed(seed: int, index: int) -> int:
+    """The seed of sample ``index``: the first 32-bit word of the ``index``-th child of
+    ``SeedSequence(seed)`` (module docstring)."""
+    return int(np.random.SeedSequence(seed, spawn_key=(index,)).generate_state(1)[0])
+
+
+def sample_model(wall: Wall, settings: MonteCarloSettings, index: int):
+    """The model of sample ``index``: the wall with its imperfections drawn from the sample's
+    seed, and the settings' overrides."""
+    model = imperfect_model(wall, settings.imperfections, sample_seed(settings.seed, index))
+    return model.overridden(**settings.model_overrides)
+
+
+def run_sample(wall: Wall, settings: MonteCarloSettings, index: int) -> dict:
+    """Sample ``index`` analysed (in a worker): ``summary`` (see :func:`sample_summary`) and
+    ``pushover`` (the Records). An exception is the sample's outcome, recorded, never raised: a
+    sample whose drawn wall cannot be built must not stop the run."""
+    from drydem.io.results import tilt_summary
+
+    start = time.perf_counter()
+    try:
+        model = sample_model(wall, settings, index)
+        result = tilt_analysis(model, settings.tilt)
+        summary, pushover = tilt_summary(result, model), result.records
+        outcome = {"status": "ok", "error": None}
+    except Exception as exc:  # the sample's failure is its record
+        summary, pushover = {}, []
+        outcome = {"status": "failed", "error": f"{type(exc).__name__}: {exc}", "traceback": traceback.format_exc(limit=5)}
+    sample = {"index": index, "seed": sample_seed(settings.seed, index), "imperfections": asdict(settings.imperfections)} | outcome
+    return {"summary": summary | {"sample": sample | {"runtime_s": round(time.perf_counter() - start, 3)}}, "pushover": pushover}
+
+
+def sample_folder(folder: Path, index: int) -> Path:
+    return Path(folder) / SAMPLES_FOLDER / f"{index:04d}"
+
+
+def write_sample(folder: Path, record: dict) -> Path:
+    """A sample's record (:func:`run_sample`) as ``OUT/samples/NNNN/``: written in a hidden
+    folder beside it, then renamed into place (a corrupt one there is replaced)."""
+    from drydem.io.results import PushoverWriter, write_summary
+
+    final = sample_folder(folder, record["summary"]["sample"]["index"])
+    partial = final.with_name(f".{final.name}.partial")
+    shutil.rmtree(partial, ignore_errors=True)
+    partial.mkdir(parents=True)
+    write_summary(partial, record["summary"])
+    if record["summary"]["sample"]["status"] == "ok":
+        writer = PushoverWriter(partial)
+        for row in record["pushover"]:
+            writer(row)
+    shutil.rmtree(final, ignore_errors=True)
+    os.replace(partial, final)
+    return final
+
+
+def sample_entry(summary: dict) -> dict:
+    """A sample's line in the top summary: index, seed, status, collapse and DLS angles (deg,
+    None where not found), how its analysis ended, its run time, its error if it failed."""
+    sample = summary["sample"]
+    entry = {"index": sample["index"], "seed": sample["seed"], "status": sample["status"]}
+    if sample["status"] != "ok":
+        return entry | {"collapse_angle_deg": None, "dls_angle_deg": None, "ended_by": None, "error": sample["error"],
+                        "runtime_s": sample["runtime_s"]}
+    return entry | {"collapse_angle_deg": summary["collapse_angle_deg"], "dls_angle_deg": summary["drift_limit_angles_deg"][DLS_DRIFT],
+                    "ended_by": summary["ended_by"], "runtime_s": sample["runtime_s"]}
+
+
+def read_sample(folder: Path, settings: MonteCarloSettings, index: int) -> dict:
+    """The top-summary entry (:func:`sample_entry`) of sample ``index`` as recorded in
+    ``folder``; MonteCarloError naming the file and what is wrong when its record is not JSON,
+    lacks a key, or is not that of this sample (another index, seed or imperfections)."""
+    path = sample_folder(folder, index) / "summary.json"
+    try:
+        summary = json.loads(path.read_text(encoding="utf-8"))
+        sample = summary["sample"]
+        expected = {"index": index, "seed": sample_seed(settings.seed, index), "imperfections": asdict(settings.imperfections)}
+        wrong = [key for key, value in expected.items() if sample[key] != json.loads(json.dumps(value))]
+        if wrong:
+            raise MonteCarloError(f"{path}: its {', '.join(wrong)} are not sample {index}'s")
+        if sample["status"] == "ok" and not (path.parent / "pushover.csv").is_file():
+            raise MonteCarloError(f"{path.parent}: no pushover.csv")
+        return sample_entry(summary)
+    except OSError as exc:
+        raise MonteCarloError(f"{path}: cannot read the record ({exc.strerror})") from None
+    except (ValueError, TypeError, KeyError) as exc:
+        raise MonteCarloError(f"{path}: not a sample's record ({type(exc).__name__}: {exc})") from None
+
+
+@dataclass(frozen=True)
+class PendingSamples:
+    """The samples of a run: those ``recorded`` (index -> top-summary entry), the indices
+    ``todo`` (missing or corrupt), and the ``corrupt`` records' errors."""
+
+    recorded: dict[int, dict]
+    todo: list[int]
+    corrupt: list[str]
+
+
+def pending_samples(folder: Path, settings: MonteCarloSettings) -> PendingSamples:
+    """What is recorded in ``folder`` and what is left to run (see :class:`PendingSamples`)."""
+    recorded, todo, corrupt = {}, [], []
+    for index in range(settings.samples):
+        if not sample_folder(folder, index).exists():
+            todo.append(index)
+            continue
+        try:
+            recorded[index] = read_sample(folder, settings, index)
+        except MonteCarloError as exc:
+            corrupt.append(str(exc))
+            todo.append(index)
+    return PendingSamples(recorded, todo, corrupt)
+
+
+def check_resumable(folder: Path, settings: MonteCarloSettings) -> None:
+    """MonteCarloError unless ``folder/summary.json`` is a Monte Carlo run's with the same
+    settings (all but the number of samples: more extend it, fewer summarise its first ones),
+    naming those that differ."""
+    path = Path(folder) / "summary.json"
+    try:
+        recorded = json.loads(path.read_text(encoding="utf-8"))["settings"]
+    except (OSError, ValueError, TypeError, KeyError):
+        raise MonteCarloError(f"{path}: not the summary of a drydem montecarlo run; --resume needs the --out of one") from None
+    current = settings.identity()
+    differ = sorted(key for key in current.keys() | recorded.keys() if current.get(key) != recorded.get(key))
+    if differ:
+        raise MonteCarloError(f"{folder}: the recorded run had other settings ({', '.join(differ)}: "
+                              + "; ".join(f"{key} {recorded.get(key)} there, {current.get(key)} now" for key in differ)
+                              + "); resume with the same options, or start another --out")
+
+
+def statistics(values) -> dict:
+    """Statistics of ``values`` (deg): ``count``; ``mean``; ``std``, the sample standard
+    deviation (ddof = 1: unbiased variance), None under two values; ``cov`` = std / mean (None
+    when either is None or the mean is 0); ``p05``, the 5th percentile (numpy's linear
+    interpolation between order statistics); ``min``, ``max``. All None but the count when
+    there is no value."""
+    x = np.asarray(list(values), dtype=float)
+    if x.size == 0:
+        return {"count": 0, "mean": None, "std": None, "cov": None, "p05": None, "min": None, "max": None}
+    mean = float(x.mean())
+    std = float(x.std(ddof=1)) if x.size > 1 else None
+    cov = std / mean if std is not None and mean != 0.0 else None
+    return {"count": int(x.size), "mean": mean, "std": std, "cov": cov, "p05": float(np.percentile(x, PERCENTILE)),
+            "min": float(x.min()), "max": float(x.max())}
+
+
+def run_summary(target: dict, settings: MonteCarloSettings, entries: Mapping[int, dict]) -> dict:
+    """The top ``summary.json``: ``target`` (what the caller says of it), the settings, the
+    ``samples`` recorded (index order), the statistics of the collapse angle over the samples
+    that found one (a collapse: the others, listed with their outcome, are counted in
+    ``excluded`` by outcome) and of the DLS angle over those that reached a 1 % drift."""
+    samples = [entries[index] for index in sorted(entries)]
+    collapsed = [s["collapse_angle_deg"] for s in samples if s["collapse_angle_deg"] is not None]
+    excluded: dict[str, int] = {}
+    for s in samples:
+        if s["collapse_angle_deg"] is None:
+            outcome = s["ended_by"] or s["status"]
+            excluded[outcome] = excluded.get(outcome, 0) + 1
+    dls = [s["dls_angle_deg"] for s in samples if s["dls_angle_deg"] is not None]
+    return {
+        "target": target,
+        "samples_requested": settings.samples,
+        "samples_recorded": len(samples),
+        "settings": settings.identity(),
+        "collapse_angle_deg": statistics(collapsed),
+        "dls_angle_deg": statistics(dls),
+        "excluded": {"collapse_angle_deg": excluded, "dls_angle_deg_missing": len(samples) - len(dls)},
+        "samples": samples,
+        "drydem_version": __version__,
+    }
+
+
+@contextmanager
+def hold_folder(folder: Path) -> Iterator[None]:
+    """Hold ``folder`` for this run: an exclusive flock on ``folder/.montecarlo.lock`` (the
+    kernel drops it when the process ends, however it ends); MonteCarloError if another run
+    holds it."""
+    fd = os.open(Path(folder) / LOCK_FILE, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(fd)
+        raise MonteCarloError(f"{folder}: another drydem montecarlo is working on it; wait for it to end, or give another --out") from None
+    try:
+        yield
+    finally:
+        os.close(fd)
+
+
+@dataclass(frozen=True)
+class MonteCarloOutcome:
+    """How a run went: the samples ``finished`` now, ``skipped`` (validly recorded before), the
+    ``corrupt`` records found (run again), and the top ``summary`` written last."""
+
+    finished: int
+    skipped: int
+    corrupt: tuple[str, ...]
+    summary: dict
+
+
+def monte_carlo(wall: Wall, settings: MonteCarloSettings, folder: Path, executor: Executor, *, target: dict,
+                in_flight: int | None = None, on_sample: Callable[[dict], None] | None = None) -> MonteCarloOutcome:
+    """Run on ``executor`` the samples of ``settings`` not validly recorded in ``folder``
+    (:func:`pending_samples`), at most ``in_flight`` at a time (default: all), writing each
+    sample's record as it comes and the top summary (:func:`run_summary`, ``target`` in it)
+    before the first and after each; ``on_sample(entry)`` for each sample finished here.
+    MonteCarloError if another run holds the folder or the executor loses a sample (the
+    samples finished are recorded)."""
+    folder = Path(folder)
+    (folder / SAMPLES_FOLDER).mkdir(parents=True, exist_ok=True)
+    with hold_folder(folder):
+        from drydem.io.results import write_summary
+
+        plan = pending_samples(folder, settings)
+        entries = dict(plan.recorded)
+        summary = run_summary(target, settings, entries)
+        write_summary(folder, summary)
+        queue = iter(plan.todo)
+        window = in_flight or max(len(plan.todo), 1)
+        running: dict[Future, int] = {}
+        while True:
+            while len(running) < window and (index := next(queue, None)) is not None:
+                running[executor.submit(run_sample, wall, settings, index)] = index
+            if not running:
+                break
+            done, _ = wait(running, return_when=FIRST_COMPLETED)
+            for future in done:
+                index = running.pop(future)
+                try:
+                    record = future.result()
+                except Exception as exc:
+                    raise MonteCarloError(f"sample {index} was lost by the executor ({type(exc).__name__}: {exc}); the samples "
+                                          "finished are recorded: resume to go on") from exc
+                write_sample(folder, record)
+                entries[index] = sample_entry(record["summary"])
+                summary = run_summary(target, settings, entries)
+                write_summary(folder, summary)
+                if on_sample is not None:
+                    on_sample(entries[index])
+    return MonteCarloOutcome(len(plan.todo), len(plan.recorded), tuple(plan.corrupt), summary)
+
+
+def experiment(name: str) -> dict | None:
+    """The experimental collapse angle of the paper's wall ``name`` (WD1-WD7; Savalle et al.
+    2022, Table 1): ``mean_deg`` and ``cov`` (a fraction); None for another wall."""
+    from drydem.masonry.published import savalle2022
+
+    table = savalle2022()["table1_experiment"]
+    if name not in table["collapse_angle_deg"]:
+        return None
+    return {"mean_deg": table["collapse_angle_deg"][name], "cov": table["cov_percent"][name] / 100.0}

@@ -1,0 +1,227 @@
+"""drydem montecarlo: statistics against a known distribution (a tall brick toppling at
+atan(L / H) with a scattered height H), the statistics against numpy, seeds that do not depend
+on the number of samples, resumption, --overwrite and bad inputs."""
+
+import json
+import math
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import asdict
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from scipy import integrate, stats
+
+from drydem.parametric.montecarlo import MonteCarloSettings, monte_carlo, sample_seed, statistics
+from drydem.analysis.tilt import TiltSettings
+from drydem.cli import main
+from drydem.masonry.imperfections import Imperfections, imperfect_blocks
+from drydem.masonry.walls import load_wall
+
+#: the tall brick: length along the wall, height, width, m; friction 0.8 > L / H = 0.4, so it
+#: topples before it slides. Two points per length put the sub-contacts at the brick's ends,
+#: so it pivots on its toe as a rigid block would
+L, H, W = 0.020, 0.050, 0.012
+TALL_BRICK = f'''joint = {{ kn = 1e9, ks = 1e9, friction = 0.8 }}
+contacts = {{ points_per_length = 2 }}
+supports = {{ fix_y = true }}
+[brick]
+length_m = {L}
+height_m = {H}
+width_m = {W}
+[layout]
+courses = """
+B
+"""
+'''
+#: the height scatter (mm, normal), samples and tilt step (deg) of the known-distribution run
+HEIGHT_SD_MM, SAMPLES, INCREMENT_DEG = 2.0, 64, 0.1
+#: the toppling angle's elastic loss, deg: the toe sub-contact carries the weight W_b and closes
+#: by W_b / (kn A), A = L W / 2 its area, which turns the brick by that over L before its heel
+#: lifts, and the centroid (H / 2 up) moves that rotation times H / 2 towards the toe:
+#: tan(theta) drops by (H / 2) (W_b / (kn A L)) / (H / 2) = W_b / (kn A L); with W_b = 0.212 N,
+#: kn = 1e9 Pa/m, A = 1.2e-4 m2: 8.8e-5 on 0.4, 0.004 deg. Bounded here by 0.02 deg
+ELASTIC_LOSS_DEG = 0.02
+#: the k of the k-sigma bounds on the statistics' sampling errors (two-sided 6e-5 for a normal estimate)
+K_SIGMA = 4.0
+
+
+def toppling_deg(height_m):
+    """A rigid block of length L and height ``height_m`` on a tilting table topples at atan(L / H)."""
+    return np.degrees(np.arctan(L / np.asarray(height_m)))
+
+
+def run(*args):
+    return CliRunner().invoke(main, ["montecarlo", *map(str, args)])
+
+
+@pytest.fixture(scope="module")
+def tall_brick(tmp_path_factory):
+    path = tmp_path_factory.mktemp("wall") / "tall.toml"
+    path.write_text(TALL_BRICK)
+    return path
+
+
+@pytest.fixture(scope="module")
+def tall_brick_run(tall_brick, tmp_path_factory):
+    """The tall brick's Monte Carlo run: its folder and summary."""
+    out = tmp_path_factory.mktemp("mc") / "run"
+    result = run(tall_brick, "--samples", SAMPLES, "--seed", 7, "--height-sd", HEIGHT_SD_MM, "--increment", INCREMENT_DEG,
+                 "--stop-displacement", 0.02, "--workers", 2, "--out", out)
+    assert result.exit_code == 0, result.output
+    return out, json.loads((out / "summary.json").read_text())
+
+
+def drawn_height_m(wall_path, seed: int) -> float:
+    """The brick's height in the sample of ``seed``: its blocks drawn again."""
+    imperfections = Imperfections(height_sd_mm=HEIGHT_SD_MM)
+    brick = next(b for b in imperfect_blocks(load_wall(wall_path), imperfections, seed) if not b.fixed)
+    z = brick.shape.vertices[:, 2]
+    return float(z.max() - z.min())
+
+
+def test_each_sample_topples_at_atan_length_over_its_own_drawn_height(tall_brick, tall_brick_run):
+    """Sample k's collapse angle is the last step below atan(L / (H + delta_k)), less the
+    joints' elastic loss: within one increment below it."""
+    _, summary = tall_brick_run
+    assert [s["index"] for s in summary["samples"]] == list(range(SAMPLES))
+    heights = [drawn_height_m(tall_brick, s["seed"]) for s in summary["samples"]]
+    assert np.std(heights) > 0.5 * HEIGHT_SD_MM * 1e-3  # the heights were scattered
+    for sample, height in zip(summary["samples"], heights):
+        exact = toppling_deg(height)
+        assert exact - INCREMENT_DEG - ELASTIC_LOSS_DEG <= sample["collapse_angle_deg"] <= exact + 1e-6, (sample, height, exact)
+
+
+def test_collapse_angle_statistics_agree_with_the_distribution_of_atan_length_over_a_normal_height(tall_brick_run):
+    """theta = atan(L / (H + delta)), delta ~ N(0, sd^2): mean and std by numerical integration,
+    p05 = theta(H + z_0.95 sd) (theta falls as the height grows). The sample statistics agree
+    within K_SIGMA standard errors (mean: std / sqrt(n); std: std / sqrt(2 (n - 1)); p05:
+    sqrt(p (1 - p) / n) / f(p05), f the density of theta there) plus the protocol's bias, the
+    recorded angle being up to one increment (and the elastic loss) below the exact one."""
+    _, summary = tall_brick_run
+    sd = HEIGHT_SD_MM * 1e-3
+
+    def moment(power):
+        return integrate.quad(lambda d: toppling_deg(H + d) ** power * stats.norm.pdf(d, scale=sd), -8 * sd, 8 * sd)[0]
+
+    mean = moment(1)
+    std = math.sqrt(moment(2) - mean**2)
+    p05_height = H + stats.norm.ppf(0.95) * sd
+    p05 = float(toppling_deg(p05_height))
+    slope = L / (p05_height**2 + L**2) * 180 / math.pi  # |d theta / d height| there, deg/m
+    density = stats.norm.pdf(p05_height - H, scale=sd) / slope  # of theta at p05, 1/deg
+    n = SAMPLES
+    bias = INCREMENT_DEG + ELASTIC_LOSS_DEG
+    found = summary["collapse_angle_deg"]
+    assert found["count"] == n
+    assert mean - bias - K_SIGMA * std / math.sqrt(n) <= found["mean"] <= mean + K_SIGMA * std / math.sqrt(n)
+    assert abs(found["std"] - std) <= K_SIGMA * std / math.sqrt(2 * (n - 1)) + bias / 2
+    assert p05 - bias - K_SIGMA * math.sqrt(0.05 * 0.95 / n) / density <= found["p05"] <= p05 + K_SIGMA * math.sqrt(0.05 * 0.95 / n) / density
+
+
+def test_the_summary_holds_every_sample_and_its_record_beside_it(tall_brick_run):
+    out, summary = tall_brick_run
+    angles = [s["collapse_angle_deg"] for s in summary["samples"]]
+    assert summary["collapse_angle_deg"] == statistics(angles)
+    assert summary["dls_angle_deg"]["count"] + summary["excluded"]["dls_angle_deg_missing"] == SAMPLES
+    assert (out / "histogram.png").stat().st_size > 0
+    for sample in summary["samples"]:
+        folder = out / "samples" / f"{sample['index']:04d}"
+        record = json.loads((folder / "summary.json").read_text())
+        assert record["sample"]["seed"] == sample["seed"] == sample_seed(7, sample["index"])
+        assert record["sample"]["imperfections"] == asdict(Imperfections(height_sd_mm=HEIGHT_SD_MM))
+        assert record["collapse_angle_deg"] == sample["collapse_angle_deg"]
+        assert record["analysis"]["adaptive"] is True  # montecarlo's default protocol
+        assert (folder / "pushover.csv").read_text().startswith("tilt_deg,")
+
+
+@pytest.mark.parametrize("values, expected", [
+    ([20.0, 21.0, 19.5, 22.5, 18.0], None),
+    ([7.8], {"count": 1, "mean": 7.8, "std": None, "cov": None, "p05": 7.8, "min": 7.8, "max": 7.8}),
+    ([], {"count": 0, "mean": None, "std": None, "cov": None, "p05": None, "min": None, "max": None}),
+])
+def test_statistics_are_numpy_sample_mean_std_cov_and_linear_5th_percentile(values, expected):
+    x = np.array(values)
+    if expected is None:
+        std = x.std(ddof=1)
+        expected = {"count": 5, "mean": x.mean(), "std": std, "cov": std / x.mean(), "p05": np.percentile(x, 5), "min": 18.0, "max": 22.5}
+    assert statistics(values) == pytest.approx(expected)
+
+
+def test_sample_seeds_do_not_depend_on_the_number_of_samples():
+    for n in (3, 10):
+        children = np.random.SeedSequence(42).spawn(n)
+        assert [sample_seed(42, k) for k in range(n)] == [int(c.generate_state(1)[0]) for c in children]
+    assert len({sample_seed(42, k) for k in range(1000)}) == 1000
+
+
+def settings(samples):
+    return MonteCarloSettings(samples=samples, seed=3, imperfections=Imperfections(height_sd_mm=HEIGHT_SD_MM),
+                              tilt=TiltSettings(increment_deg=0.5, adaptive=True, stop_displacement_m=0.02))
+
+
+def without_runtime(samples):
+    return [{key: value for key, value in sample.items() if key != "runtime_s"} for sample in samples]
+
+
+def test_a_resumed_run_computes_only_the_missing_and_corrupt_samples_with_the_same_seeds(tall_brick, tmp_path):
+    wall = load_wall(tall_brick)
+    with ThreadPoolExecutor(1) as pool:
+        first = monte_carlo(wall, settings(3), tmp_path, pool, target={"name": "tall"})
+    kept = (tmp_path / "samples" / "0000" / "summary.json").stat()
+    (tmp_path / "samples" / "0002" / "summary.json").write_text("{")  # cut short
+    computed = []
+    with ThreadPoolExecutor(1) as pool:
+        second = monte_carlo(wall, settings(4), tmp_path, pool, target={"name": "tall"}, on_sample=lambda e: computed.append(e["index"]))
+    assert sorted(computed) == [2, 3] and (second.finished, second.skipped) == (2, 2) and len(second.corrupt) == 1
+    assert (tmp_path / "samples" / "0000" / "summary.json").stat().st_mtime_ns == kept.st_mtime_ns
+    assert without_runtime(second.summary["samples"][:3]) == without_runtime(first.summary["samples"])
+    assert [s["seed"] for s in second.summary["samples"]] == [sample_seed(3, k) for k in range(4)]
+
+
+def test_the_same_seed_gives_the_same_samples(tall_brick, tmp_path):
+    wall = load_wall(tall_brick)
+    angles = []
+    for folder in (tmp_path / "a", tmp_path / "b"):
+        with ThreadPoolExecutor(1) as pool:
+            outcome = monte_carlo(wall, settings(2), folder, pool, target={"name": "tall"})
+        angles.append([(s["seed"], s["collapse_angle_deg"]) for s in outcome.summary["samples"]])
+    assert angles[0] == angles[1]
+
+
+def test_an_earlier_run_is_kept_unless_overwrite_and_a_resume_must_have_the_same_options(tall_brick, tmp_path):
+    out = tmp_path / "run"
+    options = ["--seed", 1, "--height-sd", 1.0, "--increment", 1.0, "--stop-displacement", 0.02, "--workers", 1, "--out", out]
+    assert run(tall_brick, "--samples", 2, *options).exit_code == 0
+    again = run(tall_brick, "--samples", 1, *options)
+    assert again.exit_code == 1 and "--overwrite" in again.output and "--resume" in again.output
+    other = run(tall_brick, "--samples", 2, *options[:-2], "--friction", 0.9, "--out", out, "--resume")
+    assert other.exit_code == 1 and "other settings (model_overrides" in other.output
+    replaced = run(tall_brick, "--samples", 1, *options, "--overwrite")
+    assert replaced.exit_code == 0, replaced.output
+    assert sorted(p.name for p in (out / "samples").iterdir()) == ["0000"]
+    assert [s["index"] for s in json.loads((out / "summary.json").read_text())["samples"]] == [0]
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--samples", 0], "Invalid value for '--samples': 0 is not in the range x>=1"),
+    (["--samples", "true"], "Invalid value for '--samples': 'true' is not a valid integer"),
+    (["--resume", "--overwrite"], "--resume goes on with the run in --out and --overwrite deletes it"),
+    (["--resume"], "--resume needs --out DIR holding the summary.json of an earlier drydem montecarlo"),
+    (["--increment", -1], "increment_deg = -1.0"),
+    (["--monitor", "nothing"], "nothing"),
+    (["--height-sd", 6], "--height-sd = 6.0: must be at most 5 mm"),
+    (["--height-sd", 0], "no imperfections: every sample would be the perfect wall"),
+])
+def test_bad_options_are_refused_naming_the_option_and_the_rule(tall_brick, args, message):
+    result = run(tall_brick, "--samples", 2, "--height-sd", 1, *args)
+    assert result.exit_code != 0 and message in result.output, result.output
+    assert "Traceback" not in result.output
+
+
+def test_a_model_file_is_refused_as_imperfections_need_a_brick_layout(tmp_path):
+    path = tmp_path / "model.toml"
+    path.write_text("[[block]]\nname = 'base'\nfixed = true\nbox = { min = [0, 0, -0.01], max = [0.1, 0.01, 0] }\n"
+                    "[[block]]\nname = 'b'\nbox = { min = [0, 0, 0], max = [0.02, 0.01, 0.05] }\n")
+    result = run(path, "--samples", 2, "--height-sd", 1)
+    assert result.exit_code == 1 and "has no brick layout" in result.output, result.output
