@@ -18,10 +18,10 @@ def copies(sim):
     return sim.state.copy(), sim.contacts.copy()
 
 
-def run_step(step, sim, state, sub, gravity, joint, damping):
+def run_step(step, sim, state, sub, gravity, joint, damping, closure_limit):
     nb = sim.model.n_blocks
     force, moment, rot = np.empty((nb, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3))
-    stats = step(state, sim.blocks, sub, joint, gravity, sim.timestep, damping, rot, force, moment, True)
+    stats = step(state, sim.blocks, sub, joint, closure_limit, gravity, sim.timestep, damping, rot, force, moment, True)
     return force, stats
 
 
@@ -45,15 +45,15 @@ def loaded_wall_3d(benchmark_wall):
     return sim
 
 
-def assert_same_cycle(step, oracle, sim, joint, gravity, components=(0, 1, 2), damping=Damping(0.8)):
+def assert_same_cycle(step, oracle, sim, joint, gravity, components=(0, 1, 2), damping=Damping(0.8), closure_limit=np.zeros(0)):
     """One cycle of ``step`` and of its ``oracle`` from copies of the same state: block forces
     (``components`` of them), sub-contact forces and slip and the cycle's measures to round-off;
     the motion to round-off of each array's own scale (velocities come from nearly cancelling
     contact forces, and angular ones are divided by inertias of ~1e-8 kg m2). Returns the
     oracle's sub-contacts."""
     (state, sub), (state_oracle, sub_oracle) = copies(sim), copies(sim)
-    force, stats = run_step(step, sim, state, sub, gravity, joint, damping)
-    force_oracle, stats_oracle = run_step(oracle, sim, state_oracle, sub_oracle, gravity, joint, damping)
+    force, stats = run_step(step, sim, state, sub, gravity, joint, damping, closure_limit)
+    force_oracle, stats_oracle = run_step(oracle, sim, state_oracle, sub_oracle, gravity, joint, damping, closure_limit)
     scale = np.abs(force_oracle).max()
     np.testing.assert_allclose(force[:, components], force_oracle[:, components], rtol=0, atol=1e-12 * scale)
     np.testing.assert_allclose(sub.normal_force, sub_oracle.normal_force, rtol=0, atol=1e-12 * scale)
@@ -95,8 +95,15 @@ def test_stress_dependent_joint_gives_the_oracles_forces_and_motion(loaded_wall_
     """kn(sigma), ks(sigma): the 3D kernel against the NumPy oracle (its shear stiffness from
     oracles.joints), the planar kernel against the 3D one, one cycle from the same states."""
     joint = kernel_joint(dd.JointMaterial(friction=0.5, **law))
-    assert_same_cycle(cycle3d.step, reference.step, loaded_wall_3d, joint, tilted_gravity(12.0, turn_deg=30.0))
-    assert_same_cycle(cycle_planar.step, cycle3d.step, loaded_wall, joint, tilted_gravity(12.0), components=[0, 2])
+    for sim, step, oracle, gravity, components in [
+        (loaded_wall_3d, cycle3d.step, reference.step, tilted_gravity(12.0, turn_deg=30.0), [0, 1, 2]),
+        (loaded_wall, cycle_planar.step, cycle3d.step, tilted_gravity(12.0), [0, 2]),
+    ]:
+        # closure limits below and above every sub-contact's closure: the step says whether one closes past its own
+        for limit, stiffer in [(0.0, True), (1.0, False)]:
+            closure_limit = np.full(sim.contacts.count, limit)
+            assert_same_cycle(step, oracle, sim, joint, gravity, components=components, closure_limit=closure_limit)
+            assert run_step(step, sim, *copies(sim), gravity, joint, Damping(0.8), closure_limit)[1][-1] is stiffer
 
 
 #: dynamics' damping: no local damping, contact dashpots (ratio and Rayleigh's stiffness term) and

@@ -8,6 +8,7 @@ u = ln(1 + a W / (k0 A)) / a; for the power law the integral is taken by quadrat
 weight above it.
 """
 
+import json
 import math
 
 import numpy as np
@@ -153,13 +154,17 @@ def test_normal_energy_is_the_integral_of_the_stress():
 def test_timestep_follows_the_stiffness_reached():
     """A 5-cube stack on the linear power law (kn = 3e7 Pa/m at 1 kPa): loading from nothing,
     the bottom joint stiffens ~10x; the timestep is recomputed as it does (every sub-contact's
-    stress stays below the limit its timestep holds to), the run does not blow up and ends
+    closure stays below the limit its timestep holds to), the run does not blow up and ends
     stiffer, with a shorter timestep than at the start."""
+    from drydem.engine.contacts import world_points
+    from drydem.model.rotation import matrices
+
     sim = dd.Simulation(stack(LAWS["power 1"], courses=5))
     first = sim.timestep
     assert sim.cycle_to_equilibrium().converged
     assert sim.timestep < first
-    assert np.all(sim.contacts.normal_force <= sim.stress_limit * sim.contacts.area)
+    _, gap, _ = world_points(sim.contacts, sim.state.position, matrices(sim.state.quaternion))
+    assert np.all(-gap <= sim.closure_limit)
     bottom = sim.contacts.normal_force[sim.contacts.block_inc == 1].sum() / EDGE**2
     assert bottom == pytest.approx(weight_stress(5), rel=1e-6)
 
@@ -186,3 +191,40 @@ def test_joint_laws_from_the_model_file():
     for joint, message in bad:
         with pytest.raises(ModelError, match=message):
             model_from_dict({"block": blocks, "joint": joint}, source="m.toml")
+
+
+def test_joint_law_from_the_command_line(tmp_path):
+    """`drydem tilt --joint-model power ...` runs the law (summary.json records it); a law missing
+    a key, a key of another law and a boolean stop with the rule, no traceback."""
+    from click.testing import CliRunner
+
+    from drydem.cli import main
+
+    law = ["--joint-model", "power", "--kn-exponent", "1", "--stress-ref", "1000", "--joint-kn-min", "1e6"]
+    out = tmp_path / "run"
+    result = CliRunner().invoke(main, ["tilt", "WD5", *law, "--adaptive", "--increment", "1", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "power law: kn (sigma / 1000 Pa)^1" in result.output
+    joint = json.loads((out / "summary.json").read_text())["model"]["joint"]
+    assert (joint["model"], joint["kn_exponent"], joint["stress_ref"], joint["kn_min"]) == ("power", 1.0, 1000.0, 1e6)
+    for bad, message in [(["--joint-model", "power", "--kn-exponent", "1"], "needs stress_ref"),
+                         (["--kn-per-stress", "100"], "kn_per_stress applies to model = 'affine', not 'constant'"),
+                         (["--joint-model", "affine", "--kn-per-stress", "true"], "'true' is not a valid float"),
+                         (["--joint-model", "affine", "--kn-per-stress", "-1"], "kn_per_stress = -1.0: must be a number in [0, 1e+07] 1/m")]:
+        result = CliRunner().invoke(main, ["tilt", "WD5", *bad, "--out", str(tmp_path / "bad")])
+        assert result.exit_code != 0 and message in result.output and "Traceback" not in result.output, result.output
+
+
+def test_a_runs_joint_law_reaches_its_model_and_id():
+    """RunSpec.joint_law (JSON of [joint] keys) replaces the target's law; the run's id says so;
+    calibrate refuses a law that cannot take the ends of its kn range."""
+    from drydem.parametric.calibrate import StiffnessSearch
+    from drydem.parametric.study import RunSpec, joint_law_text
+
+    law = {"model": "affine", "kn_per_stress": PAPER_SLOPE}
+    spec = RunSpec(analysis="tilt", target="WD5", protocol="adaptive", kn=1e6, ks=1e6, joint_law=joint_law_text(law))
+    assert spec.model().joint == JointMaterial(kn=1e6, ks=1e6, **law)
+    assert "-affine-kn1e+06-" in spec.id
+    assert RunSpec(analysis="tilt", target="WD5", protocol="adaptive", kn=1e6, ks=1e6).id != spec.id
+    problems = StiffnessSearch(("WD5",), 1e6, 1e8, joint_law=law | {"kn_max": 1e7}).problems()
+    assert problems and "kn = 1e+08" in problems[0] and "must lie within [kn_min, kn_max]" in problems[0]

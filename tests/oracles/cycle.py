@@ -13,7 +13,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from drydem.engine.cycle3d import cycle_loop
-from drydem.engine.joints import StressJoint, normal_stress
+from drydem.engine.joints import CLOSING_CYCLES, StressJoint, normal_stress
 from oracles.joints import shear_stiffness
 
 
@@ -34,7 +34,7 @@ def _damped(force: np.ndarray, velocity: np.ndarray, alpha: float) -> np.ndarray
     return force - alpha * np.abs(force) * np.sign(velocity)
 
 
-def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, measure):
+def step(state, blocks, sub, joint, closure_limit, gravity, dt, damping, rot, force, moment, measure):
     """One cycle; see :func:`drydem.engine.cycle3d.step` (it always measures the energies)."""
     pos, vel, omega = state.position, state.velocity, state.angular_velocity
     rot[:] = Rotation.from_quat(state.quaternion[:, [1, 2, 3, 0]]).as_matrix()
@@ -67,6 +67,9 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
         fn = joint.kn * area * -gap
         shear_scale = joint.ks * area
     opened = fn < -np.where(sub.intact, joint.tension * area, 0.0)
+    # a stress-dependent joint closing past its limit within CLOSING_CYCLES cycles at its speed
+    closing = -gap - CLOSING_CYCLES * np.minimum(np.einsum("ni,ni->n", v_rel, n), 0.0) * dt
+    stiffer = isinstance(joint, StressJoint) and bool((closing > closure_limit)[~opened].any())
     fs_new = fs_t - shear_scale[:, None] * dus
     limit = np.maximum(np.where(sub.intact, joint.cohesion * area, 0.0) + joint.friction * fn, 0.0)
     magnitude = _norm(fs_new)
@@ -111,8 +114,8 @@ def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, me
     kinetic = 0.5 * (np.einsum("ni,ni->n", vel, vel) / np.where(moving, blocks.inv_mass, 1.0) + rotational)[moving].sum()
     travel = (blocks.mass * _norm(pos - blocks.origin))[moving].sum()
     if not moving.any():
-        return 0.0, 0.0, 0.0, 0.0
-    return float(unbalanced[moving].max()), float(speed[moving].max()), float(kinetic), float(travel)
+        return 0.0, 0.0, 0.0, 0.0, stiffer
+    return float(unbalanced[moving].max()), float(speed[moving].max()), float(kinetic), float(travel), stiffer
 
 
 def _dashpot(sub, blocks, joint, damping, n, v_rel, fn):

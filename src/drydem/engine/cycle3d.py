@@ -23,7 +23,7 @@ import numba
 import numpy as np
 
 from drydem.engine.damping import dashpot_force, dashpot_per_area, has_dashpots, local_damping
-from drydem.engine.joints import normal_law, shear_law
+from drydem.engine.joints import normal_law, shear_law, stiffer_than_timestep
 from drydem.engine.loop import FASTMATH, cycle_loop
 from drydem.model.rotation import mat_t_vec, mat_vec, quaternion_to_matrix, rotate_by_vector
 
@@ -38,7 +38,7 @@ def _world_tensor_apply(r, tensor, v0, v1, v2):
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
-def contact_forces(state, rot, inv_mass, sub, joint, damping, dt, force, moment):
+def contact_forces(state, rot, inv_mass, sub, joint, closure_limit, damping, dt, force, moment):
     """Step 3: update every sub-contact's forces and add them to ``force`` and ``moment`` (N, N m).
 
     Per contact (blocks a = reference, b = incident, normal n = R_a n_body, d = vector from
@@ -48,9 +48,12 @@ def contact_forces(state, rot, inv_mass, sub, joint, damping, dt, force, moment)
     and -F on a; the contact's sums are scattered once: moment on b sum r x F, on a
     -(d x sum F + sum r x F). With viscous ``damping``, a normal dashpot beside each spring
     (:mod:`drydem.engine.damping`, ``inv_mass`` (nb,) 1/kg giving the pairs' reduced masses).
+    Returns whether a sub-contact of a stress-dependent joint is about to close past its
+    ``closure_limit`` (:func:`drydem.engine.joints.stiffer_than_timestep`).
     """
     pos, vel, omega = state.position, state.velocity, state.angular_velocity
     viscous = has_dashpots(damping)
+    stiffer = False
     for c in range(sub.pairs.shape[0]):
         a, b = sub.pairs[c, 0], sub.pairs[c, 1]
         dashpot = dashpot_per_area(sub.start[c], sub.start[c + 1], sub.area, inv_mass[a], inv_mass[b], joint.kn, damping) if viscous else 0.0
@@ -80,6 +83,7 @@ def contact_forces(state, rot, inv_mass, sub, joint, damping, dt, force, moment)
             vy = v0y + dwz * rx - dwx * rz
             vz = v0z + dwx * ry - dwy * rx
             vn = vx * nx + vy * ny + vz * nz
+            stiffer |= stiffer_than_timestep(-(base_gap + rx * nx + ry * ny + rz * nz), vn, dt, closure_limit, s, joint)
             dux, duy, duz = (vx - vn * nx) * dt, (vy - vn * ny) * dt, (vz - vn * nz) * dt
             # previous shear force rotated into the current tangent plane, magnitude kept
             sx, sy, sz = fs[0], fs[1], fs[2]
@@ -113,6 +117,7 @@ def contact_forces(state, rot, inv_mass, sub, joint, damping, dt, force, moment)
         moment[a, 0] -= dy * fz_sum - dz * fy_sum + mx_sum
         moment[a, 1] -= dz * fx_sum - dx * fz_sum + my_sum
         moment[a, 2] -= dx * fy_sum - dy * fx_sum + mz_sum
+    return stiffer
 
 
 @numba.njit(cache=True)
@@ -186,19 +191,20 @@ def energies(state, rot, blocks):
 
 
 @numba.njit(cache=True)
-def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, measure):
+def step(state, blocks, sub, joint, closure_limit, gravity, dt, damping, rot, force, moment, measure):
     """One cycle, steps 1-5 (``rot``, ``force``, ``moment`` are scratch arrays).
 
-    Returns what :func:`integrate` returns (kinetic energy and travel if ``measure``)."""
+    Returns what :func:`integrate` returns, kinetic energy and travel if ``measure``, and what
+    :func:`contact_forces` returns (a stress-dependent joint about to outgrow the timestep)."""
     for i in range(state.position.shape[0]):
         quaternion_to_matrix(state.quaternion[i], rot[i])
         for k in range(3):
             force[i, k] = blocks.mass[i] * gravity[k]
             moment[i, k] = 0.0
-    contact_forces(state, rot, blocks.inv_mass, sub, joint, damping, dt, force, moment)
+    stiffer = contact_forces(state, rot, blocks.inv_mass, sub, joint, closure_limit, damping, dt, force, moment)
     unbalanced, speed = integrate(state, rot, blocks, force, moment, damping, dt)
     kinetic, travel = energies(state, rot, blocks) if measure else (0.0, 0.0)
-    return unbalanced, speed, kinetic, travel
+    return unbalanced, speed, kinetic, travel, stiffer
 
 
 @numba.njit(cache=True)

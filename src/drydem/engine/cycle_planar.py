@@ -22,7 +22,7 @@ import numba
 import numpy as np
 
 from drydem.engine.damping import dashpot_force, dashpot_per_area, has_dashpots, local_damping
-from drydem.engine.joints import normal_law, shear_law
+from drydem.engine.joints import normal_law, shear_law, stiffer_than_timestep
 from drydem.engine.loop import FASTMATH, cycle_loop
 from drydem.model.rotation import rotate_about_y
 
@@ -41,7 +41,7 @@ def _cos_sin(q):
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
-def contact_forces(state, inv_mass, sub, joint, damping, dt, force, moment):
+def contact_forces(state, inv_mass, sub, joint, closure_limit, damping, dt, force, moment):
     """Every sub-contact's forces (as :func:`drydem.engine.cycle3d.contact_forces`), in the x-z plane:
     forces summed into ``force[:, 0]``, ``force[:, 2]`` (N) and moments about y into
     ``moment[:, 1]`` (N m). A point's arm r = R_b p and the centroid offset d give the gap
@@ -55,10 +55,11 @@ def contact_forces(state, inv_mass, sub, joint, damping, dt, force, moment):
     and tan^2 by their series below TURN_SERIES rad, exact to round-off there). Where F_s did
     not lie along the last tangent (after a re-detection or a predictor move), which
     (F_s . n)^2 = (F_s . t)^2 tan^2(w_a dt) tells to round-off, the magnitude is
-    sqrt((F_s . t)^2 + (F_s . n)^2). Viscous ``damping``: as in the 3D kernel."""
+    sqrt((F_s . t)^2 + (F_s . n)^2). Viscous ``damping`` and what it returns: as in the 3D kernel."""
     pos, vel, omega, quat = state.position, state.velocity, state.angular_velocity, state.quaternion
     point, area, intact, shear, normal = sub.point_inc_body, sub.area, sub.intact, sub.shear_force, sub.normal_force
     viscous = has_dashpots(damping)
+    stiffer = False
     for c in range(sub.pairs.shape[0]):
         a, b = sub.pairs[c, 0], sub.pairs[c, 1]
         dashpot = dashpot_per_area(sub.start[c], sub.start[c + 1], area, inv_mass[a], inv_mass[b], joint.kn, damping) if viscous else 0.0
@@ -82,12 +83,14 @@ def contact_forces(state, inv_mass, sub, joint, damping, dt, force, moment):
         fx_sum = fz_sum = my_sum = 0.0
         for s in range(sub.start[c], sub.start[c + 1]):
             rx, rz = cb * point[s, 0] + sb * point[s, 2], cb * point[s, 2] - sb * point[s, 0]
-            fn, carries = normal_law(-(base_gap + rx * nx + rz * nz), area[s], intact[s], joint)
+            closure = -(base_gap + rx * nx + rz * nz)
+            fn, carries = normal_law(closure, area[s], intact[s], joint)
             if not carries:
                 normal[s] = 0.0
                 shear[s, 0] = shear[s, 2] = 0.0
                 intact[s] = False
                 continue
+            stiffer |= stiffer_than_timestep(closure, (v0x + dw * rz) * nx + (v0z - dw * rx) * nz, dt, closure_limit, s, joint)
             # tangential displacement and previous shear force along t = (n_z, -n_x)
             du = ((v0x + dw * rz) * nz - (v0z - dw * rx) * nx) * dt
             along, across = shear[s, 0] * nz - shear[s, 2] * nx, shear[s, 0] * nx + shear[s, 2] * nz
@@ -111,6 +114,7 @@ def contact_forces(state, inv_mass, sub, joint, damping, dt, force, moment):
         force[a, 0] -= fx_sum
         force[a, 2] -= fz_sum
         moment[a, 1] -= dz * fx_sum - dx * fz_sum + my_sum
+    return stiffer
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
@@ -160,17 +164,17 @@ def energies(state, blocks):
 
 
 @numba.njit(cache=True)
-def step(state, blocks, sub, joint, gravity, dt, damping, rot, force, moment, measure):
+def step(state, blocks, sub, joint, closure_limit, gravity, dt, damping, rot, force, moment, measure):
     """One cycle of an in-plane model (``rot`` unused: the signature is
     :func:`drydem.engine.cycle3d.step`'s, so that both share the cycling loop)."""
     for i in range(state.position.shape[0]):
         force[i, 0] = blocks.mass[i] * gravity[0]
         force[i, 2] = blocks.mass[i] * gravity[2]
         moment[i, 1] = 0.0
-    contact_forces(state, blocks.inv_mass, sub, joint, damping, dt, force, moment)
+    stiffer = contact_forces(state, blocks.inv_mass, sub, joint, closure_limit, damping, dt, force, moment)
     unbalanced, speed = integrate(state, blocks, force, moment, damping, dt)
     kinetic, travel = energies(state, blocks) if measure else (0.0, 0.0)
-    return unbalanced, speed, kinetic, travel
+    return unbalanced, speed, kinetic, travel, stiffer
 
 
 @numba.njit(cache=True)

@@ -30,7 +30,7 @@ import numpy as np
 
 from drydem.engine.contacts import SubContacts
 from drydem.engine.damping import Damping, timestep_factor
-from drydem.engine.joints import JointConstants, StressJoint, kernel_joint, normal_stiffness, shear_stiffness
+from drydem.engine.joints import JointConstants, StressJoint, kernel_joint, normal_closures, normal_stiffness, shear_stiffness
 from drydem.errors import ModelError
 from drydem.model.assembly import Model
 from drydem.model.parameters import G
@@ -67,20 +67,21 @@ STRESS_FLOOR_WEIGHTS = 1.0
 
 def stiffness_bound(joint: JointConstants | StressJoint, sub: SubContacts, weight_n: float) -> tuple[np.ndarray, np.ndarray]:
     """The stiffness per area each sub-contact's springs are counted with in the critical
-    timestep, (ns,) Pa/m, and the normal stress up to which that holds, (ns,) Pa ((0,) for a
-    constant law: max(kn, ks) always holds).
+    timestep, (ns,) Pa/m, and the closure up to which that holds, (ns,) m ((0,) for a constant
+    law: max(kn, ks) always holds).
 
     Stress-dependent laws: the stress limit is sigma_lim = STRESS_HEADROOM sigma + STRESS_FLOOR_WEIGHTS
-    ``weight_n`` / sum A (N over m2: the free blocks' weight spread over every sub-contact) and the
-    stiffness max(kn(sigma_lim), ks(sigma_lim)), both laws growing with sigma. The cycles stop
-    (:data:`drydem.engine.loop.STIFFENED`) once a sub-contact's stress passes its limit, and the
-    timestep is computed again with the stiffness then reached.
+    ``weight_n`` / sum A (N over m2: the free blocks' weight spread over every sub-contact), the
+    stiffness max(kn(sigma_lim), ks(sigma_lim)), both laws growing with sigma, and the closure
+    limit u(sigma_lim). The cycles stop (:data:`drydem.engine.loop.STIFFENED`) as soon as a
+    sub-contact is about to close past it (:func:`drydem.engine.joints.stiffer_than_timestep`),
+    and the timestep is computed again with the stiffness then reached.
     """
     if isinstance(joint, JointConstants):
         return np.full(sub.count, max(joint.kn, joint.ks)), np.zeros(0)
     floor = STRESS_FLOOR_WEIGHTS * weight_n / max(float(sub.area.sum()), 1e-300)
     limit = STRESS_HEADROOM * np.maximum(sub.normal_force / sub.area, 0.0) + floor
-    return _law_stiffness(limit, joint), limit
+    return _law_stiffness(limit, joint), normal_closures(limit, joint)
 
 
 @numba.njit(cache=True)
@@ -185,11 +186,11 @@ def scaled_inertia(
 
 class Inertia(NamedTuple):
     """What the cycles run with for a set of contacts: the timestep, s; the blocks' constants;
-    the normal stress (ns,) Pa up to which the timestep holds ((0,): always; :func:`stiffness_bound`)."""
+    the closure (ns,) m up to which the timestep holds ((0,): always; :func:`stiffness_bound`)."""
 
     timestep: float
     blocks: BlockConstants
-    stress_limit: np.ndarray
+    closure_limit: np.ndarray
 
 
 def timestep_and_blocks(
@@ -197,7 +198,7 @@ def timestep_and_blocks(
     damping: Damping,
 ) -> Inertia:
     """The timestep (s), the blocks' constants with ``contacts``, blocks not ``active`` held, and
-    the stress limit of a stress-dependent joint (:func:`stiffness_bound`).
+    the closure limit of a stress-dependent joint (:func:`stiffness_bound`).
 
     The timestep is ``fixed_timestep`` (ModelError if above the critical one), else
     ``solver.timestep_safety`` times the critical one (:func:`critical_timestep`, reduced for
@@ -208,7 +209,7 @@ def timestep_and_blocks(
     """
     solver = model.solver
     movable = model.block_movable & active
-    stiffness, stress_limit = stiffness_bound(kernel_joint(model.joint), contacts, G * float(model.block_mass[movable].sum()))
+    stiffness, closure_limit = stiffness_bound(kernel_joint(model.joint), contacts, G * float(model.block_mass[movable].sum()))
     k_t, k_r = contact_stiffness(contacts, stiffness, model.n_blocks)
     critical = critical_timestep(model.block_mass, model.block_inertia_whitening, movable, k_t, k_r)
     critical *= timestep_factor(damping, critical) if np.isfinite(critical) else 1.0
@@ -233,7 +234,7 @@ def timestep_and_blocks(
         free=(~model.block_fixed & movable[:, None]).astype(float),
         radius=model.block_radius,
         origin=model.block_centroid,
-    ), stress_limit)
+    ), closure_limit)
 
 
 def free_flight_timestep(tolerance: float) -> float:

@@ -192,6 +192,58 @@ def normal_stress(closure, joint):
     return joint.stress_low * np.exp(y)
 
 
+@numba.njit(cache=True)
+def normal_closures(stress, joint):
+    """u(sigma), m, of each stress (n,) Pa >= 0 of a :class:`StressJoint`: the inverse of
+    :func:`normal_stress` (the integral of d sigma / kn(sigma), piece by piece)."""
+    out = np.empty_like(stress)
+    for i in range(stress.shape[0]):
+        sigma = stress[i]
+        if joint.exponent_n == 0.0 and joint.per_stress_n == 0.0:
+            out[i] = sigma / joint.kn
+        elif sigma >= joint.stress_high:
+            out[i] = joint.closure_high + (sigma - joint.stress_high) / joint.k_max
+        elif joint.law == AFFINE:
+            out[i] = np.log1p(joint.per_stress_n * sigma / joint.kn) / joint.per_stress_n
+        elif sigma <= joint.stress_low:
+            out[i] = sigma / joint.k_min
+        else:
+            e, log_ratio = joint.exponent_n, np.log(sigma / joint.stress_low)
+            growth = log_ratio if e == 1.0 else np.expm1((1.0 - e) * log_ratio) / (1.0 - e)
+            out[i] = joint.closure_low + growth / joint.closure_scale
+    return out
+
+
+#: a stress-dependent joint's timestep is renewed once a sub-contact's closure, plus this many
+#: times what its closing speed adds in one cycle, passes the closure its timestep holds to
+CLOSING_CYCLES = 2.0
+
+
+@numba.njit(cache=True, inline="always")
+def _never_stiffer(closure, normal_velocity, dt, closure_limit, s, joint):
+    return False
+
+
+@numba.njit(cache=True, inline="always")
+def _closes_past_limit(closure, normal_velocity, dt, closure_limit, s, joint):
+    return closure - CLOSING_CYCLES * min(normal_velocity, 0.0) * dt > closure_limit[s]
+
+
+def stiffer_than_timestep(closure, normal_velocity, dt, closure_limit, s, joint):
+    """Whether sub-contact ``s`` (closure m, normal relative velocity m/s, > 0 opening) is about
+    to close past ``closure_limit[s]`` (m, :func:`drydem.engine.inertia.stiffness_bound`): its
+    closure in CLOSING_CYCLES cycles at its current speed; so the timestep is renewed before the
+    stiffness outgrows it, however fast the joint closes. Never for a joint of constant
+    stiffness (compiled away by type, as :func:`normal_force`)."""
+    return (_closes_past_limit if _is_stress_joint(joint) else _never_stiffer)(closure, normal_velocity, dt, closure_limit, s, joint)
+
+
+@overload(stiffer_than_timestep, inline="always")
+def _stiffer_by_type(closure, normal_velocity, dt, closure_limit, s, joint):
+    chosen = _closes_past_limit if _is_stress_joint(joint) else _never_stiffer
+    return lambda closure, normal_velocity, dt, closure_limit, s, joint: chosen(closure, normal_velocity, dt, closure_limit, s, joint)
+
+
 @numba.njit(cache=True, inline="always")
 def _linear_normal_force(closure, area, joint):
     return joint.kn * area * closure

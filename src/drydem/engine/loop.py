@@ -17,7 +17,7 @@ from drydem.engine.damping import Damping
 DIVERGENCE_FACTOR = 10.0
 #: the energy test of divergence runs every this many cycles (a NaN is caught at every cycle)
 ENERGY_CHECK_EVERY = 16
-#: run_cycles exit codes (STIFFENED: a stress-dependent joint passed the stress its timestep holds to)
+#: run_cycles exit codes (STIFFENED: a stress-dependent joint about to outgrow the timestep)
 RUNNING, CONVERGED, REDETECT, DIVERGED, STIFFENED = 0, 1, 2, 3, 4
 #: criterion codes
 RATIO, VELOCITY = 0, 1
@@ -133,8 +133,8 @@ class LoopSettings(NamedTuple):
     kg m, of the divergence test. absolute_limit : m, of :func:`detection_slack`.
     ground_acceleration : (n, 3) m/s2, the table's acceleration a_g at each cycle (the body
     force of cycle k is m (g - a_g[k]): the blocks move in the frame of the table; the call
-    ends after n cycles if n < max_cycles), or (0, 3) for a table at rest. stress_limit : (ns,)
-    Pa, the normal stress of each sub-contact up to which ``dt`` is stable
+    ends after n cycles if n < max_cycles), or (0, 3) for a table at rest. closure_limit : (ns,)
+    m, the closure of each sub-contact up to which ``dt`` is stable
     (:func:`drydem.engine.inertia.stiffness_bound`), or (0,) for a joint of constant stiffness.
     """
 
@@ -148,16 +148,7 @@ class LoopSettings(NamedTuple):
     travel_slack: float
     absolute_limit: float
     ground_acceleration: np.ndarray
-    stress_limit: np.ndarray
-
-
-@numba.njit(cache=True, inline="always")
-def stiffened(sub, stress_limit):
-    """Whether a sub-contact's normal force exceeds its ``stress_limit`` (ns,) Pa times its area."""
-    for s in range(stress_limit.shape[0]):
-        if sub.normal_force[s] > stress_limit[s] * sub.area[s]:
-            return True
-    return False
+    closure_limit: np.ndarray
 
 
 @numba.njit(cache=True, inline="always")
@@ -165,8 +156,8 @@ def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neig
     """The cycling loop around ``step_function`` (a kernel's ``step``), shared by every engine,
     with the :class:`LoopSettings` ``loop``.
 
-    It cycles until converged, re-detection needed, diverged, a stress-dependent joint stiffer
-    than the timestep allows (checked after every cycle) or ``loop.max_cycles``, and returns
+    It cycles until converged, re-detection needed, diverged, a stress-dependent joint about to
+    outgrow the timestep (the step says so) or ``loop.max_cycles``, and returns
     (cycles run, exit code, unbalanced-force ratio and max point speed of the last cycle) as
     plain numbers: boxing a NamedTuple on return calls Python, and a pending Ctrl-C raised
     there crashes numba. ``broad_state`` and ``neighbours`` go to :func:`detection_slack`, which
@@ -196,7 +187,6 @@ def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neig
     ratio, speed = np.inf, np.inf
     ground = loop.ground_acceleration
     shaking = ground.shape[0] > 0
-    stiffening = loop.stress_limit.shape[0] > 0
     body = gravity.copy()
     g = np.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
     max_cycles = loop.max_cycles
@@ -211,13 +201,14 @@ def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neig
         if shaking:
             for k in range(3):
                 body[k] = gravity[k] - ground[cycle, k]
-        unbalanced, speed, kinetic, travel = step_function(state, blocks, sub, joint, body, dt, damping, rot, force, moment, measure)
+        unbalanced, speed, kinetic, travel, stiffer = step_function(state, blocks, sub, joint, loop.closure_limit, body, dt, damping, rot,
+                                                                    force, moment, measure)
         ratio = unbalanced / loop.force_scale
         if not (speed < np.inf and (not measure or kinetic <= DIVERGENCE_FACTOR * g * (travel + loop.travel_slack))):
             return cycle + 1, DIVERGED, ratio, speed
         if (criterion == RATIO and ratio < limit) or (criterion == VELOCITY and speed < limit):
             return cycle + 1, CONVERGED, ratio, speed
-        if stiffening and stiffened(sub, loop.stress_limit):
+        if stiffer:
             return cycle + 1, STIFFENED, ratio, speed
         if accumulate_motion(state, lever, dt, moved, slack):
             moved[:] = 0.0

@@ -98,8 +98,8 @@ class Simulation:
 
     Public arrays: ``state``; ``contacts``, ``neighbours`` and ``active`` (the blocks still in the
     analysis) of the ``tracker``; ``blocks``, the constants the cycle runs with
-    (:class:`~drydem.engine.inertia.BlockConstants`); ``timestep`` (s); ``stress_limit`` (ns,) Pa,
-    the sub-contact stresses up to which the timestep holds for a stress-dependent joint
+    (:class:`~drydem.engine.inertia.BlockConstants`); ``timestep`` (s); ``closure_limit`` (ns,) m,
+    the sub-contact closures up to which the timestep holds for a stress-dependent joint
     (:func:`~drydem.engine.inertia.stiffness_bound`); ``run_cycles``, the
     cycle function; ``cycles`` run so far and the model time they span, ``time_s`` (the sum of
     their timesteps, s).
@@ -143,7 +143,7 @@ class Simulation:
     def _update_inertia(self) -> None:
         """The timestep and block constants for the current contacts; with mass scaling, the
         velocities keep each block's kinetic energy through the change of fictitious masses."""
-        dt, blocks, self.stress_limit = timestep_and_blocks(
+        dt, blocks, self.closure_limit = timestep_and_blocks(
             self.model, self.tracker.contacts, self.tracker.active, fixed_timestep=self._fixed_timestep, scaled_timestep=self._scaled_timestep,
             damping=self.damping,
         )
@@ -264,7 +264,7 @@ class Simulation:
             chunk = min(CHUNK, max_cycles - done)
             settings = loop.LoopSettings(
                 g, self.timestep, self.damping, chunk, criterion, limit, max(weight, 1e-300), travel_slack, self.tracker.absolute_limit,
-                AT_REST if ground is None else ground[done:done + chunk], self.stress_limit,
+                AT_REST if ground is None else ground[done:done + chunk], self.closure_limit,
             )
             tracker = self.tracker
             n, code, ratio, speed = self.run_cycles(self.state, blocks or self.blocks, tracker.contacts, joint, settings, tracker.broad_state, tracker.neighbours)
