@@ -39,7 +39,7 @@ def time_engine(run_cycles, sim, cycles: int, gravity) -> float:
         state = sim.state.copy()
         contacts = sim.contacts.copy()
         start = time.perf_counter()
-        settings = loop.LoopSettings(gravity, sim.timestep, Damping(0.8), cycles, loop.RATIO, -1.0, 1.0, 1.0, np.inf, AT_REST, sim.closure_limit)
+        settings = loop.LoopSettings(gravity, sim.timestep, Damping(0.8), cycles, loop.RATIO, -1.0, 1.0, 1.0, np.inf, AT_REST, sim.closure_limit, sim.timestep)
         unlimited = sim.neighbours._replace(limit=np.full(len(sim.neighbours.pairs), np.inf))
         n, code, _, _ = run_cycles(state, sim.blocks, contacts, kernel_joint(sim.model.joint), settings, state.copy(), unlimited)
         best = min(best, (time.perf_counter() - start) / n)

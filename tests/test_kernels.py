@@ -21,7 +21,7 @@ def copies(sim):
 def run_step(step, sim, state, sub, gravity, joint, damping, closure_limit):
     nb = sim.model.n_blocks
     force, moment, rot = np.empty((nb, 3)), np.empty((nb, 3)), np.empty((nb, 3, 3))
-    stats = step(state, sim.blocks, sub, joint, closure_limit, gravity, sim.timestep, damping, rot, force, moment, True)
+    stats = step(state, sim.blocks, sub, joint, closure_limit, gravity, sim.timestep, sim.timestep, damping, rot, force, moment, True)
     return force, stats
 
 

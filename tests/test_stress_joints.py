@@ -228,3 +228,41 @@ def test_a_runs_joint_law_reaches_its_model_and_id():
     assert RunSpec(analysis="tilt", target="WD5", protocol="adaptive", kn=1e6, ks=1e6).id != spec.id
     problems = StiffnessSearch(("WD5",), 1e6, 1e8, joint_law=law | {"kn_max": 1e7}).problems()
     assert problems and "kn = 1e+08" in problems[0] and "must lie within [kn_min, kn_max]" in problems[0]
+
+
+def drop(law: dict, height_m: float, cycles: int = 3000) -> tuple[dd.Simulation, float, np.ndarray]:
+    """A cube dropped from ``height_m`` onto a joint of ``law``, no damping: the simulation, its
+    first timestep (s) and the cube's height above its drawn place after every 10 cycles (m)."""
+    model = stack(law)
+    state = dd.State.at_rest(model.block_centroid)
+    state.position[1, 2] += height_m
+    sim = dd.Simulation(model, state=state, damping=Damping(0.0))
+    first = sim.timestep
+    heights = []
+    for _ in range(cycles // 10):
+        sim.cycle(10)
+        heights.append(sim.state.position[1, 2] - EDGE / 2)
+    return sim, first, np.array(heights)
+
+
+@pytest.mark.parametrize("name", ["affine", "power 1"])
+def test_a_cube_dropped_on_a_stiffening_joint_bounces_back_to_its_height(name):
+    """Dropped 0.2 mm: the joint stiffens several-fold at each impact and the timestep is renewed
+    on the way in (variable-step leapfrog); each bounce reaches the drop height within 5 %
+    (measured 0.978 and 0.992: no energy created, little lost to the steps' first-order error)."""
+    sim, first, heights = drop(LAWS[name], 2e-4)
+    assert sim.timestep < first  # renewed at the impacts
+    assert heights.min() < 0  # it landed
+    assert max(heights[20:]) == pytest.approx(2e-4, rel=0.05)
+
+
+def test_a_fast_impact_on_a_steep_joint_stays_stable():
+    """Dropped 5 mm onto the linear power law, whose stress grows e-fold every 33 um of closure
+    while the cube moves 90 um a cycle: the timestep is renewed before the joint stiffens past
+    it (a run past its stable timestep blew up), so the run stays finite and the cube bounces.
+    Such an impact is not resolved, though: the first bounces went up to 2.6 times the drop
+    (measured), an accuracy limit of steps that span the stiffening (a smaller timestep_safety
+    resolves it), not a blow-up."""
+    _, _, heights = drop(LAWS["power 1"], 5e-3, cycles=4000)
+    assert np.isfinite(heights).all() and np.abs(heights).max() < 0.1
+    assert heights.min() < 0 < heights[len(heights) // 4:].max()

@@ -34,7 +34,7 @@ def _damped(force: np.ndarray, velocity: np.ndarray, alpha: float) -> np.ndarray
     return force - alpha * np.abs(force) * np.sign(velocity)
 
 
-def step(state, blocks, sub, joint, closure_limit, gravity, dt, damping, rot, force, moment, measure):
+def step(state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment, measure):
     """One cycle; see :func:`drydem.engine.cycle3d.step` (it always measures the energies)."""
     pos, vel, omega = state.position, state.velocity, state.angular_velocity
     rot[:] = Rotation.from_quat(state.quaternion[:, [1, 2, 3, 0]]).as_matrix()
@@ -97,11 +97,11 @@ def step(state, blocks, sub, joint, closure_limit, gravity, dt, damping, rot, fo
     f_free, m_free = force * free_t, moment * free_r
     unbalanced = np.maximum(_norm(f_free), _norm(m_free) / blocks.radius)
     drag = damping.mass_proportional
-    vel += (_damped(f_free, vel, damping.local) * blocks.inv_mass[:, None] - drag * vel) * dt * moving[:, None]
+    vel += (_damped(f_free, vel, damping.local) * blocks.inv_mass[:, None] - drag * vel) * velocity_dt * moving[:, None]
     torque = _damped(m_free, omega, damping.local)
     spin = _world_tensor_apply(rot, blocks.inertia_body, omega)
     accel = _world_tensor_apply(rot, blocks.inv_inertia_body, torque - np.cross(omega, spin) - drag * spin)
-    omega += accel * dt * free_r * moving[:, None]
+    omega += accel * velocity_dt * free_r * moving[:, None]
     vel *= free_t
     pos += vel * dt * moving[:, None]
     turned = Rotation.from_rotvec(omega * dt) * Rotation.from_quat(state.quaternion[:, [1, 2, 3, 0]])

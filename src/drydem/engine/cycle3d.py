@@ -121,9 +121,10 @@ def contact_forces(state, rot, inv_mass, sub, joint, closure_limit, damping, dt,
 
 
 @numba.njit(cache=True)
-def integrate(state, rot, blocks, force, moment, damping, dt):
+def integrate(state, rot, blocks, force, moment, damping, dt, velocity_dt):
     """Steps 4-5: damped velocities, positions and rotations (local damping, and Rayleigh's
-    mass-proportional term -alpha_R m v, -alpha_R I_w omega: :mod:`drydem.engine.damping`).
+    mass-proportional term -alpha_R m v, -alpha_R I_w omega: :mod:`drydem.engine.damping`); the
+    velocities step by ``velocity_dt`` (:data:`~drydem.engine.loop.LoopSettings`), the positions by ``dt``.
     Returns (max unbalanced force or moment / radius over the free degrees of freedom, N;
     max block point speed, m/s)."""
     local, drag = damping.local, damping.mass_proportional
@@ -140,8 +141,8 @@ def integrate(state, rot, blocks, force, moment, damping, dt):
             f = force[i, k] * free[k]
             f2 += f * f
             if drag != 0.0:  # Rayleigh's mass term, explicit: a branch, so that statics round as before it
-                state.velocity[i, k] *= 1.0 - drag * dt
-            state.velocity[i, k] += local_damping(f, state.velocity[i, k], local) * blocks.inv_mass[i] * dt
+                state.velocity[i, k] *= 1.0 - drag * velocity_dt
+            state.velocity[i, k] += local_damping(f, state.velocity[i, k], local) * blocks.inv_mass[i] * velocity_dt
             m = moment[i, k] * free[3 + k]
             m2 += m * m
             moment[i, k] = local_damping(m, state.angular_velocity[i, k], local)
@@ -154,9 +155,9 @@ def integrate(state, rot, blocks, force, moment, damping, dt):
         if drag != 0.0:
             tx, ty, tz = tx - drag * lx, ty - drag * ly, tz - drag * lz
         ax, ay, az = _world_tensor_apply(r, blocks.inv_inertia_body[i], tx, ty, tz)
-        w[0] += ax * dt * free[3]
-        w[1] += ay * dt * free[4]
-        w[2] += az * dt * free[5]
+        w[0] += ax * velocity_dt * free[3]
+        w[1] += ay * velocity_dt * free[4]
+        w[2] += az * velocity_dt * free[5]
         for k in range(3):
             state.velocity[i, k] *= free[k]
             state.position[i, k] += state.velocity[i, k] * dt
@@ -191,7 +192,7 @@ def energies(state, rot, blocks):
 
 
 @numba.njit(cache=True)
-def step(state, blocks, sub, joint, closure_limit, gravity, dt, damping, rot, force, moment, measure):
+def step(state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment, measure):
     """One cycle, steps 1-5 (``rot``, ``force``, ``moment`` are scratch arrays).
 
     Returns what :func:`integrate` returns, kinetic energy and travel if ``measure``, and what
@@ -202,7 +203,7 @@ def step(state, blocks, sub, joint, closure_limit, gravity, dt, damping, rot, fo
             force[i, k] = blocks.mass[i] * gravity[k]
             moment[i, k] = 0.0
     stiffer = contact_forces(state, rot, blocks.inv_mass, sub, joint, closure_limit, damping, dt, force, moment)
-    unbalanced, speed = integrate(state, rot, blocks, force, moment, damping, dt)
+    unbalanced, speed = integrate(state, rot, blocks, force, moment, damping, dt, velocity_dt)
     kinetic, travel = energies(state, rot, blocks) if measure else (0.0, 0.0)
     return unbalanced, speed, kinetic, travel, stiffer
 

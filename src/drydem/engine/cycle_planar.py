@@ -118,9 +118,10 @@ def contact_forces(state, inv_mass, sub, joint, closure_limit, damping, dt, forc
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
-def integrate(state, blocks, force, moment, damping, dt):
+def integrate(state, blocks, force, moment, damping, dt, velocity_dt):
     """Damped velocities, positions and rotations of x, z and the rotation about y (as
-    :func:`drydem.engine.cycle3d.integrate`, which returns the same two measures)."""
+    :func:`drydem.engine.cycle3d.integrate`, which returns the same two measures; the velocities
+    step by ``velocity_dt``, the positions by ``dt``)."""
     local, drag = damping.local, damping.mass_proportional
     max_unbalanced_sq = 0.0
     max_speed = 0.0
@@ -132,10 +133,10 @@ def integrate(state, blocks, force, moment, damping, dt):
         fx, fz, my = force[i, 0] * free_x, force[i, 2] * free_z, moment[i, 1] * free_ry
         w = state.angular_velocity[i, 1]
         if drag != 0.0:  # Rayleigh's mass term, explicit: a branch, so that statics round as before it
-            v[0], v[2], w = v[0] * (1.0 - drag * dt), v[2] * (1.0 - drag * dt), w * (1.0 - drag * dt)
-        v[0] = (v[0] + local_damping(fx, v[0], local) * blocks.inv_mass[i] * dt) * free_x
-        v[2] = (v[2] + local_damping(fz, v[2], local) * blocks.inv_mass[i] * dt) * free_z
-        w += local_damping(my, w, local) * blocks.inv_inertia_body[i, 1, 1] * dt * free_ry
+            v[0], v[2], w = v[0] * (1.0 - drag * velocity_dt), v[2] * (1.0 - drag * velocity_dt), w * (1.0 - drag * velocity_dt)
+        v[0] = (v[0] + local_damping(fx, v[0], local) * blocks.inv_mass[i] * velocity_dt) * free_x
+        v[2] = (v[2] + local_damping(fz, v[2], local) * blocks.inv_mass[i] * velocity_dt) * free_z
+        w += local_damping(my, w, local) * blocks.inv_inertia_body[i, 1, 1] * velocity_dt * free_ry
         state.angular_velocity[i, 1] = w
         p[0] += v[0] * dt
         p[2] += v[2] * dt
@@ -164,7 +165,7 @@ def energies(state, blocks):
 
 
 @numba.njit(cache=True)
-def step(state, blocks, sub, joint, closure_limit, gravity, dt, damping, rot, force, moment, measure):
+def step(state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment, measure):
     """One cycle of an in-plane model (``rot`` unused: the signature is
     :func:`drydem.engine.cycle3d.step`'s, so that both share the cycling loop)."""
     for i in range(state.position.shape[0]):
@@ -172,7 +173,7 @@ def step(state, blocks, sub, joint, closure_limit, gravity, dt, damping, rot, fo
         force[i, 2] = blocks.mass[i] * gravity[2]
         moment[i, 1] = 0.0
     stiffer = contact_forces(state, blocks.inv_mass, sub, joint, closure_limit, damping, dt, force, moment)
-    unbalanced, speed = integrate(state, blocks, force, moment, damping, dt)
+    unbalanced, speed = integrate(state, blocks, force, moment, damping, dt, velocity_dt)
     kinetic, travel = energies(state, blocks) if measure else (0.0, 0.0)
     return unbalanced, speed, kinetic, travel, stiffer
 

@@ -30,7 +30,9 @@ import numpy as np
 
 from drydem.engine.contacts import SubContacts
 from drydem.engine.damping import Damping, timestep_factor
-from drydem.engine.joints import JointConstants, StressJoint, kernel_joint, normal_closures, normal_stiffness, shear_stiffness
+from drydem.engine.joints import (
+    JointConstants, StressJoint, kernel_joint, normal_closures, normal_stiffness, normal_stress, shear_stiffness,
+)
 from drydem.errors import ModelError
 from drydem.model.assembly import Model
 from drydem.model.parameters import G
@@ -65,23 +67,37 @@ STRESS_HEADROOM = 2.0
 STRESS_FLOOR_WEIGHTS = 1.0
 
 
-def stiffness_bound(joint: JointConstants | StressJoint, sub: SubContacts, weight_n: float) -> tuple[np.ndarray, np.ndarray]:
+def stiffness_bound(joint: JointConstants | StressJoint, sub: SubContacts, weight_n: float,
+                    closure_ahead: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The stiffness per area each sub-contact's springs are counted with in the critical
     timestep, (ns,) Pa/m, and the closure up to which that holds, (ns,) m ((0,) for a constant
     law: max(kn, ks) always holds).
 
-    Stress-dependent laws: the stress limit is sigma_lim = STRESS_HEADROOM sigma + STRESS_FLOOR_WEIGHTS
-    ``weight_n`` / sum A (N over m2: the free blocks' weight spread over every sub-contact), the
-    stiffness max(kn(sigma_lim), ks(sigma_lim)), both laws growing with sigma, and the closure
-    limit u(sigma_lim). The cycles stop (:data:`drydem.engine.loop.STIFFENED`) as soon as a
+    Stress-dependent laws: from the stress sigma at ``closure_ahead`` (ns,) m (where each
+    sub-contact may close to before the timestep is next looked at,
+    :func:`drydem.engine.contacts.closure_ahead`; None: the stress it carries), the stress limit
+    sigma_lim = STRESS_HEADROOM sigma + STRESS_FLOOR_WEIGHTS ``weight_n`` / sum A (N over m2:
+    the free blocks' weight spread over every sub-contact), the stiffness
+    max(kn(sigma_lim), ks(sigma_lim)), both laws growing with sigma, and the closure limit
+    u(sigma_lim). The cycles stop (:data:`drydem.engine.loop.STIFFENED`) as soon as a
     sub-contact is about to close past it (:func:`drydem.engine.joints.stiffer_than_timestep`),
     and the timestep is computed again with the stiffness then reached.
     """
     if isinstance(joint, JointConstants):
         return np.full(sub.count, max(joint.kn, joint.ks)), np.zeros(0)
+    stress = sub.normal_force / sub.area if closure_ahead is None else _law_stresses(closure_ahead, joint)
     floor = STRESS_FLOOR_WEIGHTS * weight_n / max(float(sub.area.sum()), 1e-300)
-    limit = STRESS_HEADROOM * np.maximum(sub.normal_force / sub.area, 0.0) + floor
+    limit = STRESS_HEADROOM * np.maximum(stress, 0.0) + floor
     return _law_stiffness(limit, joint), normal_closures(limit, joint)
+
+
+@numba.njit(cache=True)
+def _law_stresses(closure, joint):
+    """sigma(u) of each closure (ns,) m, Pa (:func:`drydem.engine.joints.normal_stress`)."""
+    out = np.empty_like(closure)
+    for s in range(closure.shape[0]):
+        out[s] = normal_stress(closure[s], joint)
+    return out
 
 
 @numba.njit(cache=True)
@@ -195,10 +211,10 @@ class Inertia(NamedTuple):
 
 def timestep_and_blocks(
     model: Model, contacts: SubContacts, active: np.ndarray, *, fixed_timestep: float | None, scaled_timestep: float | None,
-    damping: Damping,
+    damping: Damping, closure_ahead: np.ndarray | None = None,
 ) -> Inertia:
     """The timestep (s), the blocks' constants with ``contacts``, blocks not ``active`` held, and
-    the closure limit of a stress-dependent joint (:func:`stiffness_bound`).
+    the closure limit of a stress-dependent joint (:func:`stiffness_bound`, with ``closure_ahead``).
 
     The timestep is ``fixed_timestep`` (ModelError if above the critical one), else
     ``solver.timestep_safety`` times the critical one (:func:`critical_timestep`, reduced for
@@ -209,7 +225,8 @@ def timestep_and_blocks(
     """
     solver = model.solver
     movable = model.block_movable & active
-    stiffness, closure_limit = stiffness_bound(kernel_joint(model.joint), contacts, G * float(model.block_mass[movable].sum()))
+    weight = G * float(model.block_mass[movable].sum())
+    stiffness, closure_limit = stiffness_bound(kernel_joint(model.joint), contacts, weight, closure_ahead)
     k_t, k_r = contact_stiffness(contacts, stiffness, model.n_blocks)
     critical = critical_timestep(model.block_mass, model.block_inertia_whitening, movable, k_t, k_r)
     critical *= timestep_factor(damping, critical) if np.isfinite(critical) else 1.0

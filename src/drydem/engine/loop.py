@@ -136,6 +136,10 @@ class LoopSettings(NamedTuple):
     ends after n cycles if n < max_cycles), or (0, 3) for a table at rest. closure_limit : (ns,)
     m, the closure of each sub-contact up to which ``dt`` is stable
     (:func:`drydem.engine.inertia.stiffness_bound`), or (0,) for a joint of constant stiffness.
+    first_velocity_dt : s, the velocity step of the call's first cycle: (dt_old + dt) / 2 right
+    after the timestep changed from dt_old (variable-step leapfrog: v(t + dt/2) = v(t - dt_old/2)
+    + a(t) (dt_old + dt) / 2, second order; a plain dt there is a first-order error that a stiff
+    impact turns into energy), else dt.
     """
 
     gravity: np.ndarray
@@ -149,6 +153,7 @@ class LoopSettings(NamedTuple):
     absolute_limit: float
     ground_acceleration: np.ndarray
     closure_limit: np.ndarray
+    first_velocity_dt: float
 
 
 @numba.njit(cache=True, inline="always")
@@ -201,8 +206,9 @@ def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neig
         if shaking:
             for k in range(3):
                 body[k] = gravity[k] - ground[cycle, k]
-        unbalanced, speed, kinetic, travel, stiffer = step_function(state, blocks, sub, joint, loop.closure_limit, body, dt, damping, rot,
-                                                                    force, moment, measure)
+        velocity_dt = loop.first_velocity_dt if cycle == 0 else dt
+        unbalanced, speed, kinetic, travel, stiffer = step_function(state, blocks, sub, joint, loop.closure_limit, body, dt, velocity_dt,
+                                                                    damping, rot, force, moment, measure)
         ratio = unbalanced / loop.force_scale
         if not (speed < np.inf and (not measure or kinetic <= DIVERGENCE_FACTOR * g * (travel + loop.travel_slack))):
             return cycle + 1, DIVERGED, ratio, speed

@@ -23,14 +23,15 @@ from typing import NamedTuple
 import numpy as np
 
 from drydem.engine import cycle3d, cycle_planar, diagnostics, loop
-from drydem.engine.contacts import NeighbourList, SubContacts
+from drydem.engine.contacts import NeighbourList, SubContacts, closure_ahead
 from drydem.engine.damping import Damping
 from drydem.engine.inertia import BlockConstants, keep_kinetic_energy, timestep_and_blocks
-from drydem.engine.joints import kernel_joint
+from drydem.engine.joints import CLOSING_CYCLES, kernel_joint
 from drydem.engine.tracker import ContactTracker
 from drydem.errors import DivergenceError, ModelError
 from drydem.model.assembly import Model
 from drydem.model.parameters import DAMPING, MAX_CYCLES, G, Range, check_fields
+from drydem.model.rotation import matrices
 from drydem.model.state import State
 
 #: "numba": compiled, the planar cycle for in-plane models (drydem.engine.cycle_planar), else the
@@ -141,17 +142,32 @@ class Simulation:
         self._update_inertia()
 
     def _update_inertia(self) -> None:
-        """The timestep and block constants for the current contacts; with mass scaling, the
-        velocities keep each block's kinetic energy through the change of fictitious masses."""
+        """The timestep, block constants and closure limit for the current contacts and their
+        stresses; with mass scaling, the velocities keep each block's kinetic energy through the
+        change of fictitious masses. With a stress-dependent joint, whose timestep changes
+        often and across impacts, the next cycle's velocities step by the mean of the old and
+        new timesteps (:class:`~drydem.engine.loop.LoopSettings` ``first_velocity_dt``); a joint
+        of constant stiffness keeps the plain step, and its results as they always were."""
+        old = self.timestep if self.blocks is not None else None
         dt, blocks, self.closure_limit = timestep_and_blocks(
             self.model, self.tracker.contacts, self.tracker.active, fixed_timestep=self._fixed_timestep, scaled_timestep=self._scaled_timestep,
-            damping=self.damping,
+            damping=self.damping, closure_ahead=self._closure_ahead(),
         )
         if self.model.solver.mass_scaling:
             self._scaled_timestep = dt
             if self.blocks is not None:
                 keep_kinetic_energy(self.state, self.blocks, blocks)
         self.timestep, self.blocks = dt, blocks
+        self._first_velocity_dt = 0.5 * (old + dt) if old is not None and self.model.joint.stress_dependent else dt
+
+    def _closure_ahead(self) -> np.ndarray | None:
+        """For a stress-dependent joint, where each sub-contact may close to within
+        CLOSING_CYCLES cycles of the current timestep (:func:`drydem.engine.contacts.closure_ahead`),
+        so that a joint closing fast (an impact) is counted at the stiffness it is about to reach;
+        None for a constant joint or before the first timestep."""
+        if not self.model.joint.stress_dependent or self.blocks is None:
+            return None
+        return closure_ahead(self.tracker.contacts, self.state, matrices(self.state.quaternion), CLOSING_CYCLES * self.timestep)
 
     def use_damping(self, damping: Damping) -> None:
         """Cycle on with ``damping`` (the timestep follows: dashpots shorten it)."""
@@ -183,6 +199,7 @@ class Simulation:
         self.cycles, self.time_s = snapshot.cycles, snapshot.time_s
         self._scaled_timestep = snapshot.scaled_timestep
         self._update_inertia()
+        self._first_velocity_dt = self.timestep  # the snapshot's velocities are of its own timestep
 
     # -- cycling --------------------------------------------------------------------------
     def move(self, displacement: np.ndarray, rotation: np.ndarray, *, gravity=(0.0, 0.0, -G)) -> None:
@@ -264,11 +281,12 @@ class Simulation:
             chunk = min(CHUNK, max_cycles - done)
             settings = loop.LoopSettings(
                 g, self.timestep, self.damping, chunk, criterion, limit, max(weight, 1e-300), travel_slack, self.tracker.absolute_limit,
-                AT_REST if ground is None else ground[done:done + chunk], self.closure_limit,
+                AT_REST if ground is None else ground[done:done + chunk], self.closure_limit, self._first_velocity_dt,
             )
             tracker = self.tracker
             n, code, ratio, speed = self.run_cycles(self.state, blocks or self.blocks, tracker.contacts, joint, settings, tracker.broad_state, tracker.neighbours)
             stats = StepStats(ratio, speed)
+            self._first_velocity_dt = self.timestep
             done += n
             self.cycles += n
             self.time_s += n * self.timestep

@@ -44,6 +44,7 @@ import numpy as np
 from drydem import __version__
 from drydem.analysis.tilt import TiltSettings, tilt_analysis
 from drydem.errors import DrydemError
+from drydem.io.results import PushoverWriter, tilt_summary, write_summary
 from drydem.masonry.imperfections import Imperfections, imperfect_model
 from drydem.masonry.walls import Wall
 
@@ -106,8 +107,6 @@ def run_sample(wall: Wall, settings: MonteCarloSettings, index: int) -> dict:
     """Sample ``index`` analysed (in a worker): ``summary`` (see :func:`sample_summary`) and
     ``pushover`` (the Records). An exception is the sample's outcome, recorded, never raised: a
     sample whose drawn wall cannot be built must not stop the run."""
-    from drydem.io.results import tilt_summary
-
     start = time.perf_counter()
     try:
         model = sample_model(wall, settings, index)
@@ -128,8 +127,6 @@ def sample_folder(folder: Path, index: int) -> Path:
 def write_sample(folder: Path, record: dict) -> Path:
     """A sample's record (:func:`run_sample`) as ``OUT/samples/NNNN/``: written in a hidden
     folder beside it, then renamed into place (a corrupt one there is replaced)."""
-    from drydem.io.results import PushoverWriter, write_summary
-
     final = sample_folder(folder, record["summary"]["sample"]["index"])
     partial = final.with_name(f".{final.name}.partial")
     shutil.rmtree(partial, ignore_errors=True)
@@ -300,8 +297,6 @@ def monte_carlo(wall: Wall, settings: MonteCarloSettings, folder: Path, executor
     folder = Path(folder)
     (folder / SAMPLES_FOLDER).mkdir(parents=True, exist_ok=True)
     with hold_folder(folder):
-        from drydem.io.results import write_summary
-
         plan = pending_samples(folder, settings)
         entries = dict(plan.recorded)
         summary = run_summary(target, settings, entries)
