@@ -118,12 +118,11 @@ def world_points(sub: SubContacts, position: np.ndarray, rotation: np.ndarray) -
     return x_inc, gap, normal
 
 
-def closure_ahead(sub: SubContacts, state, rotation: np.ndarray, travel_s: float) -> np.ndarray:
-    """(ns,) m: each sub-contact's closure (-gap) plus what its closing speed (the normal
-    relative velocity of its two material points at the incident point, when closing) adds in
-    ``travel_s`` seconds: how far it may close before the timestep is next looked at."""
+def closing_motion(sub: SubContacts, state, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(ns,) m and (ns,) m/s: each sub-contact's closure (-gap) and its closing speed (the normal
+    relative velocity of its two material points at the incident point, positive when closing)."""
     x_inc, gap, normal = world_points(sub, state.position, rotation)
     ref, inc = sub.block_ref, sub.block_inc
     v = state.velocity[inc] + np.cross(state.angular_velocity[inc], x_inc - state.position[inc])
     v -= state.velocity[ref] + np.cross(state.angular_velocity[ref], x_inc - state.position[ref])
-    return -gap - np.minimum(np.einsum("ni,ni->n", v, normal), 0.0) * travel_s
+    return -gap, -np.einsum("ni,ni->n", v, normal)

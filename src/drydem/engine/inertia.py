@@ -31,7 +31,7 @@ import numpy as np
 from drydem.engine.contacts import SubContacts
 from drydem.engine.damping import Damping, timestep_factor
 from drydem.engine.joints import (
-    JointConstants, StressJoint, kernel_joint, normal_closures, normal_stiffness, normal_stress, shear_stiffness,
+    CLOSING_CYCLES, JointConstants, StressJoint, kernel_joint, normal_closures, normal_stiffness, normal_stress, shear_stiffness,
 )
 from drydem.errors import ModelError
 from drydem.model.assembly import Model
@@ -65,30 +65,63 @@ STRESS_HEADROOM = 2.0
 #: ... plus this many times the mean stress of the free blocks' weight over all the sub-contacts
 #: (a joint just made, at zero stress, may load up to it before the timestep is recomputed)
 STRESS_FLOOR_WEIGHTS = 1.0
+#: a step may close a stress-dependent joint by at most this fraction of its stiffening length
+#: sigma / kn(sigma) (:func:`stiffness_bound`): its stress then grows by about that fraction a cycle
+RESOLUTION = 0.25
+
+
+class JointBound(NamedTuple):
+    """What a stress-dependent joint allows the timestep (:func:`stiffness_bound`): the stiffness
+    per area each sub-contact is counted with, (ns,) Pa/m; the closure up to which that holds,
+    (ns,) m ((0,) for a constant joint); the longest timestep that resolves the joints'
+    stiffening at their closing speeds, s (inf when none closes)."""
+
+    stiffness: np.ndarray
+    closure_limit: np.ndarray
+    resolved_timestep: float
 
 
 def stiffness_bound(joint: JointConstants | StressJoint, sub: SubContacts, weight_n: float,
-                    closure_ahead: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """The stiffness per area each sub-contact's springs are counted with in the critical
-    timestep, (ns,) Pa/m, and the closure up to which that holds, (ns,) m ((0,) for a constant
-    law: max(kn, ks) always holds).
+                    closure: np.ndarray | None = None, closing_speed: np.ndarray | None = None) -> JointBound:
+    """The joint's bound on the timestep (:class:`JointBound`); a constant joint: max(kn, ks)
+    always.
 
-    Stress-dependent laws: from the stress sigma at ``closure_ahead`` (ns,) m (where each
-    sub-contact may close to before the timestep is next looked at,
-    :func:`drydem.engine.contacts.closure_ahead`; None: the stress it carries), the stress limit
-    sigma_lim = STRESS_HEADROOM sigma + STRESS_FLOOR_WEIGHTS ``weight_n`` / sum A (N over m2:
-    the free blocks' weight spread over every sub-contact), the stiffness
-    max(kn(sigma_lim), ks(sigma_lim)), both laws growing with sigma, and the closure limit
-    u(sigma_lim). The cycles stop (:data:`drydem.engine.loop.STIFFENED`) as soon as a
-    sub-contact is about to close past it (:func:`drydem.engine.joints.stiffer_than_timestep`),
-    and the timestep is computed again with the stiffness then reached.
+    Stress-dependent laws: from the stress sigma at the closure each sub-contact may reach
+    before the timestep is next looked at, u + CLOSING_CYCLES v dt (``closure`` u (ns,) m and
+    ``closing_speed`` v (ns,) m/s, :func:`drydem.engine.contacts.closing_motion`, dt the
+    ``previous_timestep``; None: the stress each carries), the stress limit
+    sigma_lim = STRESS_HEADROOM sigma + STRESS_FLOOR_WEIGHTS ``weight_n`` / sum A (N over m2: the free
+    blocks' weight spread over every sub-contact), the stiffness max(kn(sigma_lim), ks(sigma_lim)),
+    both laws growing with sigma, and the closure limit u(sigma_lim). The cycles stop
+    (:data:`drydem.engine.loop.STIFFENED`) as soon as a sub-contact is about to close past it
+    (:func:`drydem.engine.joints.stiffer_than_timestep`), and the timestep is computed again.
+
+    Stability is not enough where a joint closes fast (an impact): a step that closes it by more
+    than its stiffening length l = sigma / kn(sigma) (the closure over which its stress grows
+    e-fold, for the linear power law) jumps across the law and creates energy. So the timestep
+    is also at most RESOLUTION l / v over the closing sub-contacts, at sigma_lim.
     """
     if isinstance(joint, JointConstants):
-        return np.full(sub.count, max(joint.kn, joint.ks)), np.zeros(0)
-    stress = sub.normal_force / sub.area if closure_ahead is None else _law_stresses(closure_ahead, joint)
+        return JointBound(np.full(sub.count, max(joint.kn, joint.ks)), np.zeros(0), np.inf)
+    stress = sub.normal_force / sub.area if closure is None else _law_stresses(closure, joint)
     floor = STRESS_FLOOR_WEIGHTS * weight_n / max(float(sub.area.sum()), 1e-300)
     limit = STRESS_HEADROOM * np.maximum(stress, 0.0) + floor
-    return _law_stiffness(limit, joint), normal_closures(limit, joint)
+    stiffness = _law_stiffness(limit, joint)
+    resolved = np.inf
+    if closing_speed is not None and (closing_speed > 0).any():
+        closing = closing_speed > 0
+        length = limit[closing] / _law_normal_stiffness(limit[closing], joint)
+        resolved = float(RESOLUTION * np.min(length / closing_speed[closing]))
+    return JointBound(stiffness, normal_closures(limit, joint), resolved)
+
+
+@numba.njit(cache=True)
+def _law_normal_stiffness(stress, joint):
+    """kn(sigma) of each stress (ns,) Pa, Pa/m."""
+    out = np.empty_like(stress)
+    for s in range(stress.shape[0]):
+        out[s] = normal_stiffness(stress[s], joint)
+    return out
 
 
 @numba.njit(cache=True)
@@ -211,22 +244,29 @@ class Inertia(NamedTuple):
 
 def timestep_and_blocks(
     model: Model, contacts: SubContacts, active: np.ndarray, *, fixed_timestep: float | None, scaled_timestep: float | None,
-    damping: Damping, closure_ahead: np.ndarray | None = None,
+    damping: Damping, closing: tuple[np.ndarray, np.ndarray, float] | None = None,
 ) -> Inertia:
     """The timestep (s), the blocks' constants with ``contacts``, blocks not ``active`` held, and
-    the closure limit of a stress-dependent joint (:func:`stiffness_bound`, with ``closure_ahead``).
+    the closure limit of a stress-dependent joint (:func:`stiffness_bound`, with ``closing``: each
+    sub-contact's closure, m, and closing speed, m/s, and the timestep they were taken at, s).
 
     The timestep is ``fixed_timestep`` (ModelError if above the critical one), else
     ``solver.timestep_safety`` times the critical one (:func:`critical_timestep`, reduced for
     the dashpots of a viscous ``damping``: :func:`drydem.engine.damping.timestep_factor`), or the
-    free flight one where nothing is sprung. With mass scaling, the masses and inertias are the
+    free flight one where nothing is sprung, and at most the one that resolves a stress-dependent
+    joint's stiffening (a fixed one is only held to stability). With mass scaling, the masses and inertias are the
     fictitious ones (:func:`scaled_inertia`) for ``scaled_timestep`` (s; None: for this timestep,
     which is then the one to keep).
     """
     solver = model.solver
     movable = model.block_movable & active
     weight = G * float(model.block_mass[movable].sum())
-    stiffness, closure_limit = stiffness_bound(kernel_joint(model.joint), contacts, weight, closure_ahead)
+    if closing is None:
+        bound = stiffness_bound(kernel_joint(model.joint), contacts, weight)
+    else:
+        closure, speed, previous = closing
+        bound = stiffness_bound(kernel_joint(model.joint), contacts, weight, closure + CLOSING_CYCLES * speed * previous, speed)
+    stiffness = bound.stiffness
     k_t, k_r = contact_stiffness(contacts, stiffness, model.n_blocks)
     critical = critical_timestep(model.block_mass, model.block_inertia_whitening, movable, k_t, k_r)
     critical *= timestep_factor(damping, critical) if np.isfinite(critical) else 1.0
@@ -239,6 +279,7 @@ def timestep_and_blocks(
         dt = fixed_timestep
     else:
         dt = solver.timestep_safety * critical if np.isfinite(critical) else free_flight_timestep(model.contact_tolerance)
+        dt = min(dt, bound.resolved_timestep)
     mass, inertia = model.block_mass, model.block_inertia
     if solver.mass_scaling:
         dt = dt if scaled_timestep is None else scaled_timestep
@@ -251,7 +292,7 @@ def timestep_and_blocks(
         free=(~model.block_fixed & movable[:, None]).astype(float),
         radius=model.block_radius,
         origin=model.block_centroid,
-    ), closure_limit)
+    ), bound.closure_limit)
 
 
 def free_flight_timestep(tolerance: float) -> float:

@@ -23,10 +23,10 @@ from typing import NamedTuple
 import numpy as np
 
 from drydem.engine import cycle3d, cycle_planar, diagnostics, loop
-from drydem.engine.contacts import NeighbourList, SubContacts, closure_ahead
+from drydem.engine.contacts import NeighbourList, SubContacts, closing_motion
 from drydem.engine.damping import Damping
 from drydem.engine.inertia import BlockConstants, keep_kinetic_energy, timestep_and_blocks
-from drydem.engine.joints import CLOSING_CYCLES, kernel_joint
+from drydem.engine.joints import kernel_joint
 from drydem.engine.tracker import ContactTracker
 from drydem.errors import DivergenceError, ModelError
 from drydem.model.assembly import Model
@@ -151,7 +151,7 @@ class Simulation:
         old = self.timestep if self.blocks is not None else None
         dt, blocks, self.closure_limit = timestep_and_blocks(
             self.model, self.tracker.contacts, self.tracker.active, fixed_timestep=self._fixed_timestep, scaled_timestep=self._scaled_timestep,
-            damping=self.damping, closure_ahead=self._closure_ahead(),
+            damping=self.damping, closing=self._closing(),
         )
         if self.model.solver.mass_scaling:
             self._scaled_timestep = dt
@@ -160,14 +160,15 @@ class Simulation:
         self.timestep, self.blocks = dt, blocks
         self._first_velocity_dt = 0.5 * (old + dt) if old is not None and self.model.joint.stress_dependent else dt
 
-    def _closure_ahead(self) -> np.ndarray | None:
-        """For a stress-dependent joint, where each sub-contact may close to within
-        CLOSING_CYCLES cycles of the current timestep (:func:`drydem.engine.contacts.closure_ahead`),
-        so that a joint closing fast (an impact) is counted at the stiffness it is about to reach;
+    def _closing(self) -> tuple[np.ndarray, np.ndarray, float] | None:
+        """For a stress-dependent joint, each sub-contact's closure (m) and closing speed (m/s)
+        (:func:`drydem.engine.contacts.closing_motion`) and the timestep they were reached with:
+        a joint closing fast (an impact) is counted at the stiffness it is about to reach, and
+        the timestep resolves its stiffening (:func:`drydem.engine.inertia.stiffness_bound`).
         None for a constant joint or before the first timestep."""
         if not self.model.joint.stress_dependent or self.blocks is None:
             return None
-        return closure_ahead(self.tracker.contacts, self.state, matrices(self.state.quaternion), CLOSING_CYCLES * self.timestep)
+        return (*closing_motion(self.tracker.contacts, self.state, matrices(self.state.quaternion)), self.timestep)
 
     def use_damping(self, damping: Damping) -> None:
         """Cycle on with ``damping`` (the timestep follows: dashpots shorten it)."""

@@ -211,8 +211,8 @@ class TiltRun:
 def elastic_closure(model: Model, contacts: SubContacts) -> float:
     """Median over the sprung free blocks of m g / sum(k A), m, with the contacts of the model as
     drawn: how far a block's own weight closes its joints (the predictor's scale)."""
-    stiffness, _ = stiffness_bound(kernel_joint(model.joint), contacts, G * float(model.block_mass[model.block_movable].sum()))
-    k_t, _ = contact_stiffness(contacts, stiffness, model.n_blocks)
+    bound = stiffness_bound(kernel_joint(model.joint), contacts, G * float(model.block_mass[model.block_movable].sum()))
+    k_t, _ = contact_stiffness(contacts, bound.stiffness, model.n_blocks)
     sprung = model.block_movable & (k_t > 0)
     return float(np.median(model.block_mass[sprung] * G / k_t[sprung])) if sprung.any() else 0.0
 
