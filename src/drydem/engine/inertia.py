@@ -106,22 +106,12 @@ def stiffness_bound(joint: JointConstants | StressJoint, sub: SubContacts, weigh
     stress = sub.normal_force / sub.area if closure is None else _law_stresses(closure, joint)
     floor = STRESS_FLOOR_WEIGHTS * weight_n / max(float(sub.area.sum()), 1e-300)
     limit = STRESS_HEADROOM * np.maximum(stress, 0.0) + floor
-    stiffness = _law_stiffness(limit, joint)
+    normal, stiffness = _law_stiffnesses(limit, joint)
     resolved = np.inf
     if closing_speed is not None and (closing_speed > 0).any():
         closing = closing_speed > 0
-        length = limit[closing] / _law_normal_stiffness(limit[closing], joint)
-        resolved = float(RESOLUTION * np.min(length / closing_speed[closing]))
+        resolved = float(RESOLUTION * np.min(limit[closing] / normal[closing] / closing_speed[closing]))
     return JointBound(stiffness, normal_closures(limit, joint), resolved)
-
-
-@numba.njit(cache=True)
-def _law_normal_stiffness(stress, joint):
-    """kn(sigma) of each stress (ns,) Pa, Pa/m."""
-    out = np.empty_like(stress)
-    for s in range(stress.shape[0]):
-        out[s] = normal_stiffness(stress[s], joint)
-    return out
 
 
 @numba.njit(cache=True)
@@ -134,12 +124,14 @@ def _law_stresses(closure, joint):
 
 
 @numba.njit(cache=True)
-def _law_stiffness(stress, joint):
-    """max(kn(sigma), ks(sigma)) of each stress (ns,) Pa, Pa/m."""
-    out = np.empty_like(stress)
+def _law_stiffnesses(stress, joint):
+    """kn(sigma) and max(kn(sigma), ks(sigma)) of each stress (ns,) Pa, Pa/m."""
+    normal = np.empty_like(stress)
+    largest = np.empty_like(stress)
     for s in range(stress.shape[0]):
-        out[s] = max(normal_stiffness(stress[s], joint), shear_stiffness(stress[s], joint))
-    return out
+        normal[s] = normal_stiffness(stress[s], joint)
+        largest[s] = max(normal[s], shear_stiffness(stress[s], joint))
+    return normal, largest
 
 
 def contact_stiffness(sub: SubContacts, stiffness: np.ndarray, n_blocks: int) -> tuple[np.ndarray, np.ndarray]:
