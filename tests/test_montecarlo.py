@@ -197,6 +197,10 @@ def test_an_earlier_run_is_kept_unless_overwrite_and_a_resume_must_have_the_same
     assert again.exit_code == 1 and "--overwrite" in again.output and "--resume" in again.output
     other = run(tall_brick, "--samples", 2, *options[:-2], "--friction", 0.9, "--out", out, "--resume")
     assert other.exit_code == 1 and "other settings (model_overrides" in other.output
+    edited = tmp_path / "edited.toml"  # the same wall's file with another brick: another wall, not a resume
+    edited.write_text(tall_brick.read_text().replace(f"height_m = {H}", f"height_m = {H * 1.1}"))
+    elsewhere = run(edited, "--samples", 2, *options, "--resume")
+    assert elsewhere.exit_code == 1 and "other settings (wall" in elsewhere.output
     replaced = run(tall_brick, "--samples", 1, *options, "--overwrite")
     assert replaced.exit_code == 0, replaced.output
     assert sorted(p.name for p in (out / "samples").iterdir()) == ["0000"]

@@ -8,6 +8,7 @@ import json
 import pytest
 from test_report import tilt_record
 
+from drydem.io.target import load_target
 from drydem.parametric.montecarlo import MonteCarloSettings, run_summary, statistics
 from drydem.analysis.tilt import TiltSettings
 from drydem.masonry.imperfections import Imperfections
@@ -132,7 +133,8 @@ def montecarlo_summary(results, name, wall, angles, imperfections):
                    "runtime_s": 1.0} for k, a in enumerate(angles)}
     path = results / "montecarlo" / name / "summary.json"
     path.parent.mkdir(parents=True)
-    path.write_text(json.dumps(run_summary({"name": wall, "path": f"{wall}.toml", "experiment": None}, settings, entries)))
+    path.write_text(json.dumps(run_summary({"name": wall, "path": f"{wall}.toml", "experiment": None}, load_target(wall).wall, settings,
+                                           entries)))
     return statistics(angles)
 
 

@@ -85,7 +85,7 @@ def test_stack_settles_by_the_sum_of_its_joints_closures(name):
     assert 2.5 * EDGE - sim.state.position[3, 2] == pytest.approx(expected, rel=1e-6)
 
 
-@pytest.mark.parametrize("law", [dict(model="affine", kn_per_stress=0.0), dict(model="power", kn_exponent=0.0, stress_ref=1e3)],
+@pytest.mark.parametrize("law", [dict(model="affine", kn_per_stress=0.0), dict(model="power", kn_exponent=0.0, stress_ref=1e3, kn_min=1e6)],
                          ids=["affine a=0", "power e=0"])
 def test_zero_slope_or_exponent_is_the_constant_law_exactly(law):
     """a = 0 or e = 0 is kn, ks constant: the kernels get the constant joint and a settling wall's
@@ -142,13 +142,18 @@ def test_no_energy_is_created_over_load_unload_cycles(name):
     assert swings[0] / swings[1] == pytest.approx(4.0, rel=0.1)
 
 
-def test_normal_energy_is_the_integral_of_the_stress():
-    """int_0^u sigma du' of the affine law: (k0 / a) (expm1(a u) / a - u) in closed form."""
-    law = LAWS["affine"]
+@pytest.mark.parametrize("name", [*LAWS, "power 2"])
+def test_normal_energy_is_the_integral_of_the_stress(name):
+    """w(u) = int_0^u sigma du' in closed form against quadrature of sigma(u), across every
+    piece of the clamp (up to 1 mm of closure), to 1e-9."""
+    from scipy.integrate import quad
+
+    law = LAWS.get(name, dict(model="power", kn=3e7, kn_exponent=2.0, stress_ref=1e3, kn_min=1e5, kn_max=1e10))
     joint = kernel_joint(JointMaterial(**law))
-    closure = np.array([0.0, 1e-5, 1e-4, 2e-4])
-    a, k0 = law["kn_per_stress"], law["kn"]
-    np.testing.assert_allclose(normal_energies(closure, joint), k0 / a * (np.expm1(a * closure) / a - closure), rtol=1e-12)
+    closure = np.array([1e-7, 1e-6, 1e-5, 1e-4, 3e-4, 1e-3])
+    expected = [sum(quad(lambda u: normal_stress(u, joint), lo, hi, epsabs=0.0, epsrel=1e-12, limit=200)[0]
+                    for lo, hi in zip(np.concatenate([[0.0], np.geomspace(1e-9, c, 40)[:-1]]), np.geomspace(1e-9, c, 40))) for c in closure]
+    np.testing.assert_allclose(normal_energies(closure, joint), expected, rtol=1e-9)
 
 
 def test_timestep_follows_the_stiffness_reached():
@@ -172,17 +177,20 @@ def test_timestep_follows_the_stiffness_reached():
 def test_joint_laws_from_the_model_file():
     blocks = [{"name": "base", "box": {"min": [-0.2, -0.05, -0.02], "max": [0.2, 0.05, 0.0]}, "fixed": True},
               {"name": "b", "box": {"min": [-0.05, -0.05, 0.0], "max": [0.05, 0.05, 0.1]}}]
-    model = model_from_dict({"block": blocks, "joint": {"model": "power", "kn": 3e7, "kn_exponent": 0.5, "stress_ref": 2e3}}, source="m.toml")
-    joint = model.joint
-    assert (joint.model, joint.ks_exponent, joint.law_value("ks_exponent"), joint.law_value("kn_min")) == ("power", None, 0.5, 1e4)
+    law = {"model": "power", "kn": 3e7, "kn_exponent": 0.5, "stress_ref": 2e3, "kn_min": 1e6}
+    joint = model_from_dict({"block": blocks, "joint": law}, source="m.toml").joint
+    assert (joint.model, joint.ks_exponent, joint.law_value("ks_exponent"), joint.law_value("kn_max")) == ("power", None, 0.5, 1e15)
     assert joint.changed(kn_exponent=1.0).law_value("ks_exponent") == 1.0  # ks follows kn unless given
     assert joint.changed(model="affine", kn_per_stress=1e4) == JointMaterial(kn=3e7, model="affine", kn_per_stress=1e4)
+    model = model_from_dict({"block": blocks, "joint": law}, source="m.toml")
     assert model.overridden(joint_law={"model": "constant"}, kn=1e8).joint == JointMaterial(kn=1e8)
     bad = [
-        ({"model": "power", "kn_exponent": 0.5}, "needs stress_ref"),
+        ({"model": "power", "kn_exponent": 0.5}, "needs stress_ref; .* needs kn_min"),
+        ({"model": "power", "kn_exponent": 1.5, "stress_ref": 1e3, "kn_min": 1e6}, "kn_exponent = 1.5 > 1 needs kn_max"),
+        ({"model": "power", "kn_exponent": 1.0, "ks_exponent": 2.0, "stress_ref": 1e3, "kn_min": 1e6}, "ks_exponent = 2.0 > 1 needs kn_max"),
         ({"model": "affine", "kn_per_stress": 1e4, "kn_exponent": 0.5}, "kn_exponent applies to model = 'power'"),
         ({"kn_per_stress": 1e4}, "applies to model = 'affine', not 'constant'"),
-        ({"model": "power", "kn_exponent": 4.0, "stress_ref": 1e3}, r"kn_exponent = 4.0: must be a number in \[0, 3\]"),
+        ({"model": "power", "kn_exponent": 4.0, "stress_ref": 1e3, "kn_min": 1e6}, r"kn_exponent = 4.0: must be a number in \[0, 3\]"),
         ({"model": "affine", "kn_per_stress": True}, "kn_per_stress = True: must be a number"),
         ({"model": "affine", "kn_per_stress": 1e4, "kn_min": 1e8}, "kn = 3e\\+07 Pa/m: must lie within"),
         ({"model": "power", "kn_exponent": 1, "stress_ref": 1e3, "kn_min": 1e9, "kn_max": 1e8}, "kn_min = 1e\\+09 exceeds kn_max"),
@@ -207,7 +215,7 @@ def test_joint_law_from_the_command_line(tmp_path):
     assert "power law: kn (sigma / 1000 Pa)^1" in result.output
     joint = json.loads((out / "summary.json").read_text())["model"]["joint"]
     assert (joint["model"], joint["kn_exponent"], joint["stress_ref"], joint["kn_min"]) == ("power", 1.0, 1000.0, 1e6)
-    for bad, message in [(["--joint-model", "power", "--kn-exponent", "1"], "needs stress_ref"),
+    for bad, message in [(["--joint-model", "power", "--kn-exponent", "1", "--joint-kn-min", "1e6"], "needs stress_ref"),
                          (["--kn-per-stress", "100"], "kn_per_stress applies to model = 'affine', not 'constant'"),
                          (["--joint-model", "affine", "--kn-per-stress", "true"], "'true' is not a valid float"),
                          (["--joint-model", "affine", "--kn-per-stress", "-1"], "kn_per_stress = -1.0: must be a number in [0, 1e+07] 1/m")]:
@@ -259,3 +267,13 @@ def test_a_cube_dropped_on_a_stiffening_joint_bounces_back_to_its_height(name, h
     sim, first, heights = drop(LAWS[name], height_m, cycles=4000)
     assert heights.min() < 0  # it landed
     assert max(heights[20:]) == pytest.approx(height_m, rel=0.05)
+
+
+def test_dashpots_on_a_stress_dependent_joint_are_refused():
+    """Contact dashpots are sized for a constant kn: with a law whose kn follows the stress,
+    neither the damping ratio nor the timestep's bound would hold, so dynamics with them stop
+    with that reason instead of running on a wrong damping."""
+    model = stack(LAWS["affine"])
+    with pytest.raises(ModelError, match="contact dashpots .* stress-dependent joint .* not supported"):
+        dd.Simulation(model, damping=Damping(0.0, contact_ratio=0.5))
+    dd.Simulation(model, damping=Damping(0.0, mass_proportional=1.0))  # Rayleigh's mass term needs no kn

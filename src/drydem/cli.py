@@ -1055,7 +1055,7 @@ def montecarlo(target, samples, seed, height_sd, height_distribution, flatness_s
                               + (f" ({out} has none)" if out else ""))
         folder = _results_folder(out, f"{found.name}-montecarlo", resume=resume, overwrite=overwrite)
         if resume:
-            check_resumable(folder, settings)
+            check_resumable(folder, settings, found.wall)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     measured = experiment(found.name) if designs.find(target) is not None else None

@@ -324,23 +324,43 @@ def shear_law(fn, dus_x, dus_y, dus_z, fs_x, fs_y, fs_z, area, intact, joint):
     return fs_x, fs_y, fs_z, intact
 
 
-#: Gauss-Legendre nodes and weights on [0, 1] for :func:`normal_energies` (16 points integrate
-#: each smooth piece of sigma(u) to round-off)
-_NODES = 0.5 * (np.polynomial.legendre.leggauss(16)[0] + 1.0)
-_WEIGHTS = 0.5 * np.polynomial.legendre.leggauss(16)[1]
-
-
 @numba.njit(cache=True)
 def normal_energies(closure, joint):
-    """The elastic energy per area w(u) = integral from 0 to u of sigma(u') du' (J/m2) of each
-    closure (n,) m >= 0 of a :class:`StressJoint`: Gauss-Legendre quadrature of
-    :func:`normal_stress` over each of its smooth pieces (split at closure_low and closure_high)."""
-    out = np.zeros(closure.shape[0])
+    """The elastic energy per area w(u) = int_0^u sigma du' (J/m2) of each closure (n,) m of a
+    :class:`StressJoint`, in closed form: w = int_0^sigma s ds / kn(s) piece by piece, with
+    sigma = sigma(u) (:func:`normal_stress`):
+
+        clamp at k:  (sigma_b^2 - sigma_a^2) / (2 k)
+        power:       (sigma_ref^2 / k) (s^(2-e) - s_low^(2-e)) / (2 - e)   (ln(s / s_low) at e = 2)
+        affine:      (k0 / a^2) (x - ln(1 + x)), x = a sigma / k0          (its series for small x)
+
+    Opening (u < 0): the stiffness at zero stress, kn(0) u^2 / 2."""
+    out = np.empty_like(closure)
     for i in range(closure.shape[0]):
         u = closure[i]
-        edges = (0.0, min(u, joint.closure_low), min(u, joint.closure_high), u)
-        for piece in range(3):
-            lo, hi = edges[piece], max(edges[piece + 1], edges[piece])
-            for k in range(_NODES.shape[0]):
-                out[i] += _WEIGHTS[k] * (hi - lo) * normal_stress(lo + (hi - lo) * _NODES[k], joint)
+        sigma = normal_stress(u, joint)
+        if u <= 0.0 or (joint.exponent_n == 0.0 and joint.per_stress_n == 0.0):
+            out[i] = 0.5 * sigma * u
+        elif u >= joint.closure_high:
+            high = joint.stress_high
+            out[i] = _law_energy(high, joint) + (sigma * sigma - high * high) / (2.0 * joint.k_max)
+        else:
+            out[i] = _law_energy(sigma, joint)
     return out
+
+
+@numba.njit(cache=True, inline="always")
+def _law_energy(sigma, joint):
+    """int_0^sigma s ds / kn(s), J/m2, below stress_high (see :func:`normal_energies`)."""
+    if joint.law == AFFINE:
+        x = joint.per_stress_n * sigma / joint.kn
+        # x - ln(1 + x), by its series where the subtraction would cancel
+        rest = x * x * (0.5 - x * (1.0 / 3.0 - x * (0.25 - x * (0.2 - x / 6.0)))) if x < 1e-3 else x - np.log1p(x)
+        return joint.kn / joint.per_stress_n ** 2 * rest
+    low = joint.stress_low
+    if sigma <= low:
+        return sigma * sigma / (2.0 * joint.k_min)
+    e, s_low = joint.exponent_n, low / joint.stress_ref
+    log_ratio = np.log(sigma / low)
+    growth = log_ratio if e == 2.0 else np.expm1((2.0 - e) * log_ratio) / (2.0 - e)
+    return low * low / (2.0 * joint.k_min) + joint.stress_ref ** 2 / joint.kn * s_low ** (2.0 - e) * growth

@@ -321,11 +321,16 @@ class Simulation:
 
 
 def _checked(damping: Damping, model: Model) -> Damping:
-    """``damping`` as floats, or a ModelError naming each coefficient out of its range."""
+    """``damping`` as floats, or a ModelError naming each coefficient out of its range, or
+    refusing dashpots on a stress-dependent joint."""
     if not isinstance(damping, Damping):
         raise ModelError(f"{model.source}: damping must be a drydem.engine.damping.Damping, got {damping!r}")
     rules = {"local": DAMPING, "contact_ratio": NON_NEGATIVE, "stiffness_proportional": NON_NEGATIVE, "mass_proportional": NON_NEGATIVE}
     check_fields(damping, rules, f"{model.source}: damping")
+    if model.joint.stress_dependent and (damping.contact_ratio > 0 or damping.stiffness_proportional > 0):
+        raise ModelError(f"{model.source}: contact dashpots (a damping ratio or Rayleigh's stiffness term) with a stress-dependent "
+                         f"joint ({model.joint.model} law): the dashpots are sized for a constant kn, and neither their damping ratio "
+                         "nor the timestep's bound for them would hold as kn follows the stress; not supported yet")
     return Damping(*(float(value) for value in damping))
 
 

@@ -170,7 +170,7 @@ JOINT_RULES = {"kn": JOINT_STIFFNESS, "ks": JOINT_STIFFNESS, "friction": FRICTIO
 #: the keys of each law beyond kn and ks: (required, optional)
 LAW_KEYS = {
     "constant": ((), ()),
-    "power": (("kn_exponent", "stress_ref"), ("ks_exponent", "kn_min", "kn_max")),
+    "power": (("kn_exponent", "stress_ref", "kn_min"), ("ks_exponent", "kn_max")),
     "affine": (("kn_per_stress",), ("ks_per_stress", "kn_min", "kn_max")),
 }
 
@@ -190,7 +190,10 @@ class JointMaterial:
         "power"     kn (sigma / stress_ref)^kn_exponent, ks (sigma / stress_ref)^ks_exponent
         "affine"    kn + kn_per_stress sigma,            ks + ks_per_stress sigma
 
-        each clamped to [kn_min, kn_max] (defaults: the whole range of :data:`JOINT_STIFFNESS`).
+        each clamped to [kn_min, kn_max]. The power law needs kn_min (its stiffness vanishes
+        with the stress: the floor decides how far a lightly loaded joint closes), and kn_max
+        with an exponent above 1 (its stress then grows without bound at a finite closure);
+        otherwise they default to the whole range of :data:`JOINT_STIFFNESS`.
         ks_exponent defaults to kn_exponent and ks_per_stress to kn_per_stress (ks follows kn,
         as in the seed paper's kn = ks); a key not given stays None (:meth:`law_value` gives
         the value in force). The keys of one law are errors with another.
@@ -269,6 +272,10 @@ def _law_problems(joint: JointMaterial) -> list[str]:
     problems = [f"[joint] {key} applies to model = {_law_of(key)}, not {joint.model!r}"
                 for key in LAW_FIELDS if getattr(joint, key) is not None and key not in required + optional]
     problems += [f"[joint] model = {joint.model!r} needs {key}" for key in required if getattr(joint, key) is None]
+    steep = [key for key in ("kn_exponent", "ks_exponent") if joint.model == "power" and (joint.law_value(key) or 0.0) > 1.0]
+    if steep and joint.kn_max is None:
+        problems.append(f"[joint] {steep[0]} = {joint.law_value(steep[0])!r} > 1 needs kn_max: the stress of such a law grows "
+                        "without bound at a finite closure, and the clamp is what keeps it (and the timestep) finite")
     return problems
 
 

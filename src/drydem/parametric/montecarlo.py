@@ -28,6 +28,7 @@ time works on a folder (:func:`hold_folder`).
 from __future__ import annotations
 
 import fcntl
+import hashlib
 import json
 import os
 import shutil
@@ -47,6 +48,7 @@ from drydem.errors import DrydemError
 from drydem.io.results import PushoverWriter, tilt_summary, write_summary
 from drydem.masonry.imperfections import Imperfections, imperfect_model
 from drydem.masonry.walls import Wall
+from drydem.parametric.calibrate import wall_angle
 
 #: the drift whose angle is the DLS angle (EN 1998-1 4.4.3.2; Savalle et al. 2022, Section 5),
 #: a key of the tilt summary's ``drift_limit_angles_deg``
@@ -81,13 +83,21 @@ class MonteCarloSettings:
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise DrydemError(f"seed = {self.seed!r}: must be a whole number >= 0")
 
-    def identity(self) -> dict:
-        """Everything that makes the samples what they are (all but their number), as JSON
-        values: a resumed run must have the same (:func:`check_resumable`)."""
+    def identity(self, wall: Wall) -> dict:
+        """Everything that makes the samples of ``wall`` what they are (all but their number), as
+        JSON values: the wall (its name and :func:`wall_digest`), the seed, imperfections, tilt
+        settings and overrides; a resumed run must have the same (:func:`check_resumable`)."""
         return json.loads(json.dumps({
-            "seed": self.seed, "imperfections": asdict(self.imperfections), "tilt": asdict(self.tilt),
+            "wall": {"name": wall.name, "digest": wall_digest(wall)}, "seed": self.seed, "imperfections": asdict(self.imperfections), "tilt": asdict(self.tilt),
             "model_overrides": {key: value for key, value in self.model_overrides.items() if value is not None},
         }))
+
+
+def wall_digest(wall: Wall) -> str:
+    """A hash of what builds ``wall``'s model (bricks, layout, density, joint, contacts, supports,
+    solver), so that a run resumed on another wall, or on its file edited, is refused."""
+    what = (wall.brick, wall.layout, wall.density, wall.joint, wall.contacts, wall.supports, wall.solver)
+    return hashlib.sha1(repr(what).encode()).hexdigest()[:16]
 
 
 def sample_seed(seed: int, index: int) -> int:
@@ -143,13 +153,15 @@ def write_sample(folder: Path, record: dict) -> Path:
 
 def sample_entry(summary: dict) -> dict:
     """A sample's line in the top summary: index, seed, status, collapse and DLS angles (deg,
-    None where not found), how its analysis ended, its run time, its error if it failed."""
+    None where not found; a wall that cannot stand under its own weight has a collapse angle of
+    0 deg, :func:`drydem.parametric.calibrate.wall_angle`: its capacity, not a missing value that
+    would flatter the statistics), how its analysis ended, its run time, its error if it failed."""
     sample = summary["sample"]
     entry = {"index": sample["index"], "seed": sample["seed"], "status": sample["status"]}
     if sample["status"] != "ok":
         return entry | {"collapse_angle_deg": None, "dls_angle_deg": None, "ended_by": None, "error": sample["error"],
                         "runtime_s": sample["runtime_s"]}
-    return entry | {"collapse_angle_deg": summary["collapse_angle_deg"], "dls_angle_deg": summary["drift_limit_angles_deg"][DLS_DRIFT],
+    return entry | {"collapse_angle_deg": wall_angle(summary), "dls_angle_deg": summary["drift_limit_angles_deg"][DLS_DRIFT],
                     "ended_by": summary["ended_by"], "runtime_s": sample["runtime_s"]}
 
 
@@ -199,7 +211,7 @@ def pending_samples(folder: Path, settings: MonteCarloSettings) -> PendingSample
     return PendingSamples(recorded, todo, corrupt)
 
 
-def check_resumable(folder: Path, settings: MonteCarloSettings) -> None:
+def check_resumable(folder: Path, settings: MonteCarloSettings, wall: Wall) -> None:
     """MonteCarloError unless ``folder/summary.json`` is a Monte Carlo run's with the same
     settings (all but the number of samples: more extend it, fewer summarise its first ones),
     naming those that differ."""
@@ -208,7 +220,7 @@ def check_resumable(folder: Path, settings: MonteCarloSettings) -> None:
         recorded = json.loads(path.read_text(encoding="utf-8"))["settings"]
     except (OSError, ValueError, TypeError, KeyError):
         raise MonteCarloError(f"{path}: not the summary of a drydem montecarlo run; --resume needs the --out of one") from None
-    current = settings.identity()
+    current = settings.identity(wall)
     differ = sorted(key for key in current.keys() | recorded.keys() if current.get(key) != recorded.get(key))
     if differ:
         raise MonteCarloError(f"{folder}: the recorded run had other settings ({', '.join(differ)}: "
@@ -232,7 +244,7 @@ def statistics(values) -> dict:
             "min": float(x.min()), "max": float(x.max())}
 
 
-def run_summary(target: dict, settings: MonteCarloSettings, entries: Mapping[int, dict]) -> dict:
+def run_summary(target: dict, wall: Wall, settings: MonteCarloSettings, entries: Mapping[int, dict]) -> dict:
     """The top ``summary.json``: ``target`` (what the caller says of it), the settings, the
     ``samples`` recorded (index order), the statistics of the collapse angle over the samples
     that found one (a collapse: the others, listed with their outcome, are counted in
@@ -249,7 +261,7 @@ def run_summary(target: dict, settings: MonteCarloSettings, entries: Mapping[int
         "target": target,
         "samples_requested": settings.samples,
         "samples_recorded": len(samples),
-        "settings": settings.identity(),
+        "settings": settings.identity(wall),
         "collapse_angle_deg": statistics(collapsed),
         "dls_angle_deg": statistics(dls),
         "excluded": {"collapse_angle_deg": excluded, "dls_angle_deg_missing": len(samples) - len(dls)},
@@ -299,7 +311,7 @@ def monte_carlo(wall: Wall, settings: MonteCarloSettings, folder: Path, executor
     with hold_folder(folder):
         plan = pending_samples(folder, settings)
         entries = dict(plan.recorded)
-        summary = run_summary(target, settings, entries)
+        summary = run_summary(target, wall, settings, entries)
         write_summary(folder, summary)
         queue = iter(plan.todo)
         window = in_flight or max(len(plan.todo), 1)
@@ -319,7 +331,7 @@ def monte_carlo(wall: Wall, settings: MonteCarloSettings, folder: Path, executor
                                           "finished are recorded: resume to go on") from exc
                 write_sample(folder, record)
                 entries[index] = sample_entry(record["summary"])
-                summary = run_summary(target, settings, entries)
+                summary = run_summary(target, wall, settings, entries)
                 write_summary(folder, summary)
                 if on_sample is not None:
                     on_sample(entries[index])
