@@ -49,8 +49,8 @@ def test_editing_the_joint_law_reaches_the_cached_planar_kernel(tmp_path):
     before = sheared_brick(tmp_path, compiled=True)
     joints = tmp_path / "drydem" / "engine" / "joints.py"
     law = joints.read_text()
-    assert law.count("shear_scale = joint.ks * area") == 1
-    joints.write_text(law.replace("shear_scale = joint.ks * area", "shear_scale = 0.5 * joint.ks * area"))
+    assert law.count("    return joint.ks * area") == 1  # the shear stiffness of a joint of constant stiffness
+    joints.write_text(law.replace("    return joint.ks * area", "    return 0.5 * joint.ks * area"))
     after = sheared_brick(tmp_path, compiled=True)
     assert after == pytest.approx(sheared_brick(tmp_path, compiled=False), rel=1e-9)
     assert after > 1.5 * before > 0.0  # a softer joint: the brick slid further

@@ -160,7 +160,7 @@ def test_a_run_analyses_its_target_with_its_overrides_as_the_cli_does():
     from drydem.io.target import load_target
 
     spec = RunSpec(analysis="tilt", target="WD1", protocol="fixed", kn=1e8, ks=5e7, friction=0.7, points=2)
-    assert spec.overrides == {"kn": 1e8, "ks": 5e7, "friction": 0.7, "points": 2}
+    assert spec.overrides == {"kn": 1e8, "ks": 5e7, "friction": 0.7, "points": 2, "joint_law": None}
     model = spec.model()
     assert (model.joint.kn, model.joint.ks, model.joint.friction, model.contacts.points_per_length) == (1e8, 5e7, 0.7, 2)
     assert model.joint == load_target("WD1").model.overridden(**spec.overrides).joint
