@@ -247,8 +247,9 @@ def statistics(values) -> dict:
 def run_summary(target: dict, wall: Wall, settings: MonteCarloSettings, entries: Mapping[int, dict]) -> dict:
     """The top ``summary.json``: ``target`` (what the caller says of it), the settings, the
     ``samples`` recorded (index order), the statistics of the collapse angle over the samples
-    that found one (a collapse: the others, listed with their outcome, are counted in
-    ``excluded`` by outcome) and of the DLS angle over those that reached a 1 % drift."""
+    with a verdict (a collapse, or 0 deg for a wall that cannot stand: :func:`sample_entry`; the
+    others, listed with their outcome, are counted in ``excluded`` by outcome) and of the DLS
+    angle over those that reached a 1 % drift."""
     samples = [entries[index] for index in sorted(entries)]
     collapsed = [s["collapse_angle_deg"] for s in samples if s["collapse_angle_deg"] is not None]
     excluded: dict[str, int] = {}

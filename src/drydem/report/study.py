@@ -39,8 +39,9 @@ MONTECARLO_TITLE = "Monte Carlo scatter of the collapse angle"
 #: the statistics of a Monte Carlo summary's collapse angle the report shows (count aside)
 MONTECARLO_STATISTICS = ("mean", "std", "cov", "p05")
 MONTECARLO_NOTE = (
-    "Each row a `drydem montecarlo` run in montecarlo/NAME: the statistics of its collapse angles over the samples that found one "
-    "(samples: how many; std with ddof = 1; p05 the 5th percentile), with the imperfections drawn; experiment: the mean and CoV "
+    "Each row a `drydem montecarlo` run in montecarlo/NAME: the statistics of its collapse angles over the samples with a verdict, "
+    "a sample that cannot stand under its own weight counting as 0 deg (samples: how many; std with ddof = 1; p05 the 5th "
+    "percentile), with the imperfections drawn; experiment: the mean and CoV "
     "of the wall's tests (Savalle et al. 2022, Table 1; '-': not one of its walls).")
 NOTE = ("drydem's WD1-WD7 are reconstructions that obey the competition brief, not the original drawings "
         "(which drydem does not have): compare trends and rankings, not single numbers.")
