@@ -1,0 +1,182 @@
+"""What the commands share: the ``drydem`` group, target loading, results folders, interruption,
+and the options of several commands (units, workers, joint laws, imperfections)."""
+
+from __future__ import annotations
+
+import functools
+import itertools
+import signal
+from contextlib import contextmanager
+from datetime import datetime
+from pathlib import Path
+
+import click
+import numpy as np
+
+from drydem import __version__
+from drydem.errors import DrydemError
+from drydem.io.target import Target, load_target
+from drydem.model.parameters import JOINT_MODELS
+from drydem.masonry.imperfections import Imperfections
+
+
+#: the tilting analysis' checkpoint in its results folder, and the file it is written to first
+CHECKPOINT = "checkpoint.npz"
+CHECKPOINT_PARTIAL = ".checkpoint.partial.npz"
+
+
+#: length units of imported geometry (VRML, OBJ, STL), in metres
+UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001}
+
+unit_option = click.option("--unit", type=click.Choice(list(UNITS)), default="m", show_default=True,
+                           help="Length unit of imported geometry (.wrl, .obj, .stl).")
+
+
+workers_option = click.option("--workers", type=click.IntRange(min=1), help="Local processes (default: all cores).")
+scheduler_option = click.option("--scheduler", help="Address of a Dask distributed scheduler to run on instead (tcp://host:8786).")
+#: the options of a joint law: option name -> ([joint] key, the option)
+JOINT_LAW_OPTIONS = {
+    "joint_model": ("model", click.option("--joint-model", type=click.Choice(JOINT_MODELS),
+                                          help="Joint law ([joint] model): constant, or kn and ks a power of the normal stress sigma or "
+                                               "affine in it (overrides the model file's law; the law's keys below)")),
+    "kn_exponent": ("kn_exponent", click.option("--kn-exponent", type=float, help="power: kn (sigma / stress_ref)^kn_exponent.")),
+    "ks_exponent": ("ks_exponent", click.option("--ks-exponent", type=float, help="power: ks (sigma / stress_ref)^ks_exponent "
+                                                                                       "(default: kn_exponent).")),
+    "stress_ref": ("stress_ref", click.option("--stress-ref", type=float, help="power: the stress at which kn and ks hold, Pa.")),
+    "kn_per_stress": ("kn_per_stress", click.option("--kn-per-stress", type=float, help="affine: kn + kn_per_stress sigma, 1/m.")),
+    "ks_per_stress": ("ks_per_stress", click.option("--ks-per-stress", type=float, help="affine: ks + ks_per_stress sigma, 1/m "
+                                                                                             "(default: kn_per_stress).")),
+    "joint_kn_min": ("kn_min", click.option("--joint-kn-min", type=float, help="The law's smallest stiffness, Pa/m ([joint] kn_min).")),
+    "joint_kn_max": ("kn_max", click.option("--joint-kn-max", type=float, help="The law's largest stiffness, Pa/m ([joint] kn_max).")),
+}
+
+
+def joint_law_options(command):
+    """The options of :data:`JOINT_LAW_OPTIONS`, handed to ``command`` as one ``joint_law``
+    argument: the ``[joint]`` keys given (None when none is)."""
+    @functools.wraps(command)
+    def bundled(**values):
+        law = {key: values.pop(name) for name, (key, _) in JOINT_LAW_OPTIONS.items()}
+        return command(joint_law={key: value for key, value in law.items() if value is not None} or None, **values)
+
+    for _, option in reversed(JOINT_LAW_OPTIONS.values()):
+        bundled = option(bundled)
+    return bundled
+
+
+def resolve_target(target: str, unit: str = "m") -> Target:
+    """Load TARGET or exit with its error; print to stderr what an imported file could not say."""
+    try:
+        found = load_target(target, unit_m=UNITS[unit])
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    for note in found.notes:
+        click.echo(f"note: {note}", err=True)
+    return found
+
+
+@click.group()
+@click.version_option(__version__, prog_name="drydem")
+def main() -> None:
+    """drydem: discrete element analysis of dry-joint masonry."""
+
+#: what ``drydem shake`` writes in its results folder
+SHAKE_OUTPUTS = ("summary.json", "history.csv", "history.png", "vtk", "shake.mp4", "shake.gif")
+#: what ``drydem montecarlo`` writes in its results folder besides summary.json
+MONTECARLO_OUTPUTS = ("samples", "histogram.png")
+#: what ``drydem tilt``, ``drydem limit``, ``drydem shake`` and ``drydem montecarlo`` write in
+#: their results folders (deleted first by --overwrite, whichever of them wrote them)
+RUN_OUTPUTS = ("summary.json", "pushover.csv", "pushover.png", "mechanism.png", CHECKPOINT, CHECKPOINT_PARTIAL, "vtk",
+               "collapse.mp4", "collapse.gif") + tuple(name for name in SHAKE_OUTPUTS if name not in ("summary.json", "vtk")) \
+    + MONTECARLO_OUTPUTS
+
+
+def results_folder(out: Path | None, name: str, *, resume: bool | None = False, overwrite: bool = False) -> Path:
+    """``out`` made ready for a run (drydem.io.results.prepare_folder; ``resume`` None for a
+    command that cannot resume), or by default a new results/NAME-TIME folder (numbered -2,
+    -3, ... if two runs start in the same second)."""
+    from drydem.io.results import prepare_folder
+
+    if out is None:
+        stem = f"{name}-{datetime.now():%Y%m%d-%H%M%S}"
+        out = Path("results") / stem
+        for k in itertools.count(2):
+            if not out.exists():
+                break
+            out = Path("results") / f"{stem}-{k}"
+    return prepare_folder(out, RUN_OUTPUTS, resume=resume, overwrite=overwrite)
+
+
+class _Received:
+    """The signal that interrupted a command: its name and number (SIGINT until told otherwise)."""
+
+    name, number = "SIGINT", int(signal.SIGINT)
+
+
+@contextmanager
+def signals_interrupt():
+    """SIGTERM (a kill, a scheduler's time limit) interrupts like Ctrl-C: KeyboardInterrupt,
+    so that the command says what it saved and how to go on. Yields what was received."""
+    received = _Received()
+
+    def interrupt(number, frame):
+        received.name, received.number = signal.Signals(number).name, number
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield received
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+def _amplitude_mm(ctx, param, value):
+    """An imperfection amplitude, mm: not given (None), or a finite number >= 0."""
+    if value is not None and not (np.isfinite(value) and value >= 0.0):
+        raise click.BadParameter(f"{value!r}: must be a finite number >= 0 (mm)")
+    return value
+
+
+def _factor(ctx, param, value):
+    """A drawing factor: a finite number > 0."""
+    if not (np.isfinite(value) and value > 0.0):
+        raise click.BadParameter(f"{value!r}: must be a finite number > 0")
+    return value
+
+
+#: the option of each amplitude of drydem.masonry.imperfections.Imperfections
+IMPERFECTION_OPTIONS = {"height_sd_mm": "--height-sd", "flatness_sd_mm": "--flatness-sd", "misalignment_sd_mm": "--misalignment-sd"}
+
+
+def imperfection_options(command):
+    """Add the imperfect-brick options (drydem.masonry.imperfections) to ``command``: --seed,
+    --height-sd, --height-distribution, --flatness-sd and --misalignment-sd, passed as ``seed``,
+    ``height_sd``, ``height_distribution``, ``flatness_sd`` and ``misalignment_sd``; the amplitudes
+    are None where not given (:func:`imperfections_from_options` reads them)."""
+    options = [
+        click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the imperfections' random draws."),
+        click.option("--height-sd", type=float, metavar="MM", callback=_amplitude_mm,
+                     help="Imperfect bricks: standard deviation of each brick's height, mm."),
+        click.option("--height-distribution", type=click.Choice(["normal", "uniform"]), default="normal", show_default=True,
+                     help="Distribution of the heights (uniform: the same standard deviation)."),
+        click.option("--flatness-sd", type=float, metavar="MM", callback=_amplitude_mm,
+                     help="Imperfect bricks: each bed face tilted along the wall, its edges this standard deviation off its mid-line, mm."),
+        click.option("--misalignment-sd", type=float, metavar="MM", callback=_amplitude_mm,
+                     help="Imperfect bricks: standard deviation of each brick's placement along the wall, mm."),
+    ]
+    for option in reversed(options):
+        command = option(command)
+    return command
+
+
+def imperfections_from_options(height_sd: float | None, height_distribution: str, flatness_sd: float | None,
+                               misalignment_sd: float | None) -> Imperfections | None:
+    """The imperfections the options of :func:`imperfection_options` ask for (an amplitude not
+    given is zero); None where no amplitude is given: the perfect wall."""
+    amplitudes = {"height_sd_mm": height_sd, "flatness_sd_mm": flatness_sd, "misalignment_sd_mm": misalignment_sd}
+    if all(value is None for value in amplitudes.values()):
+        return None
+    try:
+        return Imperfections(height_distribution=height_distribution,
+                             **{name: 0.0 if value is None else value for name, value in amplitudes.items()})
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None

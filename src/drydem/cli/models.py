@@ -1,0 +1,190 @@
+"""Commands on a model itself: ``check``, ``show``, ``export`` and ``designs``."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import click
+import numpy as np
+
+from drydem.masonry import designs
+from drydem.errors import DrydemError
+from drydem.io.target import Target
+from drydem.model.assembly import Model
+from drydem.masonry.imperfections import Imperfections
+from drydem.engine.simulation import Simulation
+from drydem.cli.common import (
+    _factor, IMPERFECTION_OPTIONS, imperfection_options, imperfections_from_options, main, resolve_target, unit_option,
+)
+
+
+@main.command()
+@click.argument("target")
+@click.option("--settle", is_flag=True, help="Also cycle to equilibrium under vertical gravity and report the settlement.")
+@click.option("--strict", is_flag=True, help="Fail if a wall breaks the competition brief.")
+@unit_option
+def check(target: str, settle: bool, strict: bool, unit: str) -> None:
+    """Validate TARGET (a built-in wall, a wall or model file, or a .wrl/.obj/.stl) and print
+    its blocks, contacts and timestep."""
+    from drydem.masonry.brief import brief_violations
+    from drydem.analysis.support import unsupported
+
+    found = resolve_target(target, unit)
+    model = found.model
+    try:
+        sim = Simulation(model)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    c = sim.contacts
+    movable = model.block_movable
+    click.echo(f"model           {found.path}")
+    if found.wall is not None:
+        violations = brief_violations(found.wall)
+        click.echo(f"wall            {found.wall.name} {found.wall.title}: {found.wall.layout.void_ratio:.1%} voids, "
+                   + ("meets the competition brief" if not violations else "breaks the brief: " + "; ".join(violations)))
+        _fail_if_strict(strict, violations, found)
+    click.echo(f"blocks          {model.n_blocks} ({int(movable.sum())} movable, {int((~movable).sum())} fixed)")
+    click.echo(f"mass            {model.total_mass:.6g} kg (movable blocks)")
+    density = model.contact_density
+    click.echo(f"contacts        {len(c.pairs)} face contacts, {c.count} sub-contacts ({density.along} points per length, {density.across} across y)")
+    click.echo(f"contact area    {c.area.sum():.6g} m2, tolerance {model.contact_tolerance:.3g} m")
+    click.echo(f"joint           {model.joint.stiffness_text}, friction {model.joint.friction:g}")
+    mass_note = " (mass scaled)" if model.solver.mass_scaling else ""
+    click.echo(f"timestep        {sim.timestep:.4g} s{mass_note}")
+    floating = [model.block_name[b] for b in unsupported(model, c)]
+    if floating:
+        click.echo(f"unsupported     {len(floating)} movable blocks touch nothing and will fall under gravity: "
+                   + ", ".join(repr(name) for name in floating[:10]) + (", ..." if len(floating) > 10 else ""), err=True)
+    if settle:
+        _settle(sim)
+
+
+def _fail_if_strict(strict: bool, violations: list[str], found: Target) -> None:
+    if strict and violations:
+        raise click.ClickException(f"{found.path}: breaks the competition brief ({len(violations)} violations)")
+
+
+def _settle(sim: Simulation) -> None:
+    from tqdm import tqdm
+
+    model = sim.model
+    start = time.perf_counter()
+    with tqdm(desc="settling under gravity", unit=" cycles", leave=False) as bar:
+
+        def progress(cycles, stats):
+            bar.update(cycles - bar.n)
+            bar.set_postfix(ratio=f"{stats.ratio:.2e}", speed=f"{stats.max_speed:.2e} m/s")
+
+        result = sim.cycle_to_equilibrium(progress=progress)
+    elapsed = time.perf_counter() - start
+    drop = model.block_centroid[:, 2] - sim.state.position[:, 2]
+    status = "converged" if result.converged else "NOT converged"
+    click.echo(f"equilibrium     {status} after {result.cycles} cycles ({result.criterion} {result.ratio:.2e}), {elapsed:.2f} s")
+    top = int(np.argmax(model.block_centroid[:, 2]))
+    click.echo(f"settlement      {drop.max() * 1e3:.4g} mm max, top block {model.block_name[top]!r} {drop[top] * 1e3:.4g} mm")
+    if not result.converged:
+        raise SystemExit(1)
+
+@main.command(name="designs")
+def list_designs() -> None:
+    """List the built-in walls: WD1-WD7 (reconstructions of the seed paper's competition walls)
+    and the examples, with their void ratio, block count and the competition-brief check."""
+    from drydem.masonry.brief import brief_violations
+
+    click.echo(f"{'name':<16} {'title':<28} {'voids':>6} {'blocks':>6}  brief")
+    for name in designs.names():
+        wall = resolve_target(name).wall
+        violations = brief_violations(wall)
+        verdict = "ok" if not violations else "breaks it: " + "; ".join(violations)
+        click.echo(f"{name:<16} {wall.title[:28]:<28} {wall.layout.void_ratio:>6.1%} {len(wall.layout.solid_units):>6}  {verdict}")
+    click.echo("WD1-WD7 are reconstructions that obey the brief, not the original drawings (drydem show NAME draws one).")
+
+def _imperfect_drawing(found: Target, imperfections: Imperfections, seed: int, factor: float) -> tuple[Model, str]:
+    """The wall of ``found`` with imperfect bricks, deviations ``factor`` times larger
+    (drydem.masonry.imperfections.exaggerated_model), and a line saying so for the title."""
+    from drydem.masonry.imperfections import exaggerated_model
+
+    if found.wall is None:
+        raise click.ClickException(f"{found.path}: imperfect bricks (--height-sd, --flatness-sd, --misalignment-sd) need a brick "
+                                   "layout: a wall file or a built-in wall, not a model file or a mesh")
+    try:
+        imperfections.check_for(found.wall.brick, found.wall.source, name=IMPERFECTION_OPTIONS.__getitem__)
+        model, used = exaggerated_model(found.wall, imperfections, seed, factor)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    capped = "" if used == factor else f" (not x{factor:g}: bricks keep half their height)"
+    return model, f"imperfect bricks, seed {seed}, deviations x{used:.3g}{capped}\n{imperfections}"
+
+
+@main.command()
+@click.argument("target")
+@click.option("--out", "-o", type=click.Path(dir_okay=False, path_type=Path), help="PNG file (default: TARGET.png here).")
+@click.option("--strict", is_flag=True, help="Fail if a wall breaks the competition brief.")
+@unit_option
+@imperfection_options
+@click.option("--exaggerate", type=float, default=1.0, show_default=True, metavar="FACTOR", callback=_factor,
+              help="Draw the imperfections' deviations FACTOR times larger (the same draws), so that a 0.1 mm scatter shows.")
+def show(target: str, out: Path | None, strict: bool, unit: str, seed: int, height_sd: float | None, height_distribution: str,
+         flatness_sd: float | None, misalignment_sd: float | None, exaggerate: float) -> None:
+    """Draw TARGET as built (bricks, half bricks, headers, lintel, voids, the monitored block) to
+    a PNG (or another format matplotlib writes, by the suffix), written whole or not at all.
+    With --height-sd, --flatness-sd or --misalignment-sd, draw a wall's bricks imperfect, drawn
+    from --seed (drydem.masonry.imperfections), their deviations --exaggerate times larger."""
+    from drydem.analysis.tilt import monitored_block
+    from drydem.masonry.brief import brief_violations
+    from drydem.files import replaced_atomically, writable
+    from drydem.report.plots import figure_path, layout_figure
+
+    imperfections = imperfections_from_options(height_sd, height_distribution, flatness_sd, misalignment_sd)
+    found = resolve_target(target, unit)
+    model, wall = found.model, found.wall
+    title = found.name if wall is None else f"{wall.name} {wall.title}: {wall.layout.void_ratio:.1%} voids"
+    voids = wall.layout.void_outlines(wall.brick) if wall is not None else []
+    if imperfections is not None:
+        model, note = _imperfect_drawing(found, imperfections, seed, exaggerate)
+        title, voids = f"{title}\n{note}", []  # the voids' outlines are the perfect wall's
+    monitored = model.block_name[monitored_block(model)]
+    out = out or Path(f"{found.name}.png")
+    kinds = wall.layout.kinds() if wall is not None else None
+    try:
+        with replaced_atomically(writable(figure_path(out))) as partial:
+            layout_figure(model, partial, kinds=kinds, voids=voids, monitored=monitored, title=title)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"{found.name}: {model.n_blocks} blocks, monitored block {monitored} -> {out}")
+    if wall is not None:
+        violations = brief_violations(wall)
+        for violation in violations:
+            click.echo(f"brief: {violation}", err=True)
+        _fail_if_strict(strict, violations, found)
+
+
+@main.command()
+@click.argument("target")
+@click.argument("output", type=click.Path(dir_okay=False, path_type=Path))
+@unit_option
+def export(target: str, output: Path, unit: str) -> None:
+    """Write TARGET's blocks to OUTPUT: a model file (.toml), ParaView (.vtu) or a mesh (.obj,
+    .stl: block names, shapes and fixed blocks; not the material, joint, contacts, supports or
+    solver, which only a .toml keeps). OUTPUT is written whole or not at all."""
+    from drydem.io.mesh import write_mesh
+    from drydem.io.model_file import save_model
+    from drydem.files import replaced_atomically, writable
+    from drydem.io.vtk import write_vtu
+
+    writers = {".toml": save_model, ".vtu": write_vtu, ".obj": write_mesh, ".stl": write_mesh}
+    writer = writers.get(output.suffix.lower())
+    if writer is None:
+        raise click.ClickException(f"{output}: unknown output type {output.suffix!r}; drydem writes {', '.join(writers)}")
+    try:
+        writable(output)
+        found = resolve_target(target, unit)
+        with replaced_atomically(output) as partial:
+            writer(found.model, partial)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"{found.name}: {found.model.n_blocks} blocks -> {output}")
+    if writer is write_mesh:
+        click.echo(f"note: {output} keeps the block names, shapes and fixed blocks, not the material, joint, contacts, "
+                   "supports or solver settings (export to .toml for those)", err=True)

@@ -1,0 +1,141 @@
+"""Parametric studies: ``sweep``, ``report`` and ``calibrate``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from drydem.errors import DrydemError
+from drydem.cli.common import signals_interrupt, joint_law_options, main, scheduler_option, workers_option
+
+
+@main.command()
+@click.argument("study_file")
+@click.option("--out", type=click.Path(path_type=Path), help="Results folder (default: results/STUDY-NAME).")
+@workers_option
+@scheduler_option
+@click.option("--retry-failed", is_flag=True, help="Run again the runs recorded as failed.")
+def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str | None, retry_failed: bool) -> None:
+    """Run a parametric study (STUDY_FILE, TOML, or a shipped study: savalle2022): every run a
+    tilting, limit or shaking-table analysis, each recorded in OUT/runs as it finishes; run again to go on
+    where it stopped (corrupt records are run again). The whole study is checked before the
+    first run; two sweeps on one OUT share its runs."""
+    from tqdm import tqdm
+
+    from drydem.masonry import studies
+    from drydem.files import writable_folder
+    from drydem.parametric.study import load_study
+    from drydem.parametric.sweep import pending
+    from drydem.parametric.sweep import sweep as run_sweep
+    from drydem.parametric.workers import open_workers
+
+    path = Path(study_file) if Path(study_file).is_file() else studies.find(study_file)
+    if path is None:
+        raise click.ClickException(f"{study_file}: no such study file, and not a shipped study (savalle2022)")
+    try:
+        study = load_study(path)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    try:
+        out = writable_folder(out or Path("results") / study.name)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    plan = pending(study.runs, out, retry_failed=retry_failed)
+    click.echo(f"{study.name}: {len(study.runs)} runs, {plan.recorded} already recorded in {out}")
+    for corrupt in plan.corrupt:
+        click.echo(f"corrupt record, run again: {corrupt}", err=True)
+    failures = []
+    try:  # a DrydemError: a scheduler that does not answer, or runs the executor lost
+        with open_workers(workers, scheduler) as pool, signals_interrupt() as received, \
+                tqdm(total=len(plan.todo), desc="runs", unit=" run") as bar:
+            bar.write(f"running {len(plan.todo)} on {pool.where}")
+
+            def done(record):
+                bar.update(1)
+                if record["status"] == "failed":
+                    failures.append(f"{record['id']}: {record['error']}")
+                    bar.set_postfix(failed=len(failures))
+
+            try:
+                outcome = run_sweep(study.runs, out, pool.executor, retry_failed=retry_failed, in_flight=pool.slots, on_done=done,
+                                    on_other=lambda spec: bar.update(1))
+            except KeyboardInterrupt:
+                click.echo(f"\ninterrupted ({received.name}); the finished runs are recorded in {out}; the same command goes on", err=True)
+                raise SystemExit(128 + received.number) from None
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    for failure in failures:
+        click.echo(f"failed: {failure}", err=True)
+    click.echo(f"{outcome.finished} runs done ({outcome.failed} failed), {outcome.skipped} skipped; records in {out / 'runs'}")
+    if outcome.elsewhere:
+        click.echo(f"{outcome.elsewhere} runs left to another sweep working on {out} (it holds their claims, runs/*.lock); "
+                   "run this command again once it has finished to check that every run is recorded")
+
+
+@main.command()
+@click.argument("results_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), help="Report folder (default: RESULTS_DIR/report).")
+def report(results_dir: Path, out: Path | None) -> None:
+    """Write the report of a study (Markdown, HTML, PNG figures in the style of the paper);
+    corrupt records are left out and named."""
+    from drydem.report.study import build_report
+
+    try:
+        written = build_report(results_dir, out)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    except OSError as exc:
+        raise click.ClickException(f"{exc.filename}: cannot write the report ({exc.strerror})") from None
+    for corrupt in written.corrupt:
+        click.echo(f"corrupt record left out: {corrupt}", err=True)
+    click.echo(f"report          {written.markdown} and {written.html}")
+
+
+@main.command()
+@click.argument("results_dir", type=click.Path(path_type=Path))
+@click.option("--designs", default="WD1,WD2,WD3,WD4,WD5,WD6,WD7", show_default=True, help="Walls to fit, comma-separated.")
+@click.option("--kn-min", type=float, default=1e7, show_default=True, help="Smallest kn searched, Pa/m.")
+@click.option("--kn-max", type=float, default=1e9, show_default=True, help="Largest kn searched, Pa/m.")
+@click.option("--ks-ratio", type=float, default=1.0, show_default=True, help="ks = ratio x kn.")
+@click.option("--increment", type=float, default=0.1, show_default=True, help="Tilt step of the (adaptive) runs, deg.")
+@joint_law_options
+@workers_option
+@scheduler_option
+def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, joint_law, workers, scheduler) -> None:
+    """Find the kn that best reproduces the experimental collapse angles (paper Table 1) of
+    DESIGNS, reusing and adding runs in RESULTS_DIR (the paper's post-diction, Section 4.4);
+    every option is checked before anything runs. With a stress-dependent joint law
+    (--joint-model and its keys), the law's shape is kept and its kn (ks = ratio x kn) fitted."""
+    from drydem.parametric.calibrate import StiffnessSearch, calibrate_stiffness
+    from drydem.files import writable_folder
+    from drydem.parametric.workers import open_workers
+
+    search = StiffnessSearch(tuple(d.strip() for d in designs.split(",") if d.strip()), kn_min, kn_max, ks_ratio, increment, joint_law)
+    problems = search.problems(name=lambda field: "--" + field.replace("_", "-"))
+    if problems:
+        raise click.ClickException("\n".join(problems))
+    try:
+        writable_folder(results_dir)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    law = f" of the joint law {joint_law}" if joint_law else ""
+    click.echo(f"calibrating kn{law} over [{kn_min:.3g}, {kn_max:.3g}] Pa/m on {', '.join(search.designs)} (runs kept in {results_dir})")
+
+    def evaluated(kn, error, outcome):
+        for corrupt in outcome.corrupt:
+            click.echo(f"corrupt record, run again: {corrupt}", err=True)
+        click.echo(f"  kn {kn:10.4g} Pa/m   mean absolute error {error:.2%}")
+
+    try:  # a DrydemError: a scheduler that does not answer, or a kn's runs without an angle
+        with open_workers(workers, scheduler) as pool, signals_interrupt() as received:
+            click.echo(f"running on {pool.where}")
+            try:
+                result = calibrate_stiffness(search, results_dir, pool.executor, in_flight=pool.slots, on_evaluation=evaluated)
+            except KeyboardInterrupt:
+                click.echo(f"\ninterrupted ({received.name}); the finished runs are recorded in {results_dir}; the same command reuses them",
+                           err=True)
+                raise SystemExit(128 + received.number) from None
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"best kn         {result.best_kn:.4g} Pa/m (ks = {ks_ratio:g} kn): mean absolute error {result.best_error:.2%}")

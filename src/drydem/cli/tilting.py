@@ -1,0 +1,225 @@
+"""``drydem tilt`` (its options, shared with ``montecarlo``) and ``drydem animate``."""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass, fields
+from pathlib import Path
+
+import click
+
+from drydem.errors import DrydemError
+from drydem.io.target import Target
+from drydem.model.assembly import Model
+from drydem.model.parameters import CRITERIA
+from drydem.cli.common import CHECKPOINT, results_folder, signals_interrupt, resolve_target, joint_law_options, main, unit_option
+
+
+@dataclass(frozen=True)
+class TiltOptions:
+    """The model and protocol options of ``drydem tilt``, bundled by :func:`tilt_options`
+    (``drydem montecarlo`` takes them too: each of its samples is a tilting analysis)."""
+
+    kn: float | None
+    ks: float | None
+    friction: float | None
+    points: int | None
+    density: float | None
+    criterion: str | None
+    joint_law: dict | None
+    increment: float
+    adaptive: bool
+    predictor: bool
+    stop_displacement: float
+    loading: str
+    monitor: str | None
+    max_angle: float
+
+    def model_overrides(self) -> dict:
+        """The keywords of :meth:`Model.overridden` these options give (None: the model's)."""
+        return dict(kn=self.kn, ks=self.ks, friction=self.friction, points=self.points, density=self.density, criterion=self.criterion,
+                    joint_law=self.joint_law)
+
+    def settings(self):
+        """The TiltSettings these options give (DrydemError for a value out of its range)."""
+        from drydem.analysis.tilt import TiltSettings
+
+        return TiltSettings(increment_deg=self.increment, adaptive=self.adaptive, predictor=self.predictor,
+                            stop_displacement_m=self.stop_displacement, loading=self.loading, monitor=self.monitor,
+                            max_angle_deg=self.max_angle)
+
+
+def tilt_options(*, adaptive: bool):
+    """The options of :class:`TiltOptions`, handed to the command as one ``tilt`` argument;
+    ``adaptive``: the protocol by default (--adaptive or --fixed)."""
+    protocol = "adaptive" if adaptive else "fixed"
+    options = [
+        click.option("--kn", type=float, help="Normal joint stiffness, Pa/m (overrides the model file)."),
+        click.option("--ks", type=float, help="Shear joint stiffness, Pa/m."),
+        click.option("--friction", type=float, help="Coulomb friction coefficient."),
+        click.option("--points", type=int, help="Sub-contact points per length."),
+        click.option("--density", type=float, help="Density of every block, kg/m3."),
+        click.option("--increment", type=float, default=0.1, show_default=True, help="Tilt step, deg."),
+        click.option("--adaptive/--fixed", default=adaptive,
+                     help=f"Coarse steps, then bisection down to the increment; or every step one increment (default: {protocol})."),
+        click.option("--predictor/--no-predictor", default=True, show_default=True,
+                     help="Start each step from the last two equilibria extrapolated (fewer cycles)."),
+        click.option("--stop-displacement", type=float, default=0.10, show_default=True,
+                     help="Monitored horizontal displacement that ends the run, m."),
+        click.option("--criterion", type=click.Choice(CRITERIA), help="Equilibrium criterion (default: the model file's)."),
+        click.option("--loading", type=click.Choice(["tilt", "multiplier"]), default="tilt", show_default=True,
+                     help="Tilt the gravity or add lambda g horizontally."),
+        click.option("--monitor", help="Block whose centroid is monitored (default: the top block nearest the middle)."),
+        click.option("--max-angle", type=float, default=80.0, show_default=True, help="Largest tilt tried, deg."),
+    ]
+    names = [f.name for f in fields(TiltOptions)]
+
+    def decorate(command):
+        @functools.wraps(command)
+        def bundled(**values):
+            return command(tilt=TiltOptions(**{name: values.pop(name) for name in names}), **values)
+
+        bundled = joint_law_options(bundled)
+        for option in reversed(options):
+            bundled = option(bundled)
+        return bundled
+
+    return decorate
+
+
+@main.command()
+@click.argument("target")
+@tilt_options(adaptive=False)
+@click.option("--out", type=click.Path(path_type=Path), help="Results folder (default: results/TARGET-TIME).")
+@click.option("--resume", is_flag=True, help="Go on from the checkpoint in --out (same TARGET and options).")
+@click.option("--overwrite", is_flag=True, help="Replace the results of an earlier run in --out (they are kept otherwise).")
+@click.option("--vtk", is_flag=True, help="Write a VTK time series for ParaView (OUT/vtk: blocks and sub-contacts).")
+@click.option("--save-every", type=click.IntRange(min=1), default=1, show_default=True,
+              help="With --vtk: keep every N-th equilibrium state (the states past collapse are all kept).")
+@click.option("--video", is_flag=True, help="Also render OUT/collapse.mp4 (GIF if ffmpeg is missing); implies --vtk.")
+@unit_option
+def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, video, unit) -> None:
+    """Tilting-table analysis of TARGET (a built-in wall, a wall or model file, or a
+    .wrl/.obj/.stl): collapse angle, pushover curve, Eurocode 8 drift-limit angles, plots.
+    Exits 1 when equilibrium could not be reached within max_cycles (no verdict), 130 or 143
+    when interrupted (the last equilibrium is kept for --resume)."""
+    from tqdm import tqdm
+
+    from drydem.analysis.tilt import NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY, monitor_index, tilt_analysis
+    from drydem.engine.checkpoint import load_checkpoint
+    from drydem.io.results import PushoverWriter
+    from drydem.io.vtk import VtkSeries
+
+    found = resolve_target(target, unit)
+    try:
+        model = found.model.overridden(**tilt.model_overrides())
+        settings = tilt.settings()
+        monitor_index(model, tilt.monitor)
+        if resume and overwrite:
+            raise DrydemError("--resume goes on from the run in --out and --overwrite deletes it: give one of them")
+        if resume and (out is None or not (out / CHECKPOINT).is_file()):
+            raise DrydemError(f"--resume needs --out DIR holding a {CHECKPOINT} from an earlier run" + (f" ({out} has none)" if out else ""))
+        folder = results_folder(out, found.name, resume=resume, overwrite=overwrite)
+        if resume:
+            _, saved = load_checkpoint(folder / CHECKPOINT)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"{found.name} ({found.path}): {model.n_blocks} blocks, {model.joint.stiffness_text}, "
+               f"mu {model.joint.friction:g}, {model.contacts.points_per_length} points per length -> {folder}")
+    if resume:
+        click.echo(f"resuming from {folder / CHECKPOINT}: last equilibrium at {float(saved['theta_deg']):g} deg "
+                   f"({len(saved['records'])} equilibrium states)")
+    if model.solver.damping == 0:
+        click.echo("warning: [solver] damping = 0: dynamic relaxation has nothing to dissipate energy with and may never "
+                   "reach equilibrium", err=True)
+    go_on = "the same command plus --resume" if out is not None else f"the same command plus --out {folder} --resume"
+    with signals_interrupt() as received, tqdm(desc="tilting", unit=" cycles", unit_scale=True, leave=False) as bar:
+
+        def progress(theta, cycles, ux):
+            bar.update(cycles - bar.n)
+            bar.set_postfix_str(f"{theta:.2f} deg, ux {ux * 1e3:.2f} mm")
+
+        try:
+            series = VtkSeries(folder / "vtk", model, every=save_every, resume=resume) if vtk or video else None
+            result = tilt_analysis(
+                model, settings, on_record=PushoverWriter(folder), on_progress=progress, on_frame=series,
+                checkpoint=folder / CHECKPOINT, resume=resume,
+            )
+        except DrydemError as exc:
+            raise click.ClickException(str(exc)) from None
+        except OSError as exc:
+            raise click.ClickException(f"{exc.filename or folder}: cannot write results ({exc.strerror or exc})") from None
+        except KeyboardInterrupt:
+            saved = f"the last equilibrium is saved in {folder / CHECKPOINT}" if (folder / CHECKPOINT).is_file() else "no equilibrium was reached yet"
+            click.echo(f"\ninterrupted ({received.name}); {saved}. Go on with {go_on}", err=True)
+            raise SystemExit(128 + received.number) from None
+    _tilt_outputs(found, model, result, folder, series)
+    if video:
+        _render(series.folder, folder / "collapse.mp4", fps=8.0)
+    if result.ended_by in (NO_EQUILIBRIUM_UNDER_GRAVITY, NO_EQUILIBRIUM):
+        raise SystemExit(1)
+
+def _tilt_outputs(found: Target, model: Model, result, folder: Path, series) -> None:
+    """Write summary.json and the figures of a tilting analysis and print what it found."""
+    from drydem.io.results import tilt_summary, write_summary
+    from drydem.report.plots import mechanism_figure, pushover_figure
+
+    write_summary(folder, tilt_summary(result, model))
+    pushover_figure(result, folder / "pushover.png", title=found.name)
+    last = result.last_equilibrium_deg
+    lost_by_then = frozenset(name for name, theta in result.lost_blocks if last is not None and theta <= last)
+    states = [
+        ("last equilibrium" if last is not None else "under gravity", result.collapse_state or result.final_state, lost_by_then),
+        (f"past collapse ({result.ended_by})", result.final_state, frozenset(name for name, _ in result.lost_blocks)),
+    ]
+    mechanism_figure(model, states, folder / "mechanism.png", monitored=result.monitored_block)
+    for line in _tilt_verdict(result, model):
+        click.echo(line)
+    dls = result.drift_limit_angles_deg
+    click.echo("drift limits    " + ", ".join(f"{float(k):.2%}: " + ("not reached" if v is None else f"{v:.2f} deg") for k, v in dls.items()))
+    if result.lost_blocks and result.stable_under_gravity:
+        first = min(theta for _, theta in result.lost_blocks)
+        click.echo(f"lost blocks     {len(result.lost_blocks)} fell out of the model, the first at {first:.2f} deg (listed in summary.json)")
+    click.echo(f"cycles          {result.cycles} in {result.runtime_s:.1f} s; results in {folder}")
+    if series is not None:
+        click.echo(f"vtk             {len(series.rows)} states in {series.folder} (open blocks.pvd and contacts.pvd in ParaView)")
+
+
+def _tilt_verdict(result, model: Model) -> list[str]:
+    """What the analysis found, in words that claim no more than it showed."""
+    from drydem.analysis.tilt import MAXIMUM_ANGLE, NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY
+
+    fell = ", ".join(repr(name) for name, _ in result.lost_blocks[:5]) + (", ..." if len(result.lost_blocks) > 5 else "")
+    if result.stable_under_gravity is False:
+        what = f"{fell} fell" if fell else (f"the monitored block {result.monitored_block!r} moved "
+                                           f"{result.settings.stop_displacement_m:g} m (the stop displacement)")
+        return [f"the model cannot stand under its own weight: {what} (state in mechanism.png)"]
+    if result.ended_by == NO_EQUILIBRIUM_UNDER_GRAVITY:
+        return [f"no equilibrium under gravity within [solver] max_cycles = {model.solver.max_cycles}: no verdict on whether it "
+                "stands; raise max_cycles (or check damping) and run again"]
+    if result.ended_by == MAXIMUM_ANGLE:
+        return [f"no collapse up to {result.settings.max_angle_deg} deg"]
+    if result.ended_by == NO_EQUILIBRIUM:
+        return [f"last equilibrium {result.last_equilibrium_deg:.2f} deg; the next step reached no equilibrium within [solver] "
+                f"max_cycles = {model.solver.max_cycles} and did not collapse either: no collapse angle "
+                "(raise max_cycles to decide)"]
+    return [f"collapse angle  {result.collapse_angle_deg:.2f} deg (load multiplier {result.load_multiplier:.4f}; ended by {result.ended_by})"]
+
+@main.command()
+@click.argument("result_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.option("--out", "-o", type=click.Path(dir_okay=False, path_type=Path), help="Video file, .mp4 or .gif (default: RESULT_DIR/collapse.mp4).")
+@click.option("--fps", type=click.FloatRange(min=0.1), default=8.0, show_default=True, help="Frames per second.")
+def animate(result_dir: Path, out: Path | None, fps: float) -> None:
+    """Render the VTK series of a `drydem tilt --vtk` run (RESULT_DIR or RESULT_DIR/vtk) to a video."""
+    folder = result_dir / "vtk" if (result_dir / "vtk").is_dir() else result_dir
+    _render(folder, out or result_dir / "collapse.mp4", fps=fps)
+
+
+def _render(folder: Path, path: Path, *, fps: float) -> None:
+    from drydem.report.animation import render_video
+
+    try:
+        written = render_video(folder, path, fps=fps)
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"video           {written}")
