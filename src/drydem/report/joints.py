@@ -83,22 +83,12 @@ def calibrated(evaluations: Iterable[LawEvaluation], experiment: Mapping[str, fl
 
 
 def law_words(law: str, kn: float, ks: float) -> str:
-    """The joint law in words: model, kn and ks, exponent (power) or slope (affine), stress_ref
-    and the clamps (their defaults where not given: :meth:`JointMaterial.law_value`)."""
+    """The joint law in words (:attr:`JointMaterial.stiffness_text`: kn and ks, the law and its
+    clamps), or as recorded for a law this drydem does not read."""
     try:
-        joint = JointMaterial(kn=kn, ks=ks, **json.loads(law))
-    except (ValueError, TypeError, ModelError):  # not a law this drydem reads: as recorded
+        return JointMaterial(kn=kn, ks=ks, **json.loads(law)).stiffness_text
+    except (ValueError, TypeError, ModelError):
         return f"joint law {law} at kn = {kn:.3g}, ks = {ks:.3g} Pa/m"
-    value = joint.law_value
-    clamps = f"each clamped to [{value('kn_min'):.3g}, {value('kn_max'):.3g}] Pa/m"
-    if joint.model == "power":
-        ref = f"(sigma / {joint.stress_ref:g} Pa)"
-        return (f"power law kn = {kn:.3g} Pa/m x {ref}^{joint.kn_exponent:g}, ks = {ks:.3g} Pa/m x {ref}^{value('ks_exponent'):g} "
-                f"(sigma the joint's normal stress, stress_ref = {joint.stress_ref:g} Pa), {clamps}")
-    if joint.model == "affine":
-        return (f"affine law kn = {kn:.3g} Pa/m + {joint.kn_per_stress:g} /m x sigma, ks = {ks:.3g} Pa/m + "
-                f"{value('ks_per_stress'):g} /m x sigma (sigma the joint's normal stress), {clamps}")
-    return f"{joint.model} joints, kn = {kn:.3g}, ks = {ks:.3g} Pa/m"
 
 
 def _angle_cell(angles: Mapping[str, float | None], design: str, experiment: float) -> str:
