@@ -82,14 +82,13 @@ class JointBound(NamedTuple):
 
 
 def stiffness_bound(joint: JointConstants | StressJoint, sub: SubContacts, weight_n: float,
-                    closure: np.ndarray | None = None, closing_speed: np.ndarray | None = None) -> JointBound:
+                    closure_ahead: np.ndarray | None = None, closing_speed: np.ndarray | None = None) -> JointBound:
     """The joint's bound on the timestep (:class:`JointBound`); a constant joint: max(kn, ks)
     always.
 
-    Stress-dependent laws: from the stress sigma at the closure each sub-contact may reach
-    before the timestep is next looked at, u + CLOSING_CYCLES v dt (``closure`` u (ns,) m and
-    ``closing_speed`` v (ns,) m/s, :func:`drydem.engine.contacts.closing_motion`, dt the
-    ``previous_timestep``; None: the stress each carries), the stress limit
+    Stress-dependent laws: from the stress sigma at ``closure_ahead`` (ns,) m, the closure each
+    sub-contact may reach before the timestep is next looked at (u + CLOSING_CYCLES v dt,
+    :func:`timestep_and_blocks`; None: the stress each carries), the stress limit
     sigma_lim = STRESS_HEADROOM sigma + STRESS_FLOOR_WEIGHTS ``weight_n`` / sum A (N over m2: the free
     blocks' weight spread over every sub-contact), the stiffness max(kn(sigma_lim), ks(sigma_lim)),
     both laws growing with sigma, and the closure limit u(sigma_lim). The cycles stop
@@ -99,11 +98,12 @@ def stiffness_bound(joint: JointConstants | StressJoint, sub: SubContacts, weigh
     Stability is not enough where a joint closes fast (an impact): a step that closes it by more
     than its stiffening length l = sigma / kn(sigma) (the closure over which its stress grows
     e-fold, for the linear power law) jumps across the law and creates energy. So the timestep
-    is also at most RESOLUTION l / v over the closing sub-contacts, at sigma_lim.
+    is also at most RESOLUTION l / v over the sub-contacts closing at ``closing_speed`` v (ns,)
+    m/s (:func:`drydem.engine.contacts.closing_motion`), at sigma_lim.
     """
     if isinstance(joint, JointConstants):
         return JointBound(np.full(sub.count, max(joint.kn, joint.ks)), np.zeros(0), np.inf)
-    stress = sub.normal_force / sub.area if closure is None else _law_stresses(closure, joint)
+    stress = sub.normal_force / sub.area if closure_ahead is None else _law_stresses(closure_ahead, joint)
     floor = STRESS_FLOOR_WEIGHTS * weight_n / max(float(sub.area.sum()), 1e-300)
     limit = STRESS_HEADROOM * np.maximum(stress, 0.0) + floor
     normal, stiffness = _law_stiffnesses(limit, joint)
