@@ -257,7 +257,8 @@ def timestep_and_blocks(
         bound = stiffness_bound(kernel_joint(model.joint), contacts, weight)
     else:
         closure, speed, previous = closing
-        bound = stiffness_bound(kernel_joint(model.joint), contacts, weight, closure + CLOSING_CYCLES * speed * previous, speed)
+        ahead = closure + CLOSING_CYCLES * np.maximum(speed, 0.0) * previous  # an opening joint: where it is
+        bound = stiffness_bound(kernel_joint(model.joint), contacts, weight, ahead, speed)
     stiffness = bound.stiffness
     k_t, k_r = contact_stiffness(contacts, stiffness, model.n_blocks)
     critical = critical_timestep(model.block_mass, model.block_inertia_whitening, movable, k_t, k_r)
