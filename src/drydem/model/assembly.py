@@ -8,6 +8,7 @@ a run lives in :class:`drydem.model.state.State` and the engine's contacts (:mod
 from __future__ import annotations
 
 import dataclasses
+from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -199,8 +200,7 @@ def build_model(
     if not blocks:
         raise ModelError(f"{source}: the model has no blocks")
     DENSITY.check(density, f"{source}: [material] density")
-    names = [b.name for b in blocks]
-    duplicates = sorted({n for n in names if names.count(n) > 1})
+    duplicates = sorted(name for name, count in Counter(b.name for b in blocks).items() if count > 1)
     if duplicates:
         raise ModelError(f"{source}: duplicate block names {duplicates}")
     for b in blocks:
