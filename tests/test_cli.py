@@ -98,24 +98,12 @@ def test_an_interrupted_tilt_keeps_its_checkpoint_and_resumes_from_it(tmp_path, 
     # must not crash on it (it did, while boxing a NamedTuple return value), what was found
     # stays on disk, the message says how to go on (not asking for the --out it was given),
     # and --resume says where it goes on from
-    import signal
-    import subprocess
-    import sys
-    import time
+    from processes import interrupted_drydem
 
     out = tmp_path / "run"
-    command = [sys.executable, "-c", "from drydem.cli import main; main()", "tilt", "perforated_wall", "--out", str(out)]
-    # SIGINT at its default, as in a terminal: a test runner started in the background (`cmd &`)
-    # ignores SIGINT, its children inherit that, and Python then installs no KeyboardInterrupt
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     csv = out / "pushover.csv"
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and not (csv.is_file() and len(csv.read_text().splitlines()) >= 3):
-        time.sleep(0.2)
-    process.send_signal(getattr(signal, signal_name))
-    _, err = process.communicate(timeout=60)
-    assert process.returncode == code, err[-500:]
+    returncode, err = interrupted_drydem(["tilt", "perforated_wall", "--out", str(out)], csv, 3, signal_name)
+    assert returncode == code, err[-500:]
     assert f"interrupted ({signal_name})" in err and "the same command plus --resume" in err and "--out" not in err.split("Go on with")[1]
     assert (out / "checkpoint.npz").is_file() and len(csv.read_text().splitlines()) >= 3
     changed = CliRunner().invoke(main, ["tilt", "perforated_wall", "--out", str(out), "--resume", "--increment", "0.2"])

@@ -26,6 +26,7 @@ from drydem.parametric.records import load_records, read_record, record_path, wr
 from drydem.parametric.study import RunSpec, load_study
 from drydem.parametric.sweep import SweepError, claim, lock_path, pending, release, sweep
 from drydem.cli import main
+from processes import DRYDEM
 from drydem.errors import ModelError
 from test_sweep import STUDY, WALL_FILE, WALLS
 
@@ -41,8 +42,6 @@ kn = [1e7, 1.5e7, 2e7, 3e7, 5e7, 7e7, 1e8, 1.5e8, 2e8, 3e8, 5e8, 1e9]
 protocol = ["fixed"]
 increment_deg = 2.0
 """
-#: the command line in a process of its own (a real process to kill)
-DRYDEM = [sys.executable, "-c", "from drydem.cli import main; main()"]
 
 
 @pytest.fixture

@@ -222,25 +222,15 @@ def test_an_existing_results_folder_is_kept_without_overwrite(files, tmp_path):
 
 
 def test_an_interrupted_shake_keeps_the_rows_written_so_far(files, tmp_path):
-    # a real process and a real Ctrl-C (SIGINT at its default, as in a terminal: see test_cli)
-    import signal
-    import subprocess
-    import sys
-    import time
+    # a real process and a real Ctrl-C
+    from processes import interrupted_drydem
 
     out = tmp_path / "run"
-    command = [sys.executable, "-c", "from drydem.cli import main; main()", "shake", str(files["block"]), "--pulse", "sine",
-               "--amplitude", "0.5", "--frequency", "5", "--duration", "1000", "--output-interval", "0.01", "--damping-ratio", "0.05",
-               "--out", str(out)]
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     path = out / "history.csv"
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and not (path.is_file() and len(path.read_text().splitlines()) >= 4):
-        time.sleep(0.2)
-    process.send_signal(signal.SIGINT)
-    _, err = process.communicate(timeout=60)
-    assert process.returncode == 130, err[-500:]
+    arguments = ["shake", str(files["block"]), "--pulse", "sine", "--amplitude", "0.5", "--frequency", "5", "--duration", "1000",
+                 "--output-interval", "0.01", "--damping-ratio", "0.05", "--out", str(out)]
+    returncode, err = interrupted_drydem(arguments, path, 4)
+    assert returncode == 130, err[-500:]
     assert "interrupted (SIGINT)" in err and "history.csv" in err and "Traceback" not in err
     assert not (out / "summary.json").exists()
     with path.open(newline="") as f:
