@@ -269,29 +269,31 @@ def _is_stress_joint(joint) -> bool:
     return isinstance(joint, StressJoint) or getattr(joint, "instance_class", None) is StressJoint
 
 
-def normal_force(closure, area, joint):
-    """F_n, N, of a sub-contact of area ``area`` (m2) closed by ``closure`` (m): kn A u_n, or
-    sigma(u_n) A for a :class:`StressJoint`. Compiled, the choice is made by ``joint``'s type
-    (the overload below)."""
-    return (_law_normal_force if _is_stress_joint(joint) else _linear_normal_force)(closure, area, joint)
+def _by_joint_type(constant, stress_dependent):
+    """A function of (x, area, joint) that runs ``constant`` for a :class:`JointConstants` and
+    ``stress_dependent`` for a :class:`StressJoint`: chosen by the joint's class from Python, by
+    its numba type when compiled (an overload), so that a constant joint's kernels are compiled
+    without the law, their arithmetic as it always was."""
+    def chosen(joint):
+        return stress_dependent if _is_stress_joint(joint) else constant
+
+    def function(x, area, joint):
+        return chosen(joint)(x, area, joint)
+
+    @overload(function, inline="always")
+    def _compiled(x, area, joint):
+        implementation = chosen(joint)
+        return lambda x, area, joint: implementation(x, area, joint)
+
+    return function
 
 
-def shear_scale(fn, area, joint):
-    """ks A, N/m, of a sub-contact carrying ``fn`` (N): ks(F_n / A) for a :class:`StressJoint`
-    (the tangent at its normal stress); chosen by type when compiled."""
-    return (_law_shear_scale if _is_stress_joint(joint) else _linear_shear_scale)(fn, area, joint)
-
-
-@overload(normal_force, inline="always")
-def _normal_force_by_type(closure, area, joint):
-    chosen = _law_normal_force if _is_stress_joint(joint) else _linear_normal_force
-    return lambda closure, area, joint: chosen(closure, area, joint)
-
-
-@overload(shear_scale, inline="always")
-def _shear_scale_by_type(fn, area, joint):
-    chosen = _law_shear_scale if _is_stress_joint(joint) else _linear_shear_scale
-    return lambda fn, area, joint: chosen(fn, area, joint)
+#: F_n, N, of a sub-contact of area ``area`` (m2) closed by ``closure`` (m): kn A u_n, or
+#: sigma(u_n) A for a :class:`StressJoint` (``normal_force(closure, area, joint)``)
+normal_force = _by_joint_type(_linear_normal_force, _law_normal_force)
+#: ks A, N/m, of a sub-contact carrying ``fn`` (N): ks(F_n / A) for a :class:`StressJoint`, the
+#: tangent at its normal stress (``shear_scale(fn, area, joint)``)
+shear_scale = _by_joint_type(_linear_shear_scale, _law_shear_scale)
 
 
 @numba.njit(cache=True, inline="always")
