@@ -1,18 +1,63 @@
 """The narrow phase, compiled with numba: the sub-contacts of many candidate block pairs at once.
 
-Two convex blocks touch where a face of one (the *reference* face) lies within the contact
-tolerance of the other block. The contact polygon is discretised into sub-contacts as 3DEC's
+Two convex blocks touch where a feature of one lies within the contact tolerance of the other.
+As in 3DEC (Cundall 1988, "Formulation of a three-dimensional distinct element model - Part I",
+Int. J. Rock Mech. Min. Sci. 25(3): the contact type is the dimension of what each block has
+within the tolerance of the common plane), a contact is one of four kinds, :data:`FACE_FACE`,
+:data:`EDGE_FACE`, :data:`VERTEX_FACE` or :data:`EDGE_EDGE` (``Found.kind``, :func:`contact_kinds`).
+
+**Finding the contact plane.** The separating-axis test over both blocks' face normals (the face
+of least penetration is the *reference* face, ties to the first block) and over the cross
+products of an edge of each block that make a face of the two blocks' Minkowski difference
+(a Gauss-map test; edges within :data:`PARALLEL_SINE` of parallel skipped). An edge-pair axis
+wins only when it separates the blocks more than every face normal does (by 1e-9 of the smaller
+block's size, so round-off never turns a face contact into an edge one): two crossed edges, e.g.
+crossed prisms resting apex edge on apex edge, whose face normals would report a wrong, deep
+face contact. Nearly parallel faces (:data:`FACE_COSINE`) penetrating less than the tolerance
+skip the edge axes (a bed joint is a face contact; the edges are looked at where the faces'
+separation is deeper than the tolerance, or the faces are not parallel).
+
+**Face-face.** When the incident block's most opposed face is within :data:`FACE_COSINE` of
+parallel to the reference face (a face contact stays one while its blocks rock a few degrees,
+its open part simply beyond the tolerance), or when the incident vertices within the tolerance of
+the reference plane span an area: the contact polygon is discretised into sub-contacts as 3DEC's
 contact points: a tensor grid whose spacing puts ``points_per_length`` points along the full
 length of the smaller face, ends included, each point carrying its trapezoid share of the area
-(the areas sum to the polygon's area); in-plane models need only 1 point across the width.
+(the areas sum to the polygon's area); in-plane models need only 1 point across the width. The
+algorithm (the tests hold it to a plain-Python oracle written one pair at a time): most opposed
+incident face, Sutherland-Hodgman overlap in the reference plane, sub-contact grid (bilinear on
+quadrilaterals, clipped cells otherwise, trapezoid areas), gaps along the normal, points beyond
+the tolerance or with a sliver's area (:data:`SLIVER_FRACTION`) dropped.
 
-The algorithm (the tests hold it to a plain-Python oracle written one pair at a time): reference face of least penetration (separating axis over face
-normals, ties to the first block), most opposed incident face, Sutherland-Hodgman overlap in
-the reference plane, sub-contact grid (bilinear on quadrilaterals, clipped cells otherwise,
-trapezoid areas), gaps along the normal, points beyond the tolerance or with a sliver's area
-(:data:`SLIVER_FRACTION`) dropped. Geometry comes flattened (:class:`drydem.model.geometry.FlatGeometry`),
-so one call handles every stale pair of a re-detection. Polygon buffers are sized from the
-model's largest face and grow where round-off needs it; no input writes past one.
+**Edge-face and vertex-face.** Otherwise the incident vertices within the tolerance of the
+reference plane are the touching feature: one vertex (vertex-face: one point, where it projects
+inside the reference face) or an edge (edge-face: the segment, clipped to the reference face,
+with points along it at the spacing of a face grid).
+
+**Crossed edges.** One point, at the closest point of the reference block's edge to the other's,
+the normal the edge-pair axis.
+
+**Nominal areas of point-like contacts.** A sub-contact's normal force is kn x area x closure, so
+the area given to a contact without one sets its stiffness. The rule: *a point-like contact
+carries what the same point would carry in a face grid of the smaller block*. The nominal length
+is L = 2 R / sqrt(3), R the smaller block's circumradius about its centroid (a cube's edge for a
+cube, whatever its orientation), and a
+grid of n points per length has spacing h(n) = L / (n - 1) (L for n = 1, where the one point
+stands for the whole length). A vertex-face or crossed-edge contact is a grid's corner point:
+area h(along) h(across) / 4, the quarter cell a face grid's corner point carries (two crossed
+edge rows of half a cell's width). An edge-face contact is a grid's edge row: points at spacing
+h along the segment (``along``, or ``across`` along the model's across axis), each its trapezoid
+share of the segment's length times half a spacing, h / 2, the width the edge row of a face grid
+carries. So a block turning from its edge onto its face keeps, at the turn, the stiffness of the
+same row of points, and a cube on its edge carries its weight on points along the edge with a
+closure W / (kn L h / 2). (Itasca's documentation, searched, gives no published rule for the
+contact area of 3DEC's vertex-face and edge-edge contacts; this one is ours.)
+
+Geometry comes flattened (:class:`drydem.model.geometry.FlatGeometry`), so one call handles every
+stale pair of a re-detection, in parallel over chunks of candidates (each chunk with its own
+scratch buffers; each pair writes only its own row of :class:`Found`, so the result does not
+depend on the thread count). Polygon buffers are sized from the model's largest face and grow
+where round-off needs it; every other buffer write is bounds-checked; no input writes past one.
 """
 
 from __future__ import annotations
@@ -38,10 +83,26 @@ from drydem.model.rotation import mat_t_vec
 #: times the round-off of an area (eps L^2 for a face of size L), so both phases drop the same cells.
 SLIVER_FRACTION = 1e-9
 
+#: contact kinds (``Found.kind``): a face on a face, an edge on a face, a vertex on a face, two crossed edges
+FACE_FACE, EDGE_FACE, VERTEX_FACE, EDGE_EDGE = 0, 1, 2, 3
+KIND_NAMES = ("face-face", "edge-face", "vertex-face", "edge-edge")
+
+#: the incident face is a face contact's when its normal is within this cosine of opposite to the
+#: reference face's: 0.1 rad (5.7 deg). A block rocking on its bed joint stays in face contact up to
+#: there, its open part beyond the tolerance (its sub-contacts keep their places, as in 3DEC's
+#: face-face contacts); beyond it, only its edge or vertex touches and the contact is of that type.
+FACE_COSINE = math.cos(0.1)
+
+#: two edges whose directions are within this sine of parallel give no edge-pair axis (1e-3 rad):
+#: their cross product is the direction of round-off, and the face normals cover parallel edges
+PARALLEL_SINE = 1e-3
+
 
 class Found(NamedTuple):
     """Per candidate pair k: count[k] points (0: no contact), ref/inc block, normal (3,) world,
-    separation m; points (k, M, 3) world on the reference face, gaps (k, M) m, areas (k, M) m2."""
+    separation m; points (k, M, 3) world on the reference face, gaps (k, M) m, areas (k, M) m2;
+    kind (k,) the contact's kind (:data:`FACE_FACE`, :data:`EDGE_FACE`, :data:`VERTEX_FACE`,
+    :data:`EDGE_EDGE`; meaningful where count > 0)."""
 
     count: np.ndarray
     ref: np.ndarray
@@ -51,6 +112,7 @@ class Found(NamedTuple):
     points: np.ndarray
     gaps: np.ndarray
     areas: np.ndarray
+    kind: np.ndarray
 
     @classmethod
     def empty(cls, k: int, m: int) -> Found:
@@ -58,6 +120,7 @@ class Found(NamedTuple):
         return cls(
             count=np.zeros(k, np.int64), ref=np.zeros(k, np.int64), inc=np.zeros(k, np.int64), normal=np.zeros((k, 3)),
             separation=np.zeros(k), points=np.zeros((k, m, 3)), gaps=np.zeros((k, m)), areas=np.zeros((k, m)),
+            kind=np.zeros(k, np.int64),
         )
 
 
@@ -415,57 +478,365 @@ def _keep_points(found, k, nodes, uv, area, origin, u, v, n_inc, plane, cos_ni, 
 
 
 @numba.njit(cache=True)
+def _edges(geom, block, out):
+    """The edges of ``block`` into ``out`` (rows: its two vertex numbers within the block, the
+    lower first, and its two faces' numbers within the block: the one whose loop runs from the
+    lower to the higher, then the other, -1 if none); returns their number."""
+    count = 0
+    f0 = geom.block_face_start[block]
+    for f in range(f0, geom.block_face_start[block + 1]):
+        first, n = geom.face_start[f], geom.face_start[f + 1] - geom.face_start[f]
+        for i in range(n):
+            a, b = geom.face_vertex[first + i], geom.face_vertex[first + (i + 1) % n]
+            if a < b and count < out.shape[0]:
+                out[count, 0], out[count, 1], out[count, 2], out[count, 3] = a, b, f - f0, -1
+                count += 1
+    for f in range(f0, geom.block_face_start[block + 1]):
+        first, n = geom.face_start[f], geom.face_start[f + 1] - geom.face_start[f]
+        for i in range(n):
+            a, b = geom.face_vertex[first + i], geom.face_vertex[first + (i + 1) % n]
+            if a > b:
+                for e in range(count):
+                    if out[e, 0] == b and out[e, 1] == a:
+                        out[e, 3] = f - f0
+                        break
+    return count
+
+
+@numba.njit(cache=True)
+def _range(verts, count, x, y, z):
+    lo, hi = np.inf, -np.inf
+    for j in range(count):
+        s = x * verts[j, 0] + y * verts[j, 1] + z * verts[j, 2]
+        lo, hi = min(lo, s), max(hi, s)
+    return lo, hi
+
+
+@numba.njit(cache=True, inline="always")
+def _dot_cross(x, a, b):
+    """x . (a x b) of three 3-vectors."""
+    return x[0] * (a[1] * b[2] - a[2] * b[1]) + x[1] * (a[2] * b[0] - a[0] * b[2]) + x[2] * (a[0] * b[1] - a[1] * b[0])
+
+
+@numba.njit(cache=True, inline="always")
+def _minkowski_face(a, b, c, d):
+    """The arcs a-b (an edge of A: its faces' normals) and c-d (an edge of B: minus its faces'
+    normals) cross on the Gauss map: the edge pair is a face of the Minkowski difference, so its
+    axis can separate (Gregorius, "The separating axis test between convex polyhedra", GDC 2013)."""
+    cba, dba = _dot_cross(c, b, a), _dot_cross(d, b, a)
+    adc, bdc = _dot_cross(a, d, c), _dot_cross(b, d, c)
+    return cba * dba < 0.0 and adc * bdc < 0.0 and cba * bdc > 0.0
+
+
+@numba.njit(cache=True)
+def _edge_axes(va, nva, na, ea, nea, vb, nvb, nb, eb, neb, eps, best_axis):
+    """Separating-axis test over the cross products of an edge of A and an edge of B that make a
+    face of the Minkowski difference (:func:`_minkowski_face`; edges within PARALLEL_SINE of
+    parallel skipped: their axes are the face normals' business). The axis of largest separation
+    whose two edges realise both blocks' supports along it (within ``eps``, checked over every
+    vertex), oriented from A to B, into ``best_axis``; returns (separation, edge of A, edge of B),
+    -inf and -1 when no axis qualifies."""
+    best, best_i, best_j = -np.inf, -1, -1
+    mc, md = np.empty(3), np.empty(3)
+    for i in range(nea):
+        if ea[i, 3] < 0:
+            continue
+        p, q = va[ea[i, 0]], va[ea[i, 1]]
+        e0, e1, e2 = q[0] - p[0], q[1] - p[1], q[2] - p[2]
+        la = e0 * e0 + e1 * e1 + e2 * e2
+        fa1, fa2 = na[ea[i, 2]], na[ea[i, 3]]
+        for j in range(neb):
+            if eb[j, 3] < 0:
+                continue
+            for c in range(3):
+                mc[c], md[c] = -nb[eb[j, 2], c], -nb[eb[j, 3], c]
+            if not _minkowski_face(fa1, fa2, mc, md):
+                continue
+            r, t = vb[eb[j, 0]], vb[eb[j, 1]]
+            f0, f1, f2 = t[0] - r[0], t[1] - r[1], t[2] - r[2]
+            x, y, z = e1 * f2 - e2 * f1, e2 * f0 - e0 * f2, e0 * f1 - e1 * f0
+            norm_sq = x * x + y * y + z * z
+            if norm_sq <= PARALLEL_SINE * PARALLEL_SINE * la * (f0 * f0 + f1 * f1 + f2 * f2):
+                continue
+            scale = 1.0 / math.sqrt(norm_sq)
+            x, y, z = x * scale, y * scale, z * scale
+            if x * (fa1[0] + fa2[0]) + y * (fa1[1] + fa2[1]) + z * (fa1[2] + fa2[2]) < 0.0:  # out of A's edge
+                x, y, z = -x, -y, -z
+            if x * (r[0] - p[0]) + y * (r[1] - p[1]) + z * (r[2] - p[2]) <= best:  # the edges' own separation bounds the axis's
+                continue
+            lo_a, hi_a = _range(va, nva, x, y, z)
+            lo_b, hi_b = _range(vb, nvb, x, y, z)
+            separation = lo_b - hi_a
+            if separation <= best:
+                continue
+            # the two edges must be the supporting features, not parallel edges elsewhere
+            if x * p[0] + y * p[1] + z * p[2] < hi_a - eps or x * r[0] + y * r[1] + z * r[2] > lo_b + eps:
+                continue
+            best, best_i, best_j = separation, i, j
+            best_axis[0], best_axis[1], best_axis[2] = x, y, z
+    return best, best_i, best_j
+
+
+@numba.njit(cache=True)
+def _radius(geom, block):
+    """The block's circumradius about its centroid, m (orientation-free, unlike its bounding box)."""
+    largest = 0.0
+    for i in range(geom.vertex_start[block], geom.vertex_start[block + 1]):
+        p = geom.vertex[i]
+        largest = max(largest, p[0] * p[0] + p[1] * p[1] + p[2] * p[2])
+    return math.sqrt(largest)
+
+
+@numba.njit(cache=True)
+def _spacing(nominal, n):
+    """Grid spacing of ``n`` points along ``nominal`` length, ends included (the whole length for 1)."""
+    return nominal / (n - 1) if n > 1 else nominal
+
+
+@numba.njit(cache=True)
+def _point_area(nominal, along, across):
+    """Nominal area of a point-like contact (vertex-face, crossed edges): a corner sub-contact's
+    of a face grid of spacings _spacing(nominal, along) x _spacing(nominal, across)."""
+    return 0.25 * _spacing(nominal, along) * _spacing(nominal, across)
+
+
+@numba.njit(cache=True)
+def _put(found, k, kept, x, y, z, gap, area):
+    """One point into row ``k`` of ``found`` at ``kept``, if there is room; returns the new count."""
+    if kept >= found.gaps.shape[1]:
+        return kept
+    found.points[k, kept, 0], found.points[k, kept, 1], found.points[k, kept, 2] = x, y, z
+    found.gaps[k, kept] = gap
+    found.areas[k, kept] = area
+    return kept + 1
+
+
+@numba.njit(cache=True)
+def _crossed_edges(found, k, va, ea, i, vb, eb, j, n, tolerance, area):
+    """Crossed edges (edge i of A, edge j of B, axis ``n`` from A to B): one point at the closest
+    point of A's edge to B's, its gap along ``n``; returns 1, or 0 beyond the tolerance."""
+    p, q, r, t = va[ea[i, 0]], va[ea[i, 1]], vb[eb[j, 0]], vb[eb[j, 1]]
+    d1 = np.empty(3)
+    d2 = np.empty(3)
+    w = np.empty(3)
+    for c in range(3):
+        d1[c], d2[c], w[c] = q[c] - p[c], t[c] - r[c], p[c] - r[c]
+    a = d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2]
+    b = d1[0] * d2[0] + d1[1] * d2[1] + d1[2] * d2[2]
+    c_ = d2[0] * d2[0] + d2[1] * d2[1] + d2[2] * d2[2]
+    d = d1[0] * w[0] + d1[1] * w[1] + d1[2] * w[2]
+    e = d2[0] * w[0] + d2[1] * w[1] + d2[2] * w[2]
+    den = a * c_ - b * b  # > 0: the edges are not parallel (_edge_axes)
+    s = min(1.0, max(0.0, (b * e - c_ * d) / den))
+    u = min(1.0, max(0.0, (a * e - b * d) / den))
+    x0, x1, x2 = p[0] + s * d1[0], p[1] + s * d1[1], p[2] + s * d1[2]
+    gap = n[0] * (r[0] + u * d2[0] - x0) + n[1] * (r[1] + u * d2[1] - x1) + n[2] * (r[2] + u * d2[2] - x2)
+    if gap > tolerance:
+        return 0
+    return _put(found, k, 0, x0, x1, x2, gap, area)
+
+
+@numba.njit(cache=True)
+def _features(found, k, geom, ref, f_ref, vr, n, vi, nvi, touching, tolerance, nominal, along, across, across_axis, u, v, face_a, small):
+    """Vertex-face or edge-face contact of the incident block (world vertices ``vi``) on the
+    reference face ``f_ref`` of normal ``n``: its vertices within the tolerance of the face's
+    plane are the touching feature. One vertex: a point (:func:`_point_area`) where it projects
+    inside the face; an edge (vertices on a line): the segment clipped to the face, points along
+    it at the face grid's spacing, each its trapezoid share of the segment times half a grid
+    spacing. Returns (points, kind); kind FACE_FACE when the touching vertices span an area (the
+    face-face path is the one for them)."""
+    origin = _face_frame(geom, ref, f_ref, vr, n, u, v)
+    plane = n[0] * origin[0] + n[1] * origin[1] + n[2] * origin[2]
+    t = 0
+    for j in range(nvi):
+        if n[0] * vi[j, 0] + n[1] * vi[j, 1] + n[2] * vi[j, 2] - plane <= tolerance and t < touching.shape[0]:
+            touching[t] = j
+            t += 1
+    if t == 0:
+        return 0, VERTEX_FACE
+    # the two touching vertices farthest apart in the face plane, and how far the others lie off their line
+    ip, iq, longest = touching[0], touching[0], 0.0
+    for a in range(t):
+        for b in range(a + 1, t):
+            pa, pb = vi[touching[a]], vi[touching[b]]
+            du = (pb[0] - pa[0]) * u[0] + (pb[1] - pa[1]) * u[1] + (pb[2] - pa[2]) * u[2]
+            dv = (pb[0] - pa[0]) * v[0] + (pb[1] - pa[1]) * v[1] + (pb[2] - pa[2]) * v[2]
+            if du * du + dv * dv > longest:
+                ip, iq, longest = touching[a], touching[b], du * du + dv * dv
+    longest = math.sqrt(longest)
+    p, q = vi[ip], vi[iq]
+    p2u = (p[0] - origin[0]) * u[0] + (p[1] - origin[1]) * u[1] + (p[2] - origin[2]) * u[2]
+    p2v = (p[0] - origin[0]) * v[0] + (p[1] - origin[1]) * v[1] + (p[2] - origin[2]) * v[2]
+    q2u = (q[0] - origin[0]) * u[0] + (q[1] - origin[1]) * u[1] + (q[2] - origin[2]) * u[2]
+    q2v = (q[0] - origin[0]) * v[0] + (q[1] - origin[1]) * v[1] + (q[2] - origin[2]) * v[2]
+    if longest > 0.0:
+        for a in range(t):
+            w = vi[touching[a]]
+            wu = (w[0] - origin[0]) * u[0] + (w[1] - origin[1]) * u[1] + (w[2] - origin[2]) * u[2]
+            wv = (w[0] - origin[0]) * v[0] + (w[1] - origin[1]) * v[1] + (w[2] - origin[2]) * v[2]
+            off = abs((q2u - p2u) * (wv - p2v) - (q2v - p2v) * (wu - p2u)) / longest
+            if 0.5 * off * longest > 1e-8 * small * small:  # a triangle of touching vertices with an area: a face
+                return 0, FACE_FACE
+    n_ref = _face_2d(geom, ref, f_ref, vr, origin, u, v, face_a)
+    tol2d = 1e-9 * small
+    if longest <= tol2d:  # one vertex
+        deepest = ip
+        for a in range(t):
+            w = vi[touching[a]]
+            if n[0] * w[0] + n[1] * w[1] + n[2] * w[2] < n[0] * vi[deepest, 0] + n[1] * vi[deepest, 1] + n[2] * vi[deepest, 2]:
+                deepest = touching[a]
+        w = vi[deepest]
+        wu = (w[0] - origin[0]) * u[0] + (w[1] - origin[1]) * u[1] + (w[2] - origin[2]) * u[2]
+        wv = (w[0] - origin[0]) * v[0] + (w[1] - origin[1]) * v[1] + (w[2] - origin[2]) * v[2]
+        if not _inside(face_a, n_ref, wu, wv, tol2d):
+            return 0, VERTEX_FACE
+        gap = n[0] * w[0] + n[1] * w[1] + n[2] * w[2] - plane
+        kept = _put(found, k, 0, w[0] - gap * n[0], w[1] - gap * n[1], w[2] - gap * n[2], gap, _point_area(nominal, along, across))
+        return kept, VERTEX_FACE
+    # an edge: the segment p + s (q - p), s in [s0, s1], clipped to the reference face (Cyrus-Beck)
+    s0, s1 = 0.0, 1.0
+    du, dv = q2u - p2u, q2v - p2v
+    for e in range(n_ref):
+        ax, ay = face_a[e, 0], face_a[e, 1]
+        ex, ey = face_a[(e + 1) % n_ref, 0] - ax, face_a[(e + 1) % n_ref, 1] - ay
+        c0 = ex * (p2v - ay) - ey * (p2u - ax) + tol2d * math.sqrt(ex * ex + ey * ey)  # inside: c0 + s c1 >= 0
+        c1 = ex * dv - ey * du
+        if c1 == 0.0:
+            if c0 < 0.0:
+                return 0, EDGE_FACE
+        elif c1 > 0.0:
+            s0 = max(s0, -c0 / c1)
+        else:
+            s1 = min(s1, -c0 / c1)
+    length = (s1 - s0) * longest
+    if not (tol2d < length < np.inf):  # nothing left of it (or not a number: no contact)
+        return 0, EDGE_FACE
+    dx, dy = du / longest, dv / longest
+    axis_u = across_axis[0] * u[0] + across_axis[1] * u[1] + across_axis[2] * u[2]
+    axis_v = across_axis[0] * v[0] + across_axis[1] * v[1] + across_axis[2] * v[2]
+    if abs(dx * axis_u + dy * axis_v) > 0.999:  # along the model's across axis (as _count)
+        n_along, n_width = across, along
+    else:
+        n_along, n_width = along, across
+    width = 0.5 * _spacing(nominal, n_width)
+    # points at the face grid's spacing, at most as many as the row has room for
+    intervals = 0 if n_along == 1 else int(max(1.0, min(math.ceil(length / _spacing(nominal, n_along) - 1e-6), found.gaps.shape[1] - 1.0)))
+    nodes, weights = _trapezoid(intervals)
+    kept = 0
+    for i in range(nodes.shape[0]):
+        s = s0 + nodes[i] * (s1 - s0)
+        x0, x1, x2 = p[0] + s * (q[0] - p[0]), p[1] + s * (q[1] - p[1]), p[2] + s * (q[2] - p[2])
+        gap = n[0] * x0 + n[1] * x1 + n[2] * x2 - plane
+        if gap <= tolerance:
+            kept = _put(found, k, kept, x0 - gap * n[0], x1 - gap * n[1], x2 - gap * n[2], gap, weights[i] * length * width)
+    return kept, EDGE_FACE
+
+
+@numba.njit(cache=True)
+def _pair(geom, position, rotation, k, ia, ib, tolerance, along, across, across_axis, found, uv, area, face_a, face_b, overlap, corners,
+          va, vb, na, nb, ea, eb, touching, u, v, axis):
+    """The contact of candidate pair ``k`` (blocks ia, ib) into row ``k`` of ``found`` (module
+    docstring); the scratch buffers are the caller's. Returns the ``overlap`` and ``corners``
+    buffers (grown if a polygon outgrew them)."""
+    found.count[k] = 0
+    found.kind[k] = FACE_FACE
+    nva, nfa = _world(geom, ia, position, rotation, va, na)
+    nvb, nfb = _world(geom, ib, position, rotation, vb, nb)
+    fa, sa = _separations(geom, ia, va, na, nfa, vb, nvb)
+    fb, sb = _separations(geom, ib, vb, nb, nfb, va, nva)
+    small = min(geom.size[ia], geom.size[ib])
+    if sa >= sb - 1e-9 * small:
+        ref, inc, vr, nr, vi, ni, nvi, nfi, f_ref, separation = ia, ib, va, na, vb, nb, nvb, nfb, fa, sa
+    else:
+        ref, inc, vr, nr, vi, ni, nvi, nfi, f_ref, separation = ib, ia, vb, nb, va, na, nva, nfa, fb, sb
+    found.separation[k] = separation
+    if separation > tolerance:
+        return overlap, corners
+    n = nr[f_ref]
+    f_inc, cos_ni = _most_opposed(ni, nfi, n)
+    # crossed edges: the edge-pair axes of the separating-axis test. Not needed for nearly
+    # parallel faces penetrating less than the tolerance (a face contact, the common case: a
+    # bed joint), only where the faces' separation may be a wrong deep one (shallow crossed roofs)
+    parallel_faces = cos_ni <= -FACE_COSINE
+    edge_wins, s_edge, edge_a, edge_b = False, -np.inf, -1, -1
+    if not parallel_faces or separation < -tolerance:
+        nea, neb = _edges(geom, ia, ea), _edges(geom, ib, eb)
+        s_edge, edge_a, edge_b = _edge_axes(va, nva, na, ea, nea, vb, nvb, nb, eb, neb, 1e-9 * small, axis)
+        edge_wins = s_edge > separation + 1e-9 * small
+        if parallel_faces and edge_wins and s_edge > separation + tolerance:
+            parallel_faces = False
+    nominal = 2.0 * min(_radius(geom, ia), _radius(geom, ib)) / math.sqrt(3.0)
+    if not parallel_faces and edge_wins:
+        found.separation[k] = s_edge
+        found.kind[k] = EDGE_EDGE
+        if s_edge <= tolerance:
+            found.count[k] = _crossed_edges(found, k, va, ea, edge_a, vb, eb, edge_b, axis, tolerance, _point_area(nominal, along, across))
+            found.ref[k], found.inc[k] = ia, ib
+            for c in range(3):
+                found.normal[k, c] = axis[c]
+        return overlap, corners
+    if not parallel_faces:
+        kept, kind = _features(found, k, geom, ref, f_ref, vr, n, vi, nvi, touching, tolerance, nominal, along, across, across_axis, u, v, face_a, small)
+        if kind != FACE_FACE:
+            found.kind[k] = kind
+            found.count[k] = kept
+            found.ref[k], found.inc[k] = ref, inc
+            found.normal[k] = n
+            return overlap, corners
+    # face-face
+    if cos_ni >= -1e-6:
+        return overlap, corners
+    origin = _face_frame(geom, ref, f_ref, vr, n, u, v)
+    n_ref_2d = _face_2d(geom, ref, f_ref, vr, origin, u, v, face_a)
+    n_inc_2d = _face_2d(geom, inc, f_inc, vi, origin, u, v, face_b)
+    overlap, n_overlap = _clip(face_b, n_inc_2d, face_a, n_ref_2d, overlap)
+    if n_overlap < 3 or _area(overlap, n_overlap) <= 1e-8 * small * small:
+        return overlap, corners
+    sliver = SLIVER_FRACTION * min(_area(face_a, n_ref_2d), _area(face_b, n_inc_2d))
+    au = across_axis[0] * u[0] + across_axis[1] * u[1] + across_axis[2] * u[2]
+    av = across_axis[0] * v[0] + across_axis[1] * v[1] + across_axis[2] * v[2]
+    nodes, corners = _grid(overlap, n_overlap, corners, face_a, n_ref_2d, face_b, n_inc_2d, along, across, au, av, 1e-9 * small, sliver, uv, area)
+    n_inc = ni[f_inc]
+    inc_first = vi[geom.face_vertex[geom.face_start[geom.block_face_start[inc] + f_inc]]]
+    plane = n_inc[0] * inc_first[0] + n_inc[1] * inc_first[1] + n_inc[2] * inc_first[2]
+    found.count[k] = _keep_points(found, k, nodes, uv, area, origin, u, v, n_inc, plane, cos_ni, tolerance, sliver)
+    found.ref[k], found.inc[k] = ref, inc
+    found.normal[k] = n
+    return overlap, corners
+
+
+#: candidate pairs per parallel chunk of :func:`find_sub_contacts` (each chunk allocates its own scratch buffers once)
+CHUNK = 64
+
+
+@numba.njit(cache=True, parallel=True)
 def find_sub_contacts(geom, position, rotation, candidates, tolerance, along, across, across_axis, found):
     """Fill ``found`` (a :class:`Found` with room for the candidates and :func:`max_points`
-    points each) for every candidate pair (i < j)."""
+    points each) for every candidate pair (i < j), in parallel over chunks of :data:`CHUNK`
+    pairs; each pair writes only its own row, so the result is the same for any thread count."""
     m = found.gaps.shape[1]
     if found.count.shape[0] < candidates.shape[0] or m < max_points(along, across):
         raise ValueError("found has too little room for the candidates' points")
-    uv, area = np.empty((m, 2)), np.empty(m)
     # polygons: a face as large as the largest, an overlap of two (at most both faces' vertices)
     largest = _largest(geom.face_start)
-    face_a, face_b = np.empty((largest, 2)), np.empty((largest, 2))
-    overlap, corners = np.empty((2 * largest, 2)), np.empty((2 * largest, 2))
     # the two blocks' world geometry, in buffers for the largest block (no allocation per pair)
     largest_v, largest_f = _largest(geom.vertex_start), _largest(geom.block_face_start)
-    va, vb = np.empty((largest_v, 3)), np.empty((largest_v, 3))
-    na, nb = np.empty((largest_f, 3)), np.empty((largest_f, 3))
-    u, v = np.empty(3), np.empty(3)
-    for k in range(candidates.shape[0]):
-        found.count[k] = 0
-        ia, ib = candidates[k, 0], candidates[k, 1]
-        nva, nfa = _world(geom, ia, position, rotation, va, na)
-        nvb, nfb = _world(geom, ib, position, rotation, vb, nb)
-        fa, sa = _separations(geom, ia, va, na, nfa, vb, nvb)
-        fb, sb = _separations(geom, ib, vb, nb, nfb, va, nva)
-        small = min(geom.size[ia], geom.size[ib])
-        if sa >= sb - 1e-9 * small:
-            ref, inc, vr, nr, vi, ni, nfi, f_ref, separation = ia, ib, va, na, vb, nb, nfb, fa, sa
-        else:
-            ref, inc, vr, nr, vi, ni, nfi, f_ref, separation = ib, ia, vb, nb, va, na, nfa, fb, sb
-        found.separation[k] = separation
-        if separation > tolerance:
-            continue
-        n = nr[f_ref]
-        f_inc, cos_ni = _most_opposed(ni, nfi, n)
-        if cos_ni >= -1e-6:
-            continue
-        origin = _face_frame(geom, ref, f_ref, vr, n, u, v)
-        n_ref_2d = _face_2d(geom, ref, f_ref, vr, origin, u, v, face_a)
-        n_inc_2d = _face_2d(geom, inc, f_inc, vi, origin, u, v, face_b)
-        overlap, n_overlap = _clip(face_b, n_inc_2d, face_a, n_ref_2d, overlap)
-        if n_overlap < 3 or _area(overlap, n_overlap) <= 1e-8 * small * small:
-            continue
-        sliver = SLIVER_FRACTION * min(_area(face_a, n_ref_2d), _area(face_b, n_inc_2d))
-        au = across_axis[0] * u[0] + across_axis[1] * u[1] + across_axis[2] * u[2]
-        av = across_axis[0] * v[0] + across_axis[1] * v[1] + across_axis[2] * v[2]
-        nodes, corners = _grid(overlap, n_overlap, corners, face_a, n_ref_2d, face_b, n_inc_2d, along, across, au, av, 1e-9 * small, sliver, uv, area)
-        n_inc = ni[f_inc]
-        inc_first = vi[geom.face_vertex[geom.face_start[geom.block_face_start[inc] + f_inc]]]
-        plane = n_inc[0] * inc_first[0] + n_inc[1] * inc_first[1] + n_inc[2] * inc_first[2]
-        found.count[k] = _keep_points(found, k, nodes, uv, area, origin, u, v, n_inc, plane, cos_ni, tolerance, sliver)
-        found.ref[k], found.inc[k] = ref, inc
-        found.normal[k] = n
+    largest_e = 0  # face-loop entries of the block with most: at least twice its edges
+    for b in range(geom.block_face_start.shape[0] - 1):
+        largest_e = max(largest_e, geom.face_start[geom.block_face_start[b + 1]] - geom.face_start[geom.block_face_start[b]])
+    n = candidates.shape[0]
+    for chunk in numba.prange((n + CHUNK - 1) // CHUNK):
+        uv, area = np.empty((m, 2)), np.empty(m)
+        face_a, face_b = np.empty((largest, 2)), np.empty((largest, 2))
+        overlap, corners = np.empty((2 * largest, 2)), np.empty((2 * largest, 2))
+        va, vb = np.empty((largest_v, 3)), np.empty((largest_v, 3))
+        na, nb = np.empty((largest_f, 3)), np.empty((largest_f, 3))
+        ea, eb = np.empty((largest_e, 4), np.int64), np.empty((largest_e, 4), np.int64)
+        touching = np.empty(largest_v, np.int64)
+        u, v, axis = np.empty(3), np.empty(3), np.empty(3)
+        for k in range(chunk * CHUNK, min(n, (chunk + 1) * CHUNK)):
+            overlap, corners = _pair(geom, position, rotation, k, candidates[k, 0], candidates[k, 1], tolerance, along, across, across_axis, found,
+                                     uv, area, face_a, face_b, overlap, corners, va, vb, na, nb, ea, eb, touching, u, v, axis)
 
 
 @numba.njit(cache=True)
@@ -511,17 +882,33 @@ def assemble(found, position, rotation):
     return (pairs, normal_body, offset, start, point_ref_body, point_inc_body, area, np.zeros((ns, 3)), np.zeros(ns), np.ones(ns, np.bool_))
 
 
+def find(
+    geometry: FlatGeometry, candidates: np.ndarray, position: np.ndarray, rotation: np.ndarray, *, tolerance: float,
+    density: ContactDensity,
+) -> Found:
+    """The :class:`Found` of the candidate block pairs (k, 2) at centroids ``position`` (nb, 3) m
+    and rotations (nb, 3, 3): one compiled call (:func:`find_sub_contacts`)."""
+    found = Found.empty(len(candidates), max_points(density.along, density.across))
+    find_sub_contacts(
+        geometry, np.ascontiguousarray(position, dtype=float), np.ascontiguousarray(rotation, dtype=float),
+        np.ascontiguousarray(candidates, dtype=np.int64).reshape(-1, 2), tolerance, density.along, density.across,
+        np.asarray(density.across_axis, dtype=float), found,
+    )
+    return found
+
+
+def contact_kinds(found: Found) -> np.ndarray:
+    """(nc,) the kind of each contact of ``found`` with points, in the order of :func:`assemble`'s contacts."""
+    return found.kind[found.count > 0].copy()
+
+
 def narrow_phase(
     geometry: FlatGeometry, candidates: np.ndarray, position: np.ndarray, rotation: np.ndarray, *, tolerance: float,
     density: ContactDensity,
 ) -> tuple[SubContacts, np.ndarray]:
     """Sub-contacts of the candidate block pairs (k, 2) at centroids ``position`` (nb, 3) m and
     rotations (nb, 3, 3), in one compiled call (:func:`find_sub_contacts`), and each pair's
-    separation along its best face normal (k,) m (a lower bound on their distance when positive).
+    separation along its best separating axis (k,) m (a lower bound on their distance when positive).
     Shear forces start at zero (:func:`drydem.engine.refresh.merge` carries them over)."""
-    found = Found.empty(len(candidates), max_points(density.along, density.across))
-    find_sub_contacts(
-        geometry, position, rotation, np.ascontiguousarray(candidates, dtype=np.int64), tolerance, density.along, density.across,
-        np.asarray(density.across_axis, dtype=float), found,
-    )
+    found = find(geometry, candidates, position, rotation, tolerance=tolerance, density=density)
     return SubContacts(*assemble(found, position, rotation)), found.separation
