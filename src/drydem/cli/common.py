@@ -34,6 +34,25 @@ unit_option = click.option("--unit", type=click.Choice(list(UNITS)), default="m"
 
 workers_option = click.option("--workers", type=click.IntRange(min=1), help="Local processes (default: all cores).")
 scheduler_option = click.option("--scheduler", help="Address of a Dask distributed scheduler to run on instead (tcp://host:8786).")
+
+
+def _threads(ctx, param, value):
+    """--threads: set as soon as it is read (drydem.engine.threads.set_threads; None: all cores),
+    or a usage error naming the allowed range."""
+    from drydem.engine.threads import set_threads
+
+    try:
+        set_threads(value)
+    except DrydemError as exc:
+        raise click.BadParameter(str(exc)) from None
+    return value
+
+
+#: the compiled kernels' threads (drydem.engine.threads): set by the option itself, so a command
+#: takes no argument for it; the results are the same for every count, only the speed changes
+threads_option = click.option("--threads", type=int, callback=_threads, expose_value=False,
+                              help="Threads for the compiled kernels (default: all cores).")
+
 #: the options of a joint law: option name -> ([joint] key, the option)
 JOINT_LAW_OPTIONS = {
     "joint_model": ("model", click.option("--joint-model", type=click.Choice(JOINT_MODELS),

@@ -9,7 +9,7 @@ import click
 from drydem.errors import DrydemError
 from drydem.io.target import Target
 from drydem.model.assembly import Model
-from drydem.cli.common import results_folder, signals_interrupt, resolve_target, joint_law_options, main, unit_option
+from drydem.cli.common import results_folder, signals_interrupt, resolve_target, joint_law_options, main, threads_option, unit_option
 from drydem.cli.tilting import _render
 
 
@@ -81,6 +81,7 @@ class _Restitution(click.ParamType):
 @click.option("--video", is_flag=True, help="Also render OUT/shake.mp4 (GIF if ffmpeg is missing), a frame per kept state at "
                                              f"{SHAKE_FPS:g} frames per second (--save-every thins them); implies --vtk.")
 @unit_option
+@threads_option
 def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequency, cycles, duration, output_interval, restitution,
           damping_ratio, rayleigh_mass, rayleigh_stiffness, kn, ks, friction, points, density, joint_law, monitor, out, overwrite, vtk,
           save_every, video, unit) -> None:

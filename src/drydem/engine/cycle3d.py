@@ -11,6 +11,11 @@ One cycle (paper Eq. 2 and 4; Itasca 3DEC's calculation cycle) reads like the ph
    I_w d(omega)/dt = M_d - omega x I_w omega (I_w = R I_body R^T);
 5. positions x(t + dt) = x(t) + v dt and exact rotations q <- exp(omega dt / 2) q.
 
+Steps 1, 3 and 2 with 4-5 each run in parallel on numba's threads (:mod:`drydem.engine.threads`):
+over the blocks, the contacts (each writing its own sums), and the blocks again (each adding its
+contacts' sums in contact order, :func:`gather`), so that every thread count gives the serial
+loop's numbers, bit for bit.
+
 ``run_cycles`` repeats it until the equilibrium criterion holds, the blocks have moved
 far enough to need new contacts, the integration diverges, or ``max_cycles`` is reached.
 :mod:`oracles.cycle` implements the same ``step`` in vectorised NumPy, as the oracle
@@ -24,7 +29,7 @@ import numpy as np
 
 from drydem.engine.damping import dashpot_force, dashpot_per_area, has_dashpots, local_damping
 from drydem.engine.joints import normal_law, shear_law, stiffer_than_timestep
-from drydem.engine.loop import FASTMATH, cycle_loop
+from drydem.engine.loop import FASTMATH, cycle_loop, workspace
 from drydem.model.rotation import mat_t_vec, mat_vec, quaternion_to_matrix, rotate_by_vector
 
 
@@ -37,29 +42,40 @@ def _world_tensor_apply(r, tensor, v0, v1, v2):
     return mat_vec(r, t0, t1, t2)
 
 
-@numba.njit(cache=True, fastmath=FASTMATH)
-def contact_forces(state, rot, inv_mass, sub, joint, closure_limit, damping, dt, force, moment):
-    """Step 3: update every sub-contact's forces and add them to ``force`` and ``moment`` (N, N m).
+#: numbers per contact in :class:`~drydem.engine.loop.Workspace` ``contribution``: its force and
+#: moment sums on the incident block b (F, sum r x F), and d x F + sum r x F, the moment taken from a
+CONTRIBUTION = 9
+
+
+@numba.njit(cache=True, fastmath=FASTMATH, parallel=True)
+def contact_forces(state, rot, inv_mass, sub, joint, closure_limit, damping, dt, contribution, stiffer):
+    """Step 3: update every sub-contact's forces and write each contact's sums into
+    ``contribution`` (nc, CONTRIBUTION), N and N m; in parallel over the contacts, each writing
+    only its own rows (:func:`gather`, not this, adds them to the blocks).
 
     Per contact (blocks a = reference, b = incident, normal n = R_a n_body, d = vector from
     a's centroid to b's): each sub-contact's incident arm r = R_b p_inc gives
     gap = (d + r) . n - offset (every reference point lies on the plane n . x = offset), and
     relative velocity v_b - v_a - w_a x d + (w_b - w_a) x r. The forces F act at x_b on b
-    and -F on a; the contact's sums are scattered once: moment on b sum r x F, on a
-    -(d x sum F + sum r x F). With viscous ``damping``, a normal dashpot beside each spring
+    and -F on a; the contact's sums: force sum F and moment sum r x F on b, -sum F and
+    -(d x sum F + sum r x F) on a. With viscous ``damping``, a normal dashpot beside each spring
     (:mod:`drydem.engine.damping`, ``inv_mass`` (nb,) 1/kg giving the pairs' reduced masses).
     Returns whether a sub-contact of a stress-dependent joint is about to close past its
-    ``closure_limit`` (:func:`drydem.engine.joints.stiffer_than_timestep`).
+    ``closure_limit`` (:func:`drydem.engine.joints.stiffer_than_timestep`), each contact's
+    answer in ``stiffer`` (nc,).
     """
+    # every array read off its NamedTuple out here: numba's parallel loops lose what is written into
+    # sub.normal_force[s] in their bodies (numba issues 5872, 7135, 10338), not into these names
     pos, vel, omega = state.position, state.velocity, state.angular_velocity
+    pairs, start, normal_body, offset, point, area = sub.pairs, sub.start, sub.normal_body, sub.offset, sub.point_inc_body, sub.area
+    shear, normal, intact_now = sub.shear_force, sub.normal_force, sub.intact
     viscous = has_dashpots(damping)
-    stiffer = False
-    for c in range(sub.pairs.shape[0]):
-        a, b = sub.pairs[c, 0], sub.pairs[c, 1]
-        dashpot = dashpot_per_area(sub.start[c], sub.start[c + 1], sub.area, inv_mass[a], inv_mass[b], joint.kn, damping) if viscous else 0.0
-        nx, ny, nz = mat_vec(rot[a], sub.normal_body[c, 0], sub.normal_body[c, 1], sub.normal_body[c, 2])
+    for c in numba.prange(pairs.shape[0]):
+        a, b = pairs[c, 0], pairs[c, 1]
+        dashpot = dashpot_per_area(start[c], start[c + 1], area, inv_mass[a], inv_mass[b], joint.kn, damping) if viscous else 0.0
+        nx, ny, nz = mat_vec(rot[a], normal_body[c, 0], normal_body[c, 1], normal_body[c, 2])
         dx, dy, dz = pos[b, 0] - pos[a, 0], pos[b, 1] - pos[a, 1], pos[b, 2] - pos[a, 2]
-        base_gap = dx * nx + dy * ny + dz * nz - sub.offset[c]
+        base_gap = dx * nx + dy * ny + dz * nz - offset[c]
         wa, wb = omega[a], omega[b]
         v0x = vel[b, 0] - vel[a, 0] - (wa[1] * dz - wa[2] * dy)
         v0y = vel[b, 1] - vel[a, 1] - (wa[2] * dx - wa[0] * dz)
@@ -68,22 +84,23 @@ def contact_forces(state, rot, inv_mass, sub, joint, closure_limit, damping, dt,
         rb = rot[b]
         fx_sum = fy_sum = fz_sum = 0.0
         mx_sum = my_sum = mz_sum = 0.0
-        for s in range(sub.start[c], sub.start[c + 1]):
-            p = sub.point_inc_body[s]
+        closing = False
+        for s in range(start[c], start[c + 1]):
+            p = point[s]
             rx, ry, rz = mat_vec(rb, p[0], p[1], p[2])
-            fn, carries = normal_law(-(base_gap + rx * nx + ry * ny + rz * nz), sub.area[s], sub.intact[s], joint)
-            fs = sub.shear_force[s]
+            fn, carries = normal_law(-(base_gap + rx * nx + ry * ny + rz * nz), area[s], intact_now[s], joint)
+            fs = shear[s]
             if not carries:
-                sub.normal_force[s] = 0.0
+                normal[s] = 0.0
                 fs[0] = fs[1] = fs[2] = 0.0
-                sub.intact[s] = False
+                intact_now[s] = False
                 continue
             # relative velocity of b with respect to a at x_b, tangential part times dt
             vx = v0x + dwy * rz - dwz * ry
             vy = v0y + dwz * rx - dwx * rz
             vz = v0z + dwx * ry - dwy * rx
             vn = vx * nx + vy * ny + vz * nz
-            stiffer |= stiffer_than_timestep(-(base_gap + rx * nx + ry * ny + rz * nz), vn, dt, closure_limit, s, joint)
+            closing |= stiffer_than_timestep(-(base_gap + rx * nx + ry * ny + rz * nz), vn, dt, closure_limit, s, joint)
             dux, duy, duz = (vx - vn * nx) * dt, (vy - vn * ny) * dt, (vz - vn * nz) * dt
             # previous shear force rotated into the current tangent plane, magnitude kept
             sx, sy, sz = fs[0], fs[1], fs[2]
@@ -93,11 +110,11 @@ def contact_forces(state, rot, inv_mass, sub, joint, closure_limit, damping, dt,
                 new_sq = old_sq - fsn * fsn  # |F_s - (F_s . n) n|^2
                 scale = np.sqrt(old_sq / new_sq) if new_sq > 0.0 else 0.0
                 sx, sy, sz = (sx - fsn * nx) * scale, (sy - fsn * ny) * scale, (sz - fsn * nz) * scale
-            sx, sy, sz, intact = shear_law(fn, dux, duy, duz, sx, sy, sz, sub.area[s], sub.intact[s], joint)
-            sub.normal_force[s] = fn
+            sx, sy, sz, intact = shear_law(fn, dux, duy, duz, sx, sy, sz, area[s], intact_now[s], joint)
+            normal[s] = fn
             fs[0], fs[1], fs[2] = sx, sy, sz
-            sub.intact[s] = intact
-            push = fn + dashpot_force(fn, vn, dashpot * sub.area[s]) if viscous else fn
+            intact_now[s] = intact
+            push = fn + dashpot_force(fn, vn, dashpot * area[s]) if viscous else fn
             fx, fy, fz = push * nx + sx, push * ny + sy, push * nz + sz
             fx_sum += fx
             fy_sum += fy
@@ -105,34 +122,63 @@ def contact_forces(state, rot, inv_mass, sub, joint, closure_limit, damping, dt,
             mx_sum += ry * fz - rz * fy
             my_sum += rz * fx - rx * fz
             mz_sum += rx * fy - ry * fx
-        force[b, 0] += fx_sum
-        force[b, 1] += fy_sum
-        force[b, 2] += fz_sum
-        moment[b, 0] += mx_sum
-        moment[b, 1] += my_sum
-        moment[b, 2] += mz_sum
-        force[a, 0] -= fx_sum
-        force[a, 1] -= fy_sum
-        force[a, 2] -= fz_sum
-        moment[a, 0] -= dy * fz_sum - dz * fy_sum + mx_sum
-        moment[a, 1] -= dz * fx_sum - dx * fz_sum + my_sum
-        moment[a, 2] -= dx * fy_sum - dy * fx_sum + mz_sum
-    return stiffer
+        out = contribution[c]
+        out[0], out[1], out[2] = fx_sum, fy_sum, fz_sum
+        out[3], out[4], out[5] = mx_sum, my_sum, mz_sum
+        out[6] = dy * fz_sum - dz * fy_sum + mx_sum
+        out[7] = dz * fx_sum - dx * fz_sum + my_sum
+        out[8] = dx * fy_sum - dy * fx_sum + mz_sum
+        stiffer[c] = closing
+    return stiffer.any()
 
 
 @numba.njit(cache=True)
-def integrate(state, rot, blocks, force, moment, damping, dt, velocity_dt):
-    """Steps 4-5: damped velocities, positions and rotations (local damping, and Rayleigh's
-    mass-proportional term -alpha_R m v, -alpha_R I_w omega: :mod:`drydem.engine.damping`); the
-    velocities step by ``velocity_dt`` (:data:`~drydem.engine.loop.LoopSettings`), the positions by ``dt``.
+def gather(i, mass, gravity, work, force, moment):
+    """Block i's force and moment (N, N m): its body force ``mass`` g plus what its contacts
+    contribute (:func:`contact_forces`), added in increasing contact order, as a serial loop over
+    the contacts adds them: the same numbers, bit for bit, whatever the threads. Not fast-math:
+    the order is the result."""
+    f0, f1, f2 = mass * gravity[0], mass * gravity[1], mass * gravity[2]
+    m0 = m1 = m2 = 0.0
+    contribution, incidence = work.contribution, work.incidence
+    for e in range(work.incidence_start[i], work.incidence_start[i + 1]):
+        code = incidence[e]
+        q = contribution[code >> 1]
+        if code & 1:  # the incident block b
+            f0 += q[0]
+            f1 += q[1]
+            f2 += q[2]
+            m0 += q[3]
+            m1 += q[4]
+            m2 += q[5]
+        else:  # the reference block a
+            f0 -= q[0]
+            f1 -= q[1]
+            f2 -= q[2]
+            m0 -= q[6]
+            m1 -= q[7]
+            m2 -= q[8]
+    force[i, 0], force[i, 1], force[i, 2] = f0, f1, f2
+    moment[i, 0], moment[i, 1], moment[i, 2] = m0, m1, m2
+
+
+@numba.njit(cache=True, parallel=True)
+def integrate(state, rot, blocks, force, moment, damping, dt, velocity_dt, gravity, work):
+    """Steps 2 and 4-5, in parallel over the blocks: each block's body force and contact forces
+    (:func:`gather`, into ``force`` and ``moment``), damped velocities, positions and rotations
+    (local damping, and Rayleigh's mass-proportional term -alpha_R m v, -alpha_R I_w omega:
+    :mod:`drydem.engine.damping`); the velocities step by ``velocity_dt``
+    (:data:`~drydem.engine.loop.LoopSettings`), the positions by ``dt``.
     Returns (max unbalanced force or moment / radius over the free degrees of freedom, N;
-    max block point speed, m/s)."""
+    max block point speed, m/s), the maxima taken in block order after the parallel loop."""
     local, drag = damping.local, damping.mass_proportional
-    max_unbalanced = 0.0
-    max_speed = 0.0
-    for i in range(state.position.shape[0]):
+    measures = work.measures
+    position, velocity, omega, quaternion = state.position, state.velocity, state.angular_velocity, state.quaternion
+    for i in numba.prange(position.shape[0]):
+        gather(i, blocks.mass[i], gravity, work, force, moment)
         free = blocks.free[i]
         if free.max() == 0.0:
+            measures[i, 2] = -1.0
             continue
         r = rot[i]
         f2 = 0.0
@@ -141,13 +187,13 @@ def integrate(state, rot, blocks, force, moment, damping, dt, velocity_dt):
             f = force[i, k] * free[k]
             f2 += f * f
             if drag != 0.0:  # Rayleigh's mass term, explicit: a branch, so that statics round as before it
-                state.velocity[i, k] *= 1.0 - drag * velocity_dt
-            state.velocity[i, k] += local_damping(f, state.velocity[i, k], local) * blocks.inv_mass[i] * velocity_dt
+                velocity[i, k] *= 1.0 - drag * velocity_dt
+            velocity[i, k] += local_damping(f, velocity[i, k], local) * blocks.inv_mass[i] * velocity_dt
             m = moment[i, k] * free[3 + k]
             m2 += m * m
-            moment[i, k] = local_damping(m, state.angular_velocity[i, k], local)
+            moment[i, k] = local_damping(m, omega[i, k], local)
         # world inertia I_w = R I_body R^T applied to omega, and the gyroscopic moment omega x I_w omega
-        w = state.angular_velocity[i]
+        w = omega[i]
         lx, ly, lz = _world_tensor_apply(r, blocks.inertia_body[i], w[0], w[1], w[2])
         tx = moment[i, 0] - (w[1] * lz - w[2] * ly)
         ty = moment[i, 1] - (w[2] * lx - w[0] * lz)
@@ -159,16 +205,51 @@ def integrate(state, rot, blocks, force, moment, damping, dt, velocity_dt):
         w[1] += ay * velocity_dt * free[4]
         w[2] += az * velocity_dt * free[5]
         for k in range(3):
-            state.velocity[i, k] *= free[k]
-            state.position[i, k] += state.velocity[i, k] * dt
-        rotate_by_vector(state.quaternion[i], w[0] * dt, w[1] * dt, w[2] * dt)
-        v = state.velocity[i]
+            velocity[i, k] *= free[k]
+            position[i, k] += velocity[i, k] * dt
+        rotate_by_vector(quaternion[i], w[0] * dt, w[1] * dt, w[2] * dt)
+        v = velocity[i]
         speed = np.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * blocks.radius[i]
         if not speed < np.inf:  # NaN counts as infinitely fast
             speed = np.inf
-        max_speed = max(max_speed, speed)
-        max_unbalanced = max(max_unbalanced, np.sqrt(f2), np.sqrt(m2) / blocks.radius[i])
+        measures[i, 0] = np.sqrt(f2)
+        measures[i, 1] = np.sqrt(m2) / blocks.radius[i]
+        measures[i, 2] = speed
+    return _maxima(measures)
+
+
+@numba.njit(cache=True)
+def _maxima(measures):
+    """The largest unbalanced force (or moment / radius) and speed of the moving blocks
+    (:class:`~drydem.engine.loop.Workspace` ``measures``), in block order: serial, so that a
+    NaN goes through ``max`` exactly as it did in the serial kernel."""
+    max_unbalanced = 0.0
+    max_speed = 0.0
+    for i in range(measures.shape[0]):
+        if measures[i, 2] < 0.0:  # not moving
+            continue
+        max_speed = max(max_speed, measures[i, 2])
+        max_unbalanced = max(max_unbalanced, measures[i, 0], measures[i, 1])
     return max_unbalanced, max_speed
+
+
+#: below this many blocks :func:`rotations` runs serially: starting a parallel loop costs ~1-2 us,
+#: the rotations of ~200 blocks (numba.get_num_threads() is no test here: a function that asks it
+#: cannot be cached)
+SERIAL_ROTATIONS = 1024
+
+
+@numba.njit(cache=True, parallel=True)
+def rotations(quaternion, rot):
+    """Step 1: the rotation matrix of every block, in parallel for many blocks on several threads
+    (the same numbers either way: one block's matrix is one strict, not fast-math, computation)."""
+    n = quaternion.shape[0]
+    if n < SERIAL_ROTATIONS:
+        for i in range(n):
+            quaternion_to_matrix(quaternion[i], rot[i])
+    else:
+        for i in numba.prange(n):
+            quaternion_to_matrix(quaternion[i], rot[i])
 
 
 @numba.njit(cache=True)
@@ -192,23 +273,28 @@ def energies(state, rot, blocks):
 
 
 @numba.njit(cache=True)
-def step(state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment, measure):
-    """One cycle, steps 1-5 (``rot``, ``force``, ``moment`` are scratch arrays).
+def step(state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment, measure, work=None):
+    """One cycle, steps 1-5 (``rot``, ``force``, ``moment`` are scratch arrays; ``work`` the
+    :class:`~drydem.engine.loop.Workspace` of ``sub``, made here where not given).
 
     Returns what :func:`integrate` returns, kinetic energy and travel if ``measure``, and what
-    :func:`contact_forces` returns (a stress-dependent joint about to outgrow the timestep)."""
-    for i in range(state.position.shape[0]):
-        quaternion_to_matrix(state.quaternion[i], rot[i])
-        for k in range(3):
-            force[i, k] = blocks.mass[i] * gravity[k]
-            moment[i, k] = 0.0
-    stiffer = contact_forces(state, rot, blocks.inv_mass, sub, joint, closure_limit, damping, dt, force, moment)
-    unbalanced, speed = integrate(state, rot, blocks, force, moment, damping, dt, velocity_dt)
+    :func:`contact_forces` returns (a stress-dependent joint about to outgrow the timestep).
+    Every thread count gives the same numbers, bit for bit: each contact writes its own sums,
+    each block adds its contacts' in contact order (:func:`gather`)."""
+    if work is None:
+        scratch = workspace(sub.pairs, state.position.shape[0], CONTRIBUTION)
+    else:
+        scratch = work
+    rotations(state.quaternion, rot)
+    stiffer = contact_forces(state, rot, blocks.inv_mass, sub, joint, closure_limit, damping, dt, scratch.contribution, scratch.stiffer)
+    unbalanced, speed = integrate(state, rot, blocks, force, moment, damping, dt, velocity_dt, gravity, scratch)
     kinetic, travel = energies(state, rot, blocks) if measure else (0.0, 0.0)
     return unbalanced, speed, kinetic, travel, stiffer
 
 
 @numba.njit(cache=True)
 def run_cycles(state, blocks, sub, joint, loop, broad_state, neighbours):
-    """:func:`cycle_loop` around the 3D :func:`step`."""
-    return cycle_loop(step, state, blocks, sub, joint, loop, broad_state, neighbours)
+    """:func:`cycle_loop` around the 3D :func:`step`, with one :class:`~drydem.engine.loop.Workspace`
+    for the call (numba's threads: :mod:`drydem.engine.threads`)."""
+    work = workspace(sub.pairs, state.position.shape[0], CONTRIBUTION)
+    return cycle_loop(step, state, blocks, sub, joint, loop, broad_state, neighbours, work)

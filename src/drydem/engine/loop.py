@@ -10,6 +10,8 @@ from typing import NamedTuple
 
 import numba
 import numpy as np
+from numba.core import types
+from numba.extending import overload
 
 from drydem.engine.damping import Damping
 
@@ -124,6 +126,84 @@ def accumulate_motion(state, lever, dt, moved, slack):
     return used_up
 
 
+class Workspace(NamedTuple):
+    """The scratch arrays of a compiled cycle that runs on several threads, made once per call of
+    ``run_cycles`` (:func:`workspace`): the contacts change only between calls.
+
+    incidence_start (nb + 1,), incidence (2 nc,) int64: each block's contacts in increasing order,
+    CSR-style (those of block i are ``incidence[incidence_start[i]:incidence_start[i + 1]]``), each
+    as 2 c + 1 where the block is contact c's incident block b, 2 c where it is its reference
+    block a. contribution (nc, width): what each contact adds to its blocks (the kernel's layout).
+    stiffer (nc,) bool: a contact's stress-dependent joint about to outgrow the timestep.
+    measures (nb, 3): each block's unbalanced force and unbalanced moment / radius (N; squared,
+    N2, in the planar kernel) and point speed (m/s), speed -1 for a block that does not move:
+    their maxima are taken after the parallel loop, in block order.
+    """
+
+    incidence_start: np.ndarray
+    incidence: np.ndarray
+    contribution: np.ndarray
+    stiffer: np.ndarray
+    measures: np.ndarray
+
+
+@numba.njit(cache=True)
+def block_incidence(pairs, nb):
+    """Each of ``nb`` blocks' contacts (``pairs`` (nc, 2): reference, incident block), in increasing
+    order: (start (nb + 1,), entries (2 nc,)) as :class:`Workspace` ``incidence``; a counting sort."""
+    nc = pairs.shape[0]
+    start = np.zeros(nb + 1, np.int64)
+    for c in range(nc):
+        start[pairs[c, 0] + 1] += 1
+        start[pairs[c, 1] + 1] += 1
+    for i in range(nb):
+        start[i + 1] += start[i]
+    fill = start[:nb].copy()
+    entries = np.empty(2 * nc, np.int64)
+    for c in range(nc):
+        a, b = pairs[c, 0], pairs[c, 1]
+        entries[fill[a]] = 2 * c
+        fill[a] += 1
+        entries[fill[b]] = 2 * c + 1
+        fill[b] += 1
+    return start, entries
+
+
+@numba.njit(cache=True)
+def workspace(pairs, nb, width):
+    """A :class:`Workspace` for the contacts ``pairs`` (nc, 2) of ``nb`` blocks, ``width`` numbers per contact."""
+    start, entries = block_incidence(pairs, nb)
+    nc = pairs.shape[0]
+    return Workspace(start, entries, np.empty((nc, width)), np.zeros(nc, np.bool_), np.empty((nb, 3)))
+
+
+def call_step(step_function, work, state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment,
+              measure):
+    """``step_function`` with the kernel's :class:`Workspace` ``work`` as its last argument, or
+    without it where ``work`` is None (the NumPy oracle's step). Compiled, the choice is made by
+    type (:func:`_call_step_compiled`), so that a kernel's ``step`` is compiled once, not also
+    for the call without a workspace."""
+    if work is None:
+        return step_function(state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment, measure)
+    return step_function(state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment, measure, work)
+
+
+@overload(call_step, inline="always")
+def _call_step_compiled(step_function, work, state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force,
+                        moment, measure):
+    if isinstance(work, (types.NoneType, types.Omitted)):
+        def without(step_function, work, state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment,
+                    measure):
+            return step_function(state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment, measure)
+        return without
+
+    def with_work(step_function, work, state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment,
+                  measure):
+        return step_function(state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment, measure,
+                             work)
+    return with_work
+
+
 class LoopSettings(NamedTuple):
     """What one call of a kernel's ``run_cycles`` is to do (:func:`cycle_loop`).
 
@@ -157,9 +237,10 @@ class LoopSettings(NamedTuple):
 
 
 @numba.njit(cache=True, inline="always")
-def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neighbours):
+def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neighbours, work=None):
     """The cycling loop around ``step_function`` (a kernel's ``step``), shared by every engine,
-    with the :class:`LoopSettings` ``loop``.
+    with the :class:`LoopSettings` ``loop``; a compiled kernel passes its :class:`Workspace`
+    ``work`` (made once per call: the contacts do not change within it) on to its step.
 
     It cycles until converged, re-detection needed, diverged, a stress-dependent joint about to
     outgrow the timestep (the step says so) or ``loop.max_cycles``, and returns
@@ -207,8 +288,8 @@ def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neig
             for k in range(3):
                 body[k] = gravity[k] - ground[cycle, k]
         velocity_dt = loop.first_velocity_dt if cycle == 0 else dt
-        unbalanced, speed, kinetic, travel, stiffer = step_function(state, blocks, sub, joint, loop.closure_limit, body, dt, velocity_dt,
-                                                                    damping, rot, force, moment, measure)
+        unbalanced, speed, kinetic, travel, stiffer = call_step(step_function, work, state, blocks, sub, joint, loop.closure_limit, body, dt,
+                                                                velocity_dt, damping, rot, force, moment, measure)
         ratio = unbalanced / loop.force_scale
         if not (speed < np.inf and (not measure or kinetic <= DIVERGENCE_FACTOR * g * (travel + loop.travel_slack))):
             return cycle + 1, DIVERGED, ratio, speed

@@ -72,12 +72,22 @@ def connect(address: str, *, timeout_s: float = SCHEDULER_TIMEOUT_S):
 
 def local_executor(workers: int) -> Executor:
     """``workers`` local processes, spawned (fresh interpreters, no forked state), that end when
-    this process ends however it ends (:func:`_exit_with_parent`)."""
+    this process ends however it ends, each running its kernels on one thread (:func:`_start_worker`)."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                               initializer=_exit_with_parent, initargs=(os.getpid(),))
+                               initializer=_start_worker, initargs=(os.getpid(),))
+
+
+def _start_worker(parent: int) -> None:
+    """Worker initializer: :func:`_exit_with_parent`, and one kernel thread
+    (:func:`drydem.engine.threads.set_threads`): the processes already share the cores out, and
+    each on every core would oversubscribe them (the results are the same for any count)."""
+    from drydem.engine.threads import set_threads
+
+    _exit_with_parent(parent)
+    set_threads(1)
 
 
 #: prctl's option that asks for a signal when the parent ends (linux/prctl.h)

@@ -1,0 +1,58 @@
+"""How many threads the compiled kernels run on.
+
+The cycles (:mod:`drydem.engine.cycle3d`) run their loops over blocks and contacts on numba's
+threads, all the cores by default (``numba.config.NUMBA_NUM_THREADS``, itself set by the
+environment variable NUMBA_NUM_THREADS). Every thread count gives the same numbers, bit for bit:
+each contact writes its own sums and each block adds its contacts' in contact order, so a
+result does not depend on the machine's cores or on this setting, only its speed does.
+
+numba's setting belongs to the Python thread that makes it (each thread starts with all the
+cores): :func:`set_threads` and :func:`using_threads` act on the calling thread's kernels.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import numba
+
+from drydem.model.parameters import Range
+
+
+def available() -> int:
+    """The most threads the kernels may run on: numba's thread pool (NUMBA_NUM_THREADS, by
+    default the machine's cores)."""
+    return int(numba.config.NUMBA_NUM_THREADS)
+
+
+def thread_rule() -> Range:
+    """What a thread count must be: an integer from 1 to :func:`available`."""
+    return Range(1, available(), integer=True)
+
+
+def get_threads() -> int:
+    """The threads the calling Python thread's kernels run on."""
+    return int(numba.get_num_threads())
+
+
+def set_threads(n: int | None) -> int:
+    """Run the compiled kernels on ``n`` threads (None: all of :func:`available`); returns the
+    count before. A ModelError (a :class:`~drydem.errors.DrydemError`) says ``threads = VALUE:
+    must be an integer in [1, N]`` for a boolean, a non-integer or a count out of range."""
+    count = available() if n is None else n
+    thread_rule().check(count, "threads")
+    previous = get_threads()
+    numba.set_num_threads(count)
+    return previous
+
+
+@contextmanager
+def using_threads(n: int | None) -> Iterator[int]:
+    """Run the kernels on ``n`` threads (None: all) within the ``with`` block, as before after it;
+    yields the count in force."""
+    previous = set_threads(n)
+    try:
+        yield get_threads()
+    finally:
+        numba.set_num_threads(previous)
