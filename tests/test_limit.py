@@ -162,3 +162,54 @@ def test_a_bad_limit_setting_is_a_model_error_naming_it_and_its_range(setting, v
 def test_every_bad_limit_setting_is_named_at_once():
     with pytest.raises(dd.ModelError, match=r"max_iterations = 0: .*; limit setting tolerance = 0: "):
         LimitSettings(max_iterations=0, tolerance=0)
+
+
+@pytest.mark.parametrize("mu", [0.3, 0.8])
+def test_along_y_a_squat_block_slides_at_mu_and_a_slender_one_topples_at_b_y_over_h(mu):
+    # tilt axis x: the live load along y. A brick 25 x 12 mm, 5.5 mm high: toppling about its long
+    # edge needs lambda = 12 / 5.5 = 2.18 > mu: it slides, lambda = mu
+    squat = stack_model([0.0055], joint=dd.JointMaterial(friction=mu))
+    assert limit_analysis(squat, LimitSettings(tilt_axis="x")).load_multiplier == pytest.approx(mu, rel=1e-9)
+    # 10 x 12 mm, 40 mm high, mu = 1: along x b/h = 10/40, along y 12/40 (one block, or four stacked)
+    for heights in ([0.04], [0.01] * 4):
+        model = slender(heights)
+        assert limit_analysis(model).load_multiplier == pytest.approx(10 / 40, rel=1e-9)
+        along_y = limit_analysis(model, LimitSettings(tilt_axis="x"))
+        assert along_y.load_multiplier == pytest.approx(12 / 40, rel=1e-9)
+        turn = along_y.angular_velocity[1:, 0]  # every block turns about x at the same rate
+        assert np.allclose(turn, turn[0]) and abs(turn[0]) > 0
+        assert np.allclose(along_y.angular_velocity[1:, 1:], 0.0, atol=1e-9)
+        assert limit_analysis(model, LimitSettings(tilt_axis="x", non_associative=True)).load_multiplier <= 12 / 40 * (1 + 1e-9)
+
+
+def test_a_load_along_y_on_an_in_plane_model_is_a_clear_error():
+    with pytest.raises(LimitAnalysisError, match="no block may move along y, the live load's direction .tilt axis x.: the model is in-plane"):
+        limit_analysis(in_plane_wall("bBb\nBB\n", 0.5), LimitSettings(tilt_axis="x"))
+
+
+@pytest.mark.parametrize("value", ["z", "X", 1, None])
+def test_a_bad_tilt_axis_is_a_model_error(value):
+    with pytest.raises(dd.ModelError, match=r"limit setting tilt_axis = .*: must be one of \('y', 'x'\)"):
+        LimitSettings(tilt_axis=value)
+
+
+def test_the_limit_command_takes_a_tilt_axis(tmp_path):
+    import json
+
+    from click.testing import CliRunner
+
+    from drydem.cli import main
+    from drydem.io.model_file import save_model
+
+    path = tmp_path / "pier.toml"
+    save_model(slender([0.04]), path)
+    result = CliRunner().invoke(main, ["limit", str(path), "--tilt-axis", "x", "--out", str(tmp_path / "la")])
+    assert result.exit_code == 0, result.output
+    assert "LA-A load multiplier (along y) 0.3000" in result.output
+    summary = json.loads((tmp_path / "la" / "summary.json").read_text())
+    assert summary["analysis"]["tilt_axis"] == "x" and summary["load_multiplier"] == pytest.approx(0.3, rel=1e-9)
+    # the stages, with the LP's size, on stderr
+    assert "assembling the equilibrium matrix" in result.stderr and " rows x " in result.stderr
+    refused = CliRunner().invoke(main, ["limit", "WD2", "--tilt-axis", "x", "--out", str(tmp_path / "wd2")])
+    assert refused.exit_code != 0 and "the model is in-plane, held in y" in refused.output
+    assert CliRunner().invoke(main, ["limit", "WD2", "--tilt-axis", "z"]).exit_code == 2

@@ -7,7 +7,7 @@ model's contact polygons (their corners: 2 points per length), a normal force N_
 cone, |T_k| <= c A_k + mu N_k (in-plane models: one tangent, exact; 3D: a 16-sided pyramid
 inscribed in the cone, with a vertex along the live load). Every free degree of freedom of every movable block is in equilibrium under its
 weight W (dead load, vertical) plus lambda W horizontal along x (live load: the tilting table's
-lateral component)::
+lateral component; along y with ``tilt_axis = "x"``, the table tilting about x)::
 
     maximise lambda  subject to  B f + lambda L = -D,  f admissible,
 
@@ -26,6 +26,10 @@ authors state: the non-associative problem has no unique solution and this schem
 guaranteed to find the lowest multiplier (nor to converge; then the last iterate is
 reported with ``converged = False``).
 
+The LP handed to HiGHS writes each point's admissible forces by the generators of the pyramid
+(its edges) rather than its facets: the same feasible set, so the same lambda, with only the
+equilibrium rows as rows (:func:`_solve`).
+
 Units: the LP is solved in units of the mean block weight and the mean block size (HiGHS can
 return wrong optima on badly scaled input; bricks weigh ~0.03 N).
 """
@@ -38,23 +42,47 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import linprog
-from scipy.sparse import coo_matrix, hstack, identity, vstack
+from scipy.sparse import coo_matrix, hstack
 from scipy.spatial.transform import Rotation
 
 from drydem.engine.contacts import world_points
 from drydem.engine.tracker import ContactTracker
 from drydem.errors import DrydemError
 from drydem.model.assembly import Model
-from drydem.model.parameters import FLAG, G, ContactSettings, Range, check_fields
+from drydem.model.parameters import FLAG, G, ContactSettings, OneOf, Range, check_fields
 from drydem.model.state import State
 
 #: sides of the linearised friction pyramid for 3D contacts
 PYRAMID_SIDES = 16
+#: HiGHS's method (scipy.optimize.linprog), chosen by measurement (benchmarks/bench_limit.py; 2 shared
+#: cores, the generator form): the interior point method (IPX, with crossover to a vertex, whose
+#: duals are the mechanism) is 4 to 6 times faster than the dual simplex, which needs ~10 pivots
+#: per row on these degenerate LPs (a 20 x 20 brick wall: 0.3 s against 1.2 s, 10,000 pivots for
+#: 1,230 rows; a 115-block house in 3D: 6-8 s against 45 s; primal simplex 12 s); presolve
+#: removes nothing from the generator form (on or off: the same time, within the noise)
+METHOD = "highs-ipm"
+#: the non-associative iterations' method: each iteration's capacities come from the normal
+#: forces of the last solution, one of many optimal ones, so the LA-NA path depends on the
+#: method; the dual simplex keeps the published and earlier results (WD6: lambda 0.2085 as
+#: before, 0.2174 with the interior point; WD2 0.2998 as before, 0.3022 after 74 iterations),
+#: and these LPs have no pyramid (shear bounded by a fixed capacity), far fewer degenerate pivots
+NA_METHOD = "highs-ds"
+OPTIONS: dict = {}
+SOLVER_NAMES = {"highs": "HiGHS's choice", "highs-ds": "dual simplex", "highs-ipm": "interior point"}
+#: equilibrium coefficients below this (round-off of the cross products, in the LP's units) are
+#: left out: HiGHS ignores |values| <= 1e-9 anyway, with a warning
+ZERO = 1e-9
 
 
 class LimitAnalysisError(DrydemError):
     """The limit analysis has no answer: unstable under dead load, no free block, solver failure."""
 
+
+#: the axis the table tilts about (as ``drydem tilt --tilt-axis``): "y", the live load along x (a
+#: wall along x loaded in its plane); "x", the live load along y (out of the plane of such a wall)
+TILT_AXES = ("y", "x")
+#: the live load's direction for each tilt axis
+LOAD_DIRECTION = {"y": 0, "x": 1}
 
 #: the rule of each field of :class:`LimitSettings`: at most 10,000 iterations, each a linear
 #: program (minutes for a large wall); the tolerance is a relative change, a change of 100 %
@@ -64,6 +92,7 @@ LIMIT_RULES = {
     "max_iterations": Range(1, 10_000, integer=True),
     "tolerance": Range(0.0, 1.0, low_open=True, high_open=True),
     "relaxation": Range(0.0, 1.0, low_open=True),
+    "tilt_axis": OneOf(TILT_AXES),
 }
 
 
@@ -72,12 +101,14 @@ class LimitSettings:
     """non_associative : run the Gilbert et al. (2006) iteration after the associative LP.
     max_iterations : of that iteration. tolerance : relative change of lambda that ends it.
     relaxation : share of the new normal forces mixed into the old ones, 0 < r <= 1.
+    tilt_axis : "y" (default), the live load lambda W along x; "x", along y (:data:`TILT_AXES`).
     Checked when created (:data:`LIMIT_RULES`): ModelError naming each bad setting and its range."""
 
     non_associative: bool = False
     max_iterations: int = 100
     tolerance: float = 1e-4
     relaxation: float = 0.5
+    tilt_axis: str = "y"
 
     def __post_init__(self):
         check_fields(self, LIMIT_RULES, "limit setting")
@@ -133,30 +164,36 @@ def limit_analysis(model: Model, settings: LimitSettings = LimitSettings(), *,
     """LA-A (and LA-NA with ``settings.non_associative``) of ``model`` (see module docstring).
 
     ``on_progress(stage)`` is called as each stage starts (finding the contacts, assembling the
-    equilibrium matrix, each LP solved by HiGHS: the associative one, then each non-associative
-    iteration with the last lambda), with a line that says it and its size, so that a command
-    can show where it is: on a large wall nearly all the time is in the LP (a 60 x 60 brick
-    wall, 3631 blocks: contacts 0.1 s, assembly 0.6 s, the associative LP 15 min)."""
+    equilibrium matrix, each LP solved by HiGHS: the associative one with its method and size,
+    then each non-associative iteration with the last lambda), with a line that says it, so
+    that a command can show where it is; nothing is reported without it. On a large model
+    nearly all the time is in the LP (a 60 x 60 brick wall, 3,631 blocks, 2 shared cores:
+    contacts and assembly ~1 s, the associative LP ~90 s; it took ~15 min in the facet form)."""
     progress = on_progress or (lambda stage: None)
-    problem = _assemble(model, progress)
+    problem = _assemble(model, settings.tilt_axis, progress)
     joint, weight = model.joint, problem.weight
     friction = joint.friction
     cohesion = joint.cohesion * problem.area / weight
     tension = joint.tension * problem.area / weight
-    rows, columns = problem.equilibrium.shape
-    progress(f"solving the associative LP with HiGHS ({rows} equilibrium rows, {columns} contact forces)")
-    lam, forces, duals, status = _solve(problem, friction=friction, cohesion=cohesion, tension=tension, capacity=None)
+
+    def announce(rows: int, columns: int) -> None:
+        progress(f"solving the associative LP with HiGHS ({SOLVER_NAMES[METHOD]}: {rows} rows x {columns} columns, "
+                 f"{problem.n_points} contact points)")
+
+    lam, normal, duals, status = _solve(problem, friction=friction, cohesion=cohesion, tension=tension, capacity=None,
+                                        announce=announce)
+    forces = normal
     history, converged, iterations = [lam], True, 1
     if settings.non_associative:
         converged = False
-        normal = forces[: problem.n_points]
         for iterations in range(2, settings.max_iterations + 2):
             progress(f"non-associative iteration {iterations - 1} of at most {settings.max_iterations}: "
                      f"solving the LP with HiGHS (lambda {lam:.4f} so far)")
             capacity = cohesion + friction * np.maximum(normal, 0.0)
-            lam_new, forces_new, duals_new, status = _solve(problem, friction=0.0, cohesion=cohesion, tension=tension, capacity=capacity)
+            lam_new, forces_new, duals_new, status = _solve(problem, friction=friction, cohesion=cohesion, tension=tension, capacity=capacity,
+                                                            method=NA_METHOD)
             history.append(lam_new)
-            normal = (1 - settings.relaxation) * normal + settings.relaxation * forces_new[: problem.n_points]
+            normal = (1 - settings.relaxation) * normal + settings.relaxation * forces_new
             change = abs(lam_new - lam) / max(abs(lam), 1e-12)
             lam, forces, duals = lam_new, forces_new, duals_new
             if change < settings.tolerance:
@@ -166,15 +203,20 @@ def limit_analysis(model: Model, settings: LimitSettings = LimitSettings(), *,
     return LimitResult(
         load_multiplier=lam, method="non-associative" if settings.non_associative else "associative", status=status,
         iterations=iterations, converged=converged, history=history, velocity=velocity, angular_velocity=angular,
-        normal_force=forces[: problem.n_points] * weight,
+        normal_force=forces * weight,
     )
 
 
-def _assemble(model: Model, progress: Callable[[str], None]) -> _Problem:
+def _assemble(model: Model, tilt_axis: str, progress: Callable[[str], None]) -> _Problem:
     """Contact points at the contact polygons' corners, and the equilibrium rows of the free dofs."""
     movable = model.block_movable
     if not movable.any():
         raise LimitAnalysisError(f"{model.source}: no movable block to analyse")
+    load = LOAD_DIRECTION[tilt_axis]
+    free = ~model.block_fixed & movable[:, None]
+    if not free[:, load].any():
+        raise LimitAnalysisError(f"{model.source}: no block may move along {'xy'[load]}, the live load's direction "
+                                 f"(tilt axis {tilt_axis}){': the model is in-plane, held in y' if model.in_plane else ''}")
     progress(f"finding the contacts of {model.n_blocks} blocks")
     corners = model.replace(contacts=ContactSettings(points_per_length=2, points_across=model.contacts.points_across,
                                                      tolerance=model.contacts.tolerance))
@@ -188,13 +230,15 @@ def _assemble(model: Model, progress: Callable[[str], None]) -> _Problem:
     # in-plane models (the paper's walls, Model.in_plane): every contact normal lies in the x-z
     # plane and only x, z and the rotation about y are in equilibrium (the others are held)
     in_plane = model.in_plane
-    tangents = _tangents(normal, in_plane)
+    tangents = _tangents(normal, in_plane, load)
     weight = float(model.block_mass[movable].mean() * G)
-    length = float(np.mean([np.ptp(s.vertices, axis=0).max() for s in model.block_shape]))
+    geometry = model.geometry  # vertices relative to the centroids, block by block
+    starts = geometry.vertex_start[:-1]
+    extent = np.maximum.reduceat(geometry.vertex, starts) - np.minimum.reduceat(geometry.vertex, starts)
+    length = float(extent.max(axis=1).mean())
     centroid = model.block_centroid / length
     point = point / length
 
-    free = ~model.block_fixed & movable[:, None]
     row_of = -np.ones((model.n_blocks, 6), dtype=np.int64)
     row_of[free] = np.arange(free.sum())
     rows = np.argwhere(free)
@@ -209,56 +253,101 @@ def _assemble(model: Model, progress: Callable[[str], None]) -> _Problem:
             for dof in range(6):
                 value = sign * (direction[:, dof] if dof < 3 else moment[:, dof - 3])
                 row = row_of[block, dof]
-                keep = (row >= 0) & (value != 0.0)
+                keep = (row >= 0) & (np.abs(value) > ZERO)
                 i.append(row[keep]), j.append(column[keep]), v.append(value[keep])
     equilibrium = coo_matrix((np.concatenate(v), (np.concatenate(i), np.concatenate(j))),
                              shape=(len(rows), len(directions) * n_points)).tocsr()
     mass = model.block_mass[rows[:, 0]] * G / weight
     dead = np.where(rows[:, 1] == 2, -mass, 0.0)
-    live = np.where(rows[:, 1] == 0, mass, 0.0)
+    live = np.where(rows[:, 1] == load, mass, 0.0)
     # moments of the loads about the centroid vanish: they act at the centroid
     return _Problem(equilibrium, live, dead, rows, n_points, len(tangents), sub.area, weight, length, model.source)
 
 
-def _tangents(normal: np.ndarray, in_plane: bool) -> list[np.ndarray]:
+def _tangents(normal: np.ndarray, in_plane: bool, load: int = 0) -> list[np.ndarray]:
     """Unit tangents per point: in-plane, the one in the x-z plane; in 3D, t1 along the live
-    load (x) projected on the contact plane (another axis where the normal is along x), t2 = n x t1."""
+    load (axis ``load``, x or y) projected on the contact plane (z where the normal is along
+    the load), t2 = n x t1."""
     if in_plane:
         t = np.cross(normal, [0.0, 1.0, 0.0])
         return [t / np.linalg.norm(t, axis=1)[:, None]]
-    axis = np.where(np.abs(normal[:, [0]]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 0.0, 1.0]])
+    axis = np.where(np.abs(normal[:, [load]]) < 0.9, np.eye(3)[[load]], [[0.0, 0.0, 1.0]])
     t1 = axis - np.sum(axis * normal, axis=1)[:, None] * normal
     t1 /= np.linalg.norm(t1, axis=1)[:, None]
     return [t1, np.cross(normal, t1)]
 
 
-def _solve(problem: _Problem, *, friction: float, cohesion: np.ndarray, tension: np.ndarray, capacity: np.ndarray | None):
-    """max lambda: returns (lambda, forces in weight units, duals of the equilibrium rows, status).
+def _solve(problem: _Problem, *, friction: float, cohesion: np.ndarray, tension: np.ndarray, capacity: np.ndarray | None,
+           announce: Callable[[int, int], None] | None = None, method: str | None = None):
+    """max lambda: returns (lambda, normal forces (np,) in weight units, duals of the equilibrium rows, status).
 
-    Shear limits: |T . e| <= cohesion + friction N along every pyramid side e, or, with
-    ``capacity``, <= capacity (fixed; no dependence on N: no dilatancy)."""
+    Shear limits: T inside the polygon (2 sides in-plane, :data:`PYRAMID_SIDES` in 3D, a vertex
+    along t1) of circumradius cohesion + friction N, N >= -tension; or, with ``capacity``, of
+    circumradius capacity (fixed: no dependence on N, no dilatancy), N >= -tension.
+
+    The admissible set of each point is written by its generators rather than its facets (the
+    same set, so the same LP optimum; only the equilibrium rows are rows): a point's force is
+
+        f = -floor n + sum_s beta_s (n + friction v_s) + w,   beta_s >= 0,  w in radius * polygon,
+
+    v_s the polygon's unit vertices; associative: floor = min(tension, cohesion / friction) (the
+    cone's apex cuts off a larger tension) and radius = cohesion - friction floor >= 0;
+    non-associative: one ray n, floor = tension, radius = capacity. In-plane, w is one column
+    bounded by +-radius; in 3D, w = sum_s gamma_s v_s, gamma_s >= 0, sum_s gamma_s <= radius (one
+    row per point with radius > 0: none with the default zero cohesion and tension). The facet
+    form had 2 (3D: 16) inequality rows per point besides the ~3 (6) equilibrium rows per block:
+    a 20 x 20 brick wall, 5,910 rows (1,230 here); its LP took 1.8 s (dual simplex), now 0.3 s
+    (interior point, :data:`METHOD`); a 60 x 60 wall ~15 min, now ~90 s; a 115-block house in
+    3D, 684 rows x 18,945 columns here, ~190 s in the facet form, now 6-15 s (2 shared cores)."""
     n, k = problem.n_points, problem.n_tangents
     sides = 2 if k == 1 else PYRAMID_SIDES
-    # facet normals between the vertices, so that a vertex (full capacity) lies along t1, the live load
-    angles = (np.arange(sides) + (0.5 if k == 2 else 0.0)) * 2 * np.pi / sides
-    facet = np.cos(np.pi / sides) if k == 2 else 1.0  # inscribed polygon's facet distance
-    eye = identity(n, format="csr")
-    blocks, bounds_rhs = [], []
-    for angle in angles:
-        shear = [eye * (np.cos(angle) if k == 2 else (1.0 if angle == 0 else -1.0))]
-        if k == 2:
-            shear.append(eye * np.sin(angle))
-        normal_part = eye * (-friction * facet) if capacity is None else eye * 0.0
-        blocks.append(hstack([normal_part, *shear, coo_matrix((n, 1))]))
-        bounds_rhs.append(facet * (cohesion if capacity is None else capacity))
-    a_ub = vstack(blocks).tocsr()
-    b_ub = np.concatenate(bounds_rhs)
-    a_eq = hstack([problem.equilibrium, coo_matrix(problem.live[:, None])]).tocsr()
-    b_eq = problem.dead * -1.0
+    angles = np.arange(sides) * 2 * np.pi / sides  # the polygon's vertices: 0 (and pi in-plane), one along t1
+    vertex = np.stack([np.cos(angles), np.sin(angles)], axis=1)
+    vertex[np.abs(vertex) < 1e-12] = 0.0
+    equilibrium = problem.equilibrium.tocsc()  # by columns: sliced and stacked by columns, HiGHS's format
+    b_normal = equilibrium[:, :n]
+    b_tangent = [equilibrium[:, (1 + i) * n:(2 + i) * n] for i in range(k)]
+
+    def along(s: int, scale: float, cols=None):  # the equilibrium columns of the shear vertex s (times scale)
+        parts = [b_tangent[i] * (scale * vertex[s, i]) for i in range(k) if vertex[s, i] != 0.0]
+        total = parts[0]
+        for part in parts[1:]:
+            total = total + part
+        return total if cols is None else total[:, cols]
+
+    if capacity is None:
+        floor = np.minimum(tension, cohesion / friction)
+        radius = np.maximum(cohesion - friction * floor, 0.0)
+        rays = [b_normal + along(s, friction) for s in range(sides)]
+    else:
+        floor, radius = tension, capacity
+        rays = [b_normal]
+    n_rays = len(rays)
+    sheared = np.flatnonzero(radius > 0)
+    m = len(sheared)
+    columns = list(rays)
+    lower = [np.zeros(n * n_rays)]
+    upper = [np.full(n * n_rays, np.inf)]
+    a_ub = b_ub = None
+    if m and k == 1:
+        columns.append(b_tangent[0][:, sheared])
+        lower.append(-radius[sheared]), upper.append(radius[sheared])
+    elif m:
+        columns += [along(s, 1.0, sheared) for s in range(sides)]
+        lower.append(np.zeros(m * sides)), upper.append(np.full(m * sides, np.inf))
+        pick = coo_matrix((np.ones(m * sides), (np.tile(np.arange(m), sides), np.arange(m * sides))), shape=(m, m * sides))
+        a_ub = hstack([coo_matrix((m, n * n_rays)), pick, coo_matrix((m, 1))], format="csc")
+        b_ub = radius[sheared]
+    columns.append(coo_matrix(problem.live[:, None]).tocsc())
+    lower.append([-np.inf]), upper.append([np.inf])  # free: a negative lambda is reported
+    a_eq = hstack(columns, format="csc")
+    b_eq = -problem.dead + b_normal @ floor
     cost = np.zeros(a_eq.shape[1])
     cost[-1] = -1.0
-    bounds = [(-t, None) for t in tension] + [(None, None)] * (k * n) + [(None, None)]
-    res = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=b_eq, bounds=bounds, method="highs")
+    bounds = np.stack([np.concatenate(lower), np.concatenate(upper)], axis=1)
+    if announce is not None:
+        announce(a_eq.shape[0] + (0 if a_ub is None else a_ub.shape[0]), a_eq.shape[1])
+    res = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=b_eq, bounds=bounds, method=method or METHOD, options=OPTIONS)
     if res.status == 2:
         raise LimitAnalysisError(f"{problem.source}: unstable under its dead load alone: no contact forces hold the blocks up "
                                  "for any load multiplier (a block floating, or resting beyond the edge of its support)")
@@ -269,7 +358,8 @@ def _solve(problem: _Problem, *, friction: float, cohesion: np.ndarray, tension:
     if res.x[-1] < 0:
         raise LimitAnalysisError(f"{problem.source}: unstable under its dead load alone: lambda = {res.x[-1]:.4g} < 0 "
                                  "(the blocks stand only if pushed the other way)")
-    return float(res.x[-1]), res.x[:-1], res.eqlin.marginals, res.message
+    normal = res.x[: n * n_rays].reshape(n_rays, n).sum(axis=0) - floor
+    return float(res.x[-1]), normal, res.eqlin.marginals, res.message
 
 
 def _mechanism(model: Model, problem: _Problem, duals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -282,10 +372,9 @@ def _mechanism(model: Model, problem: _Problem, duals: np.ndarray) -> tuple[np.n
     if problem.live @ duals < 0:
         generalised = -generalised
     velocity, angular = generalised[:, :3], generalised[:, 3:]
-    fastest = 0.0
-    for b, shape in enumerate(model.block_shape):
-        arm = shape.vertices - shape.centroid
-        fastest = max(fastest, float(np.linalg.norm(velocity[b] + np.cross(angular[b], arm), axis=1).max()))
+    geometry = model.geometry  # every vertex relative to its block's centroid
+    block = np.repeat(np.arange(nb), np.diff(geometry.vertex_start))
+    fastest = float(np.linalg.norm(velocity[block] + np.cross(angular[block], geometry.vertex), axis=1).max())
     if fastest > 0:
         velocity, angular = velocity / fastest, angular / fastest
     return velocity, angular
