@@ -142,3 +142,39 @@ def test_bad_specs_are_refused(change, words):
 def test_spec_fields_are_keyword_only():
     with pytest.raises(TypeError):
         BuildingSpec(1.5, 1.25, 2, 20, 0.1, 0.05)
+
+
+def test_block_count_is_counted_without_building(small, large):
+    assert SMALL.block_count == small.n_blocks and LARGE.block_count == large.n_blocks
+
+
+def test_the_overlap_check_gives_the_pairwise_penetration_depths(small):
+    """drydem.model.assembly.penetration_depths, vectorised over the candidate pairs, against
+    drydem.model.geometry.penetration_depth pair by pair (boxes, and turned hulls padded to the
+    most vertices and faces), and a building with one brick pushed into another refused, named."""
+    from drydem.model.assembly import Block, build_model, penetration_depths
+    from drydem.model.boxes import bounds, overlapping_pairs
+    from drydem.model.geometry import convex_hull, penetration_depth
+
+    shapes = list(small.block_shape)
+    pairs = overlapping_pairs(*bounds(shapes), small.block_movable, 0.0)
+    depth = penetration_depths(shapes, pairs)
+    assert np.array_equal(depth, [penetration_depth(shapes[i], shapes[j]) for i, j in pairs])
+    rng = np.random.default_rng(3)
+    def prism(n):  # an n-sided prism, turned and moved at random, near the others
+        a = 2 * np.pi * np.arange(n) / n
+        ring = np.column_stack([0.05 * np.cos(a), 0.05 * np.sin(a)])
+        points = np.vstack([np.column_stack([ring, np.zeros(n)]), np.column_stack([ring, np.full(n, 0.04)])])
+        turn, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        return convex_hull(points @ turn.T + rng.normal(size=3) * 0.03)
+
+    hulls = [prism(n) for n in (3, 5, 8, 12, 4)]
+    mixed = [*hulls, *shapes[:3]]
+    every = np.array([(i, j) for i in range(len(mixed)) for j in range(i + 1, len(mixed))])
+    np.testing.assert_allclose(penetration_depths(mixed, every), [penetration_depth(mixed[i], mixed[j]) for i, j in every],
+                               rtol=1e-12, atol=1e-15)
+    blocks = building_blocks(dataclasses.replace(SMALL, storeys=1, storey_height_courses=12, window_height_courses=4, door_height_courses=0))
+    k = next(k for k, b in enumerate(blocks) if b.name == "s0w0c3b2")
+    blocks[k] = Block(name=blocks[k].name, shape=blocks[k].shape.transformed(np.eye(3), np.array([0.01, 0.0, 0.0])))
+    with pytest.raises(ModelError, match=r"blocks 's0w0c3b2' and 's0w0c3b3' overlap by 0.01 m at the start"):
+        build_model(blocks, density=1800.0)

@@ -260,3 +260,73 @@ def test_a_step_without_equilibrium_nor_collapse_gives_no_collapse_angle():
     result = tilt_analysis(model, TiltSettings(increment_deg=5.0))
     assert result.ended_by == "no equilibrium within max_cycles" and result.stable_under_gravity
     assert result.last_equilibrium_deg == 25.0 and result.collapse_angle_deg is None and result.load_multiplier is None
+
+
+# --- the table turned about x (TiltSettings.tilt_axis): the lateral load along y -----------------
+
+
+@pytest.mark.parametrize("axis", ["y", "x"])
+@pytest.mark.parametrize("loading", ["tilt", "multiplier"])
+def test_single_block_slides_at_atan_mu_about_either_axis(axis, loading):
+    model = stack_model([0.0055], joint=dd.JointMaterial(kn=1e8, ks=1e8, friction=0.5))
+    settings = TiltSettings(increment_deg=STEP, tilt_axis=axis, loading=loading)
+    result = tilt_analysis(model, settings)
+    assert within_one_step_below(result.collapse_angle_deg, math.degrees(math.atan(0.5)))
+    # it slid along the load direction only, off the end of its base (which reaches two block
+    # widths past it), and the monitored displacement is measured along it
+    moved = result.final_state.position[1] - model.block_centroid[1]
+    along, across = (0, 1) if axis == "y" else (1, 0)
+    assert moved[along] > 2 * BRICK[along] and abs(moved[across]) < 1e-3 * moved[along]
+    assert all(r.ux_m >= -1e-9 for r in result.records) and result.records[-1].ux_m > 0
+
+
+def test_a_block_topples_at_atan_of_its_width_along_the_load_over_its_height():
+    """A block 10 mm along x, 16 mm along y and 64 mm tall (mu = 1: it cannot slide first)
+    topples when the weight's line of action passes its downhill edge: tan(theta) = b / h with
+    b its width along the load, 10 mm (8.88 deg) tilting about y, 16 mm (14.04 deg) about x."""
+    model = stack_model([0.064], size_xy=(0.01, 0.016), joint=dd.JointMaterial(kn=1e10, ks=1e10, friction=1.0))
+    for axis, b in (("y", 0.01), ("x", 0.016)):
+        result = tilt_analysis(model, TiltSettings(increment_deg=STEP, tilt_axis=axis))
+        assert within_one_step_below(result.collapse_angle_deg, math.degrees(math.atan(b / 0.064))), axis
+
+
+@pytest.mark.parametrize("axis", ["y", "x"])
+def test_a_block_turned_45_deg_topples_about_its_corner(axis):
+    """A square block b = 10 mm wide, h = 40 mm tall, turned 45 deg about z: its footprint is a
+    diamond with a corner pointing along x and along y, at the half-diagonal b / sqrt(2) from
+    the centre. The tilt's lateral load g sin(theta) along x (or y) and the normal g cos(theta)
+    put the weight's line of action through the base at (h / 2) tan(theta) from the point under
+    the centroid; it reaches the downhill corner, about which the block topples (mu = 1: it
+    cannot slide first), when (h / 2) tan(theta) = b / sqrt(2), i.e. tan(theta) = b' / h with
+    b' = 2 b / sqrt(2) = sqrt(2) b, the block's diagonal: its width along the load. Here
+    atan(sqrt(2) / 4) = 19.47 deg, against atan(1 / 4) = 14.04 deg unturned; the same about
+    either axis (the diamond is symmetric)."""
+    model = stack_model([0.04], size_xy=(0.01, 0.01), turn_deg=45.0, joint=dd.JointMaterial(kn=1e10, ks=1e10, friction=1.0))
+    result = tilt_analysis(model, TiltSettings(increment_deg=STEP, tilt_axis=axis))
+    assert within_one_step_below(result.collapse_angle_deg, math.degrees(math.atan(math.sqrt(2.0) * 0.01 / 0.04)))
+
+
+def test_tilt_axis_sets_the_gravity_direction_and_is_checked():
+    t = math.radians(30.0)
+    np.testing.assert_allclose(TiltSettings(tilt_axis="x").gravity(30.0), dd.G * np.array([0.0, math.sin(t), -math.cos(t)]))
+    np.testing.assert_allclose(TiltSettings(tilt_axis="x", loading="multiplier").gravity(30.0),
+                               dd.G * np.array([0.0, math.tan(t), -1.0]))
+    np.testing.assert_array_equal(TiltSettings().gravity(30.0), dd.G * np.array([math.sin(t), 0.0, -math.cos(t)]))
+    assert TiltSettings().load_direction == 0 and TiltSettings(tilt_axis="x").load_direction == 1
+    with pytest.raises(dd.ModelError, match=r"tilt_axis = 'z': must be one of \('y', 'x'\)"):
+        TiltSettings(tilt_axis="z")
+
+
+def test_an_in_plane_model_is_not_tilted_about_x():
+    model = stack_model([0.0055], supports=dd.Supports(fix_y=True))
+    assert model.in_plane
+    with pytest.raises(dd.ModelError, match="out of its plane, but it is an in-plane model"):
+        tilt_analysis(model, TiltSettings(increment_deg=STEP, tilt_axis="x"))
+
+
+def test_a_checkpoint_of_another_tilt_axis_is_refused(tmp_path):
+    model = slender([0.04], kn=1e8)
+    checkpoint = tmp_path / "checkpoint.npz"
+    tilt_analysis(model, TiltSettings(increment_deg=STEP, max_angle_deg=1.0), checkpoint=checkpoint)
+    with pytest.raises(dd.ModelError, match="tilt setting tilt_axis: 'y' in the checkpoint, 'x' now"):
+        tilt_analysis(model, TiltSettings(increment_deg=STEP, max_angle_deg=1.0, tilt_axis="x"), checkpoint=checkpoint, resume=True)

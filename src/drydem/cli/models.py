@@ -89,7 +89,8 @@ def _settle(sim: Simulation) -> None:
 @main.command(name="designs")
 def list_designs() -> None:
     """List the built-in walls: WD1-WD7 (reconstructions of the seed paper's competition walls)
-    and the examples, with their void ratio, block count and the competition-brief check."""
+    and the examples, with their void ratio, block count and the competition-brief check; and
+    the built-in 3D buildings (building-small, building-large)."""
     from drydem.masonry.brief import brief_violations
 
     click.echo(f"{'name':<16} {'title':<28} {'voids':>6} {'blocks':>6}  brief")
@@ -98,6 +99,14 @@ def list_designs() -> None:
         violations = brief_violations(wall)
         verdict = "ok" if not violations else "breaks it: " + "; ".join(violations)
         click.echo(f"{name:<16} {wall.title[:28]:<28} {wall.layout.void_ratio:>6.1%} {len(wall.layout.solid_units):>6}  {verdict}")
+    from drydem.masonry.building import BUILDINGS
+
+    click.echo(f"\n{'name':<16} {'3D building':<28} {'plan':>13} {'blocks':>6}")
+    for name, spec in BUILDINGS.items():
+        title = f"{spec.storeys} storeys, {spec.windows_per_wall} windows a wall"
+        plan = f"{spec.length_m:g} x {spec.width_m:g} m"
+        click.echo(f"{name:<16} {title:<28} {plan:>13} {spec.block_count:>6}")
+    click.echo("\nThe buildings (drydem.masonry.building) are 3D: --tilt-axis x loads their long walls out of plane.")
     click.echo("WD1-WD7 are reconstructions that obey the brief, not the original drawings (drydem show NAME draws one).")
 
 def _imperfect_drawing(found: Target, imperfections: Imperfections, seed: int, factor: float) -> tuple[Model, str]:

@@ -32,6 +32,7 @@ class TiltOptions:
     predictor: bool
     stop_displacement: float
     loading: str
+    tilt_axis: str
     monitor: str | None
     max_angle: float
 
@@ -45,8 +46,8 @@ class TiltOptions:
         from drydem.analysis.tilt import TiltSettings
 
         return TiltSettings(increment_deg=self.increment, adaptive=self.adaptive, predictor=self.predictor,
-                            stop_displacement_m=self.stop_displacement, loading=self.loading, monitor=self.monitor,
-                            max_angle_deg=self.max_angle)
+                            stop_displacement_m=self.stop_displacement, loading=self.loading, tilt_axis=self.tilt_axis,
+                            monitor=self.monitor, max_angle_deg=self.max_angle)
 
 
 def tilt_options(*, adaptive: bool):
@@ -69,7 +70,11 @@ def tilt_options(*, adaptive: bool):
         click.option("--criterion", type=click.Choice(CRITERIA), help="Equilibrium criterion (default: the model file's)."),
         click.option("--loading", type=click.Choice(["tilt", "multiplier"]), default="tilt", show_default=True,
                      help="Tilt the gravity or add lambda g horizontally."),
-        click.option("--monitor", help="Block whose centroid is monitored (default: the top block nearest the middle)."),
+        click.option("--tilt-axis", type=click.Choice(["y", "x"]), default="y", show_default=True,
+                     help="Horizontal axis the table turns about: y loads along x (in the plane of a wall drawn in x-z); "
+                          "x loads along y, out of the plane of the walls along x (3D models; a building's long walls)."),
+        click.option("--monitor", help="Block whose centroid is monitored (default: the top block nearest the middle in x; "
+                                       "with --tilt-axis x, on the leeward wall)."),
         click.option("--max-angle", type=float, default=80.0, show_default=True, help="Largest tilt tried, deg."),
     ]
     names = [f.name for f in fields(TiltOptions)]
@@ -105,7 +110,7 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
     when interrupted (the last equilibrium is kept for --resume)."""
     from tqdm import tqdm
 
-    from drydem.analysis.tilt import NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY, monitor_index, tilt_analysis
+    from drydem.analysis.tilt import NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY, check_loading, monitor_index, tilt_analysis
     from drydem.engine.checkpoint import load_checkpoint
     from drydem.io.results import PushoverWriter
     from drydem.io.vtk import VtkSeries
@@ -114,7 +119,8 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
     try:
         model = found.model.overridden(**tilt.model_overrides())
         settings = tilt.settings()
-        monitor_index(model, tilt.monitor)
+        check_loading(model, settings)
+        monitor_index(model, tilt.monitor, settings.tilt_axis)
         if resume and overwrite:
             raise DrydemError("--resume goes on from the run in --out and --overwrite deletes it: give one of them")
         if resume and (out is None or not (out / CHECKPOINT).is_file()):
@@ -126,6 +132,8 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
         raise click.ClickException(str(exc)) from None
     click.echo(f"{found.name} ({found.path}): {model.n_blocks} blocks, {model.joint.stiffness_text}, "
                f"mu {model.joint.friction:g}, {model.contacts.points_per_length} points per length -> {folder}")
+    if settings.tilt_axis != "y":
+        click.echo(f"tilting about {settings.tilt_axis}: the lateral load acts along {'xy'[settings.load_direction]}")
     if resume:
         click.echo(f"resuming from {folder / CHECKPOINT}: last equilibrium at {float(saved['theta_deg']):g} deg "
                    f"({len(saved['records'])} equilibrium states)")
@@ -137,7 +145,7 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
 
         def progress(theta, cycles, ux):
             bar.update(cycles - bar.n)
-            bar.set_postfix_str(f"{theta:.2f} deg, ux {ux * 1e3:.2f} mm")
+            bar.set_postfix_str(f"{theta:.2f} deg, u{'xy'[settings.load_direction]} {ux * 1e3:.2f} mm")
 
         try:
             series = VtkSeries(folder / "vtk", model, every=save_every, resume=resume) if vtk or video else None
@@ -172,7 +180,8 @@ def _tilt_outputs(found: Target, model: Model, result, folder: Path, series) -> 
         ("last equilibrium" if last is not None else "under gravity", result.collapse_state or result.final_state, lost_by_then),
         (f"past collapse ({result.ended_by})", result.final_state, frozenset(name for name, _ in result.lost_blocks)),
     ]
-    mechanism_figure(model, states, folder / "mechanism.png", monitored=result.monitored_block)
+    mechanism_figure(model, states, folder / "mechanism.png", monitored=result.monitored_block,
+                     load_direction=result.settings.load_direction)
     for line in _tilt_verdict(result, model):
         click.echo(line)
     dls = result.drift_limit_angles_deg

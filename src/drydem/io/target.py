@@ -10,6 +10,7 @@ from drydem.errors import ModelError
 from drydem.files import read_toml
 from drydem.io.model_file import model_from_dict
 from drydem.model.assembly import Model, base_under, build_model
+from drydem.masonry.building import BUILDINGS, builtin_building
 from drydem.masonry.walls import Wall, is_wall_file, wall_from_dict
 
 #: file suffixes read as geometry to import, each closed convex shape a block
@@ -29,16 +30,20 @@ class Target:
 
 
 def load_target(target: str, *, unit_m: float = 1.0) -> Target:
-    """Resolve ``target``: the name of a built-in wall (``drydem designs``), a wall file or a
+    """Resolve ``target``: the name of a built-in wall or building (``drydem designs``;
+    :data:`drydem.masonry.building.BUILDINGS`), a wall file or a
     model file (.toml), or geometry to import (.wrl, .obj, .stl; coordinates times ``unit_m``
     give metres). Imported blocks stand on a fixed base block (drydem.model.assembly.base_under) and
     get the default material and options. ModelError says what was tried."""
     path = Path(target)
     if not path.is_file():
+        if target in BUILDINGS:
+            return Target(target, Path(target), builtin_building(target))
         builtin = designs.find(target)
         if builtin is None:
             what = "a folder, not a file" if path.is_dir() else "no such file"
-            raise ModelError(f"{target}: {what}, and not a built-in wall ({', '.join(designs.names())})")
+            raise ModelError(f"{target}: {what}, and not a built-in wall ({', '.join(designs.names())}) "
+                             f"or building ({', '.join(BUILDINGS)})")
         path = builtin
     suffix = path.suffix.lower()
     if suffix in MESH_SUFFIXES:

@@ -37,6 +37,21 @@ There are no floors: the storeys only set where the openings are. Blocks are nam
 ``s{storey}w{wall}c{course}b{k}`` (course counted within the storey from 0, k counting the
 course's bricks along the wall) and ``s{storey}w{wall}c{course}l{k}`` for the lintel of
 opening k; the fixed base slab, first, is ``base``.
+
+Two built-in buildings are TARGETs of every command (:data:`BUILDINGS`): ``building-small``
+(:data:`SMALL`, 1,936 blocks) and ``building-large`` (:data:`LARGE`, 19,853 blocks), e.g.
+``drydem tilt building-small --tilt-axis x`` (tilting about x loads the long walls, 0 and 2,
+out of their plane) or ``drydem export building-small building.toml`` (a model file to edit).
+A building of any other size is built from Python with a :class:`BuildingSpec`::
+
+    from drydem.masonry.building import BuildingSpec, building_model
+    from drydem.io.model_file import save_model
+
+    spec = BuildingSpec(length_m=1.0, width_m=0.8, storeys=1, storey_height_courses=12,
+                        brick_length_m=0.1, brick_height_m=0.05, windows_per_wall=1,
+                        window_width_bricks=2, window_height_courses=5, sill_courses=4)
+    house = building_model(spec, density=1800.0)     # a Model: tilt_analysis(house, ...)
+    save_model(house, "house.toml")                  # drydem tilt house.toml --tilt-axis x
 """
 
 from __future__ import annotations
@@ -114,6 +129,14 @@ class BuildingSpec:
     @property
     def courses(self) -> int:
         return self.storeys * self.storey_height_courses
+
+    @property
+    def block_count(self) -> int:
+        """The blocks of :func:`building_model`, the base slab included (counted from the
+        courses' pieces, no geometry built)."""
+        pieces = (course_pieces(self, wall, storey, course) for storey in range(self.storeys) for wall in range(4)
+                  for course in range(self.storey_height_courses))
+        return 1 + sum(len(bricks) + len(lintels) for bricks, lintels in pieces)
 
     def wall_cells(self, wall: int) -> int:
         """The outer length of ``wall`` in cells (walls 0, 2 along x; 1, 3 along y)."""
@@ -283,13 +306,23 @@ def building_blocks(spec: BuildingSpec) -> list[Block]:
     return blocks
 
 
-def building_model(spec: BuildingSpec, *, density: float = 1800.0, joint: JointMaterial = JointMaterial(),
-                   contacts: ContactSettings | None = None, solver: SolverSettings | None = None) -> Model:
+#: the buildings' default joint: kn = ks = 1e9 Pa/m, the default friction. The walls' default
+#: (kn = 3e7, for the 0.15 m competition walls) is too soft for storeys of single-leaf wall: under
+#: its own weight, building-small's ground-storey pier between the north windows buckles out of
+#: its plane (rotational stiffness of a joint kn t^3 b / 12 against the storey above) and a
+#: brick falls out in stage 1; at 1e9 it stands, and tilted about x collapses at 3.4 deg
+BUILDING_JOINT = JointMaterial(kn=1e9, ks=1e9)
+
+
+def building_model(spec: BuildingSpec, *, density: float = 1800.0, joint: JointMaterial = BUILDING_JOINT,
+                   contacts: ContactSettings | None = None, solver: SolverSettings | None = None,
+                   source: str = "<building>") -> Model:
     """The building as a 3D :class:`Model`: no supports (only the base slab is fixed); density
-    kg/m3; contacts and solver default to their defaults. Save it as a model file with
+    kg/m3; the joint :data:`BUILDING_JOINT` by default; contacts and solver default to their defaults; ``source`` names it in messages (and
+    in a tilting checkpoint's fingerprint). Save it as a model file with
     :func:`drydem.io.model_file.save_model`."""
     return build_model(building_blocks(spec), density=density, joint=joint, contacts=contacts or ContactSettings(),
-                       solver=solver or SolverSettings(), source="<building>")
+                       solver=solver or SolverSettings(), source=source)
 
 
 #: ~2,000 blocks (1,936): a two-storey model-scale house, 1.5 m x 1.25 m in plan (15 x 12.5 bricks of
@@ -303,3 +336,13 @@ SMALL = BuildingSpec(length_m=1.5, width_m=1.25, storeys=2, storey_height_course
 LARGE = BuildingSpec(length_m=14.4, width_m=9.72, storeys=3, storey_height_courses=40, brick_length_m=0.24,
                      brick_height_m=0.08, windows_per_wall=4, window_width_bricks=5, window_height_courses=18,
                      sill_courses=11, door_height_courses=28)
+
+#: the built-in buildings, by their TARGET name (``drydem designs`` lists them)
+BUILDINGS = {"building-small": SMALL, "building-large": LARGE}
+
+
+def builtin_building(name: str) -> Model | None:
+    """The model of the built-in building ``name`` (:data:`BUILDINGS`, the defaults of
+    :func:`building_model`, its source the name), or None if there is none of that name."""
+    spec = BUILDINGS.get(name)
+    return None if spec is None else building_model(spec, source=name)

@@ -17,7 +17,7 @@ import numpy as np
 
 from drydem.errors import ModelError
 from drydem.model.boxes import bounds, overlapping_pairs
-from drydem.model.geometry import ConvexPolyhedron, FlatGeometry, box, penetration_depth
+from drydem.model.geometry import ConvexPolyhedron, FlatGeometry, box
 from drydem.model.parameters import DENSITY, ContactDensity, ContactSettings, JointMaterial, SolverSettings, Supports
 from drydem.model.rotation import matrices
 
@@ -265,12 +265,60 @@ def _thickness(shape: ConvexPolyhedron) -> float:
 
 
 def _check_overlaps(model: Model) -> None:
+    """ModelError naming the first pair of blocks (in the order of their numbers) that overlap
+    by more than OVERLAP_FRACTION of the contact tolerance at the start (their penetration
+    depth, :func:`~drydem.model.geometry.penetration_depth`, worked out for all the candidate
+    pairs at once by :func:`penetration_depths`)."""
     limit = OVERLAP_FRACTION * model.contact_tolerance
     shapes = list(model.block_shape)
-    for i, j in overlapping_pairs(*bounds(shapes), model.block_movable, 0.0):
-        depth = penetration_depth(shapes[i], shapes[j])
-        if depth > limit:
-            raise ModelError(
-                f"{model.source}: blocks {model.block_name[i]!r} and {model.block_name[j]!r} overlap by "
-                f"{depth:.3g} m at the start (allowed: {limit:.3g} m, 1 % of the contact tolerance)"
-            )
+    pairs = overlapping_pairs(*bounds(shapes), model.block_movable, 0.0)
+    depth = penetration_depths(shapes, pairs)
+    over = np.flatnonzero(depth > limit)
+    if over.size:
+        i, j = (int(b) for b in pairs[over[0]])
+        raise ModelError(
+            f"{model.source}: blocks {model.block_name[i]!r} and {model.block_name[j]!r} overlap by "
+            f"{depth[over[0]]:.3g} m at the start (allowed: {limit:.3g} m, 1 % of the contact tolerance)"
+        )
+
+
+#: pairs of :func:`penetration_depths` are taken this many (pair, vertex, face) entries at a time
+DEPTH_CHUNK = 1 << 21
+
+
+def penetration_depths(shapes: list[ConvexPolyhedron], pairs: np.ndarray) -> np.ndarray:
+    """(P,) :func:`~drydem.model.geometry.penetration_depth` of each pair (i, j) of ``pairs``
+    (P, 2) of ``shapes``, m, vectorised: each block's vertices and face planes padded to the
+    most any block has (repeating one of its own, which changes no minimum or maximum), then
+    the separations of both blocks' faces, in chunks; the reference face chosen with the same
+    tie rule (:func:`~drydem.model.geometry.best_separation`)."""
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    if not len(pairs):
+        return np.zeros(0)
+    used = np.unique(pairs)
+    at = np.full(len(shapes), -1, dtype=np.int64)
+    at[used] = np.arange(len(used))
+    nv = max(len(shapes[b].vertices) for b in used)
+    nf = max(len(shapes[b].face_normals) for b in used)
+    vertices = np.empty((len(used), nv, 3))
+    normals = np.empty((len(used), nf, 3))
+    offsets = np.empty((len(used), nf))
+    size = np.empty(len(used))
+    for k, b in enumerate(used):
+        s = shapes[b]
+        v, n = s.vertices, s.face_normals
+        vertices[k, :len(v)], vertices[k, len(v):] = v, v[0]
+        normals[k, :len(n)], normals[k, len(n):] = n, n[-1]
+        offsets[k, :len(n)] = np.einsum("fi,fi->f", n, v[[f[0] for f in s.faces]])
+        offsets[k, len(n):] = offsets[k, len(n) - 1]
+        size[k] = s.size
+    depth = np.empty(len(pairs))
+    step = max(1, DEPTH_CHUNK // (nv * nf))
+    for start in range(0, len(pairs), step):
+        a, b = at[pairs[start:start + step, 0]], at[pairs[start:start + step, 1]]
+        sa = (vertices[b] @ normals[a].transpose(0, 2, 1)).min(axis=1) - offsets[a]
+        sb = (vertices[a] @ normals[b].transpose(0, 2, 1)).min(axis=1) - offsets[b]
+        fa, fb = sa.max(axis=1), sb.max(axis=1)
+        tie = 1e-9 * np.minimum(size[a], size[b])
+        depth[start:start + step] = -np.where(fa >= fb - tie, fa, fb)
+    return depth

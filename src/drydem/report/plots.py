@@ -59,7 +59,8 @@ def pushover_figure(result: TiltResult, path: Path, *, title: str = "") -> Path:
     if result.collapse_angle_deg is not None:
         ax.axhline(result.collapse_angle_deg, color="tab:red", linewidth=1, label=f"collapse {result.collapse_angle_deg:.2f} deg")
     ylabel = "tilt angle (deg)" if result.settings.loading == "tilt" else "atan(load multiplier) (deg)"
-    ax.set(xlabel=f"horizontal displacement of {result.monitored_block} (mm)", ylabel=ylabel, title=title)
+    along = "" if result.settings.load_direction == 0 else " along y"
+    ax.set(xlabel=f"horizontal displacement of {result.monitored_block}{along} (mm)", ylabel=ylabel, title=title)
     ax.set_xlim(left=min(0.0, ux_mm.min(initial=0.0)))
     ax.set_ylim(bottom=0.0)
     ax.grid(alpha=0.3)
@@ -142,19 +143,82 @@ def draw_displacements(fig, ax, outlines: list[np.ndarray], magnitude_mm: np.nda
     ax.set(title=title, xlabel="x (m)", ylabel="z (m)")
 
 
-def mechanism_figure(model: Model, states: list[tuple[str, State, frozenset[str]]], path: Path, *, monitored: str | None = None) -> Path:
-    """The model in its plane at each of ``states`` (label, State, names of blocks to leave out,
-    e.g. those fallen away by then), blocks coloured by the magnitude of their displacement from
-    the model file, each panel on its own scale (millimetres at equilibrium, decimetres past collapse)."""
-    fig = new_figure(figsize=(5.6 * len(states), 4.2), layout="constrained")
-    axes = fig.subplots(1, len(states), squeeze=False)
+def is_wall_like(model: Model) -> bool:
+    """Whether the model is a wall drawn in the x-z plane, shown by its projection on that plane:
+    its movable blocks span in y no more than the deepest of them (no block lies behind
+    another). A building or any other deep 3D model is drawn in 3D instead
+    (:func:`draw_blocks_3d`)."""
+    movable = np.flatnonzero(model.block_movable)
+    if not movable.size:
+        return True
+    lo = np.array([model.block_shape[b].vertices[:, 1].min() for b in movable])
+    hi = np.array([model.block_shape[b].vertices[:, 1].max() for b in movable])
+    return bool(hi.max() - lo.min() <= (hi - lo).max() * (1 + 1e-6) + 1e-12)
+
+
+#: the camera's azimuth (deg, matplotlib's) of a 3D mechanism by the load direction (x, y): on the
+#: side the load pushes towards, a little off its axis, so that what it pushes out is in front
+VIEW_AZIMUTH = {0: -25.0, 1: 65.0}
+
+
+def draw_blocks_3d(fig, ax, model: Model, state: State, blocks: np.ndarray, values: np.ndarray, *, title: str,
+                   norm=None, colours=None, marker: tuple[np.ndarray, str] | None = None, load_direction: int = 0,
+                   label: str = "displacement (mm)") -> None:
+    """A 3D model in perspective on ``ax`` (a 3D axes): the faces of ``blocks`` at ``state``
+    coloured by ``values`` (one per block, on ``norm``, with a colour bar ``label``) or by
+    ``colours`` (one per block), an optional ``marker`` (x-y-z point, label), true proportions,
+    seen from the side the load (``load_direction`` 0: x, 1: y) pushes towards."""
+    from matplotlib.colors import Normalize
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    faces, owner = [], []
+    for k, b in enumerate(blocks):
+        world = model.world_vertices(b, state.position[b], state.quaternion[b])
+        faces += [world[f] for f in model.block_shape[b].faces]
+        owner += [k] * len(model.block_shape[b].faces)
+    owner = np.array(owner, dtype=int)
+    polys = Poly3DCollection(faces, edgecolors="k", linewidths=0.15)
+    if colours is None:
+        norm = norm or Normalize(0.0, float(np.max(values, initial=0.0)) or 1.0)
+        polys.set_array(np.asarray(values)[owner])
+        polys.set_cmap("viridis")
+        polys.set_norm(norm)
+        fig.colorbar(polys, ax=ax, label=label, shrink=0.6, pad=0.14)
+    else:
+        polys.set_facecolor([colours[k] for k in owner])
+    ax.add_collection3d(polys)
+    points = np.concatenate(faces) if faces else np.zeros((1, 3))
+    lo, hi = points.min(0), points.max(0)
+    ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]), xlabel="x (m)", ylabel="y (m)", zlabel="z (m)", title=title)
+    ax.set_box_aspect(np.maximum(hi - lo, 1e-3 * (hi - lo).max()))
+    ax.view_init(elev=22.0, azim=VIEW_AZIMUTH.get(load_direction, -60.0))
+    if marker is not None:
+        ax.plot(*[[c] for c in marker[0]], "r+", markersize=12, markeredgewidth=2, label=marker[1], zorder=10)
+        ax.legend(loc="upper left", fontsize="small")
+
+
+def mechanism_figure(model: Model, states: list[tuple[str, State, frozenset[str]]], path: Path, *, monitored: str | None = None,
+                     load_direction: int = 0) -> Path:
+    """The model at each of ``states`` (label, State, names of blocks to leave out, e.g. those
+    fallen away by then), blocks coloured by the magnitude of their displacement from the model
+    file, each panel on its own scale (millimetres at equilibrium, decimetres past collapse): a
+    wall in its plane (x-z), a deep 3D model such as a building in 3D (:func:`is_wall_like`),
+    seen from the side the load (``load_direction`` 0: x, 1: y) pushes towards."""
+    flat = is_wall_like(model)
+    fig = new_figure(figsize=(5.6 * len(states), 4.2) if flat else (6.4 * len(states), 5.6), layout="constrained")
+    axes = fig.subplots(1, len(states), squeeze=False, subplot_kw=None if flat else {"projection": "3d"})
     for ax, (label, state, hidden) in zip(axes[0], states):
         blocks = np.array([b for b, name in enumerate(model.block_name) if name not in hidden])
         magnitude = np.linalg.norm(state.position[blocks] - model.block_centroid[blocks], axis=1) * 1e3
         marker = None
-        if monitored is not None:
-            marker = (state.position[model.block_index(monitored), [0, 2]], f"monitored: {monitored}")
-        draw_displacements(fig, ax, block_outlines(model, state, blocks), magnitude, title=label, marker=marker)
+        if flat:
+            if monitored is not None:
+                marker = (state.position[model.block_index(monitored), [0, 2]], f"monitored: {monitored}")
+            draw_displacements(fig, ax, block_outlines(model, state, blocks), magnitude, title=label, marker=marker)
+        else:
+            if monitored is not None:
+                marker = (state.position[model.block_index(monitored)], f"monitored: {monitored}")
+            draw_blocks_3d(fig, ax, model, state, blocks, magnitude, title=label, marker=marker, load_direction=load_direction)
     fig.savefig(path, dpi=150)
     return path
 
@@ -167,13 +231,22 @@ def layout_figure(model: Model, path: Path, *, kinds: list[str] | None = None, v
                   monitored: str | None = None, title: str = "") -> Path:
     """The model in its plane as built: blocks coloured by ``kinds`` (one per block: brick,
     half, header, lintel, base; default brick, base for fixed blocks), ``voids`` (x-z outlines,
-    m) hatched, the ``monitored`` block ringed."""
+    m) hatched, the ``monitored`` block ringed. A deep 3D model (:func:`is_wall_like`: a
+    building) is drawn in 3D, the voids left out."""
     from matplotlib.collections import PolyCollection
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     fixed = model.block_fixed.all(axis=1)
     kinds = kinds or ["base" if f else "brick" for f in fixed]
+    if not is_wall_like(model):
+        fig = new_figure(figsize=(8.0, 6.4), layout="constrained")
+        ax = fig.subplots(subplot_kw={"projection": "3d"})
+        marker = None if monitored is None else (model.block_centroid[model.block_index(monitored)], f"monitored: {monitored}")
+        draw_blocks_3d(fig, ax, model, State.at_rest(model.block_centroid), np.arange(model.n_blocks), np.zeros(model.n_blocks),
+                       colours=[KIND_COLOURS[k] for k in kinds], title=title, marker=marker)
+        fig.savefig(path, dpi=150)
+        return path
     outlines = block_outlines(model, State.at_rest(model.block_centroid), np.arange(model.n_blocks))
     fig = new_figure(figsize=(8.0, 4.4), layout="constrained")
     ax = fig.subplots()

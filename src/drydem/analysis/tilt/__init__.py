@@ -7,6 +7,12 @@ grows by ``increment_deg`` and gravity becomes
     multiplier:  g (lambda, 0, -1), lambda = tan theta   (classic pushover, the same statics
                  direction; theta = atan(lambda) is its tilt equivalent)
 
+with the table turning about y (``tilt_axis`` "y", the default); about x (``tilt_axis`` "x")
+the lateral component acts along y instead, g (0, sin theta, -cos theta) or g (0, lambda, -1),
+loading out of their plane the walls that run along x (a 3D model's: an in-plane one cannot
+move in y). The monitored displacement ("ux"), the drift and the stop displacement are
+measured along the load direction.
+
 cycling to equilibrium at each step, until the monitored point has moved
 ``stop_displacement_m`` horizontally, the monitored block has fallen out of the model (below,
 a part of the wall that collapses onto the rubble of another may come to rest within the
@@ -59,14 +65,14 @@ from drydem.analysis.tilt.protocol import (
 from drydem.analysis.tilt.run import TiltRun, Trace, elastic_closure, trial_limit
 from drydem.analysis.tilt.settings import (
     EQUILIBRIUM, FELL, GAVE_UP, LOADINGS, MAX_CYCLES, MAXIMUM_ANGLE, MONITOR_FELL, NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY,
-    SETTING_RANGES, STOP_DISPLACEMENT, UNSTABLE_UNDER_GRAVITY, Frame, Record, TiltResult, TiltSettings, monitor_index,
-    monitored_block, wall_height,
+    SETTING_RANGES, STOP_DISPLACEMENT, TILT_AXES, UNSTABLE_UNDER_GRAVITY, Frame, Record, TiltResult, TiltSettings,
+    check_loading, monitor_index, monitored_block, wall_height,
 )
 
 __all__ = [
     "EQUILIBRIUM", "FELL", "FRAME_SAMPLING", "GAVE_UP", "LOADINGS", "MAX_CYCLES", "MAXIMUM_ANGLE", "MONITOR_FELL",
-    "NO_EQUILIBRIUM", "NO_EQUILIBRIUM_UNDER_GRAVITY", "SETTING_RANGES", "STOP_DISPLACEMENT", "UNSTABLE_UNDER_GRAVITY",
-    "Frame", "Record", "TiltProtocol", "TiltResult", "TiltRun", "TiltSettings", "Trace", "elastic_closure", "monitor_index",
+    "NO_EQUILIBRIUM", "NO_EQUILIBRIUM_UNDER_GRAVITY", "SETTING_RANGES", "STOP_DISPLACEMENT", "TILT_AXES", "UNSTABLE_UNDER_GRAVITY",
+    "Frame", "Record", "TiltProtocol", "TiltResult", "TiltRun", "TiltSettings", "Trace", "check_loading", "elastic_closure", "monitor_index",
     "monitored_block", "replay_collapse", "stand_under_gravity", "step_up", "tilt_analysis", "tilt_result", "trial_limit",
     "wall_height",
 ]

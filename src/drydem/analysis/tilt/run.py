@@ -11,8 +11,8 @@ import numpy as np
 
 from drydem.analysis.support import elastic_settlement, load_paths
 from drydem.analysis.tilt.settings import (
-    EQUILIBRIUM, FELL, GAVE_UP, MAX_CYCLES, MONITOR_FELL, STOP_DISPLACEMENT, Frame, Record, TiltSettings, monitor_index,
-    wall_height,
+    EQUILIBRIUM, FELL, GAVE_UP, MAX_CYCLES, MONITOR_FELL, STOP_DISPLACEMENT, Frame, Record, TiltSettings, check_loading,
+    monitor_index, wall_height,
 )
 from drydem.engine.contacts import SubContacts
 from drydem.engine.inertia import contact_stiffness, stiffness_bound
@@ -54,8 +54,9 @@ class TiltRun:
 
     def __init__(self, model: Model, settings: TiltSettings, on_progress: Callable[[float, int, float], None] | None):
         self.model, self.settings, self.on_progress = model, settings, on_progress
+        check_loading(model, settings)
         self.sim = Simulation(model)
-        self.monitor = monitor_index(model, settings.monitor)
+        self.monitor = monitor_index(model, settings.monitor, settings.tilt_axis)
         self.height = wall_height(model)
         self.lost: list[tuple[str, float]] = []
         heights = np.array([np.ptp(shape.vertices[:, 2]) for shape in model.block_shape])
@@ -96,9 +97,10 @@ class TiltRun:
         return displacement, rotation, motion
 
     def displacement(self) -> tuple[float, float]:
-        """The monitored block's displacement from where it was drawn, (x, z) m."""
+        """The monitored block's displacement from where it was drawn, m: along the load
+        direction (x, or y when tilting about x; :attr:`TiltSettings.load_direction`) and z."""
         moved = self.sim.state.position[self.monitor] - self.model.block_centroid[self.monitor]
-        return float(moved[0]), float(moved[2])
+        return float(moved[self.settings.load_direction]), float(moved[2])
 
     def save(self) -> Saved:
         """What :meth:`restore` goes back to: the simulation's snapshot and the blocks lost so far."""

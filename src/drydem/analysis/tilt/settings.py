@@ -18,6 +18,10 @@ from drydem.model.parameters import FLAG, G, OneOf, Range, check_fields
 from drydem.model.state import State
 
 LOADINGS = ("tilt", "multiplier")
+#: the axes the table may turn about (TiltSettings.tilt_axis), and for each, the horizontal
+#: direction the load acts along (0: x, 1: y)
+TILT_AXES = ("y", "x")
+LOAD_DIRECTION = {"y": 0, "x": 1}
 #: how a call of :meth:`~drydem.analysis.tilt.run.TiltRun.equilibrate` ended
 EQUILIBRIUM, FELL, MONITOR_FELL, STOP_DISPLACEMENT, GAVE_UP, MAX_CYCLES = (
     "equilibrium", "fell", "monitored block fell", "stop displacement", "gave up", "max cycles",
@@ -46,7 +50,7 @@ SETTING_RANGES = {
 
 
 #: the rule of every field of TiltSettings but the monitored block's name
-SETTING_RULES = SETTING_RANGES | {"adaptive": FLAG, "loading": OneOf(LOADINGS), "predictor": FLAG}
+SETTING_RULES = SETTING_RANGES | {"adaptive": FLAG, "loading": OneOf(LOADINGS), "predictor": FLAG, "tilt_axis": OneOf(TILT_AXES)}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -56,8 +60,13 @@ class TiltSettings:
     increment_deg : tilt step, deg (paper: 0.1). adaptive : coarse steps and bisection.
     refinements : adaptive steps start at increment_deg * 2**refinements. stop_displacement_m :
     horizontal displacement of the monitored point that ends the analysis, m (paper: 0.10).
-    loading : "tilt" or "multiplier". monitor : block name (default: the block whose top is
-    highest, nearest the middle of the wall). max_angle_deg : the analysis ends there, deg.
+    loading : "tilt" or "multiplier". tilt_axis : the horizontal axis the table turns about,
+    "y" (default: the lateral load acts along +x, in the plane of a wall drawn in x-z) or "x"
+    (the lateral load acts along +y: out of the plane of such a wall, and of a building's walls
+    running along x); the multiplier's load lambda g acts along the same direction, and the
+    monitored displacement, the drift and the stop displacement are measured along it. An
+    in-plane model (held in y) cannot be tilted about x (:func:`check_loading`).
+    monitor : block name (default: :func:`monitored_block`). max_angle_deg : the analysis ends there, deg.
     lost_drop_heights : a block whose centroid dropped more than this many times its own
     height is taken out. chunk_cycles : cycles between checks of the monitored point.
     trial_growth, trial_floor_m : a coarse adaptive trial is abandoned as failed once the
@@ -74,6 +83,7 @@ class TiltSettings:
     refinements: int = 4
     stop_displacement_m: float = 0.10
     loading: str = "tilt"
+    tilt_axis: str = "y"
     monitor: str | None = None
     max_angle_deg: float = 80.0
     lost_drop_heights: float = 2.0
@@ -94,12 +104,20 @@ class TiltSettings:
                 "no step would be taken"
             )
 
+    @property
+    def load_direction(self) -> int:
+        """The horizontal axis the lateral load acts along: 0 (x, tilting about y) or 1 (y,
+        tilting about x)."""
+        return LOAD_DIRECTION[self.tilt_axis]
+
     def gravity(self, theta_deg: float) -> np.ndarray:
-        """Gravity vector (m/s2) at tilt (or tilt-equivalent) ``theta_deg``."""
+        """Gravity vector (m/s2) at tilt (or tilt-equivalent) ``theta_deg``: g (sin, -cos) or
+        g (tan, -1) in the plane of the load direction (:attr:`load_direction`) and z."""
         t = math.radians(theta_deg)
-        if self.loading == "tilt":
-            return G * np.array([math.sin(t), 0.0, -math.cos(t)])
-        return G * np.array([math.tan(t), 0.0, -1.0])
+        lateral, vertical = (math.sin(t), -math.cos(t)) if self.loading == "tilt" else (math.tan(t), -1.0)
+        g = np.array([0.0, 0.0, G * vertical])
+        g[self.load_direction] = G * lateral
+        return g
 
     def first_step(self) -> float:
         """The first stage 2 step, deg: one increment, or 2**refinements of them if adaptive."""
@@ -108,8 +126,9 @@ class TiltSettings:
 
 @dataclass(frozen=True)
 class Record:
-    """One equilibrium state of the pushover curve: tilt (deg), monitored displacement (m),
-    drift (ux / wall height) and the cycles this step took."""
+    """One equilibrium state of the pushover curve: tilt (deg), the monitored block's
+    displacement along the load direction (``ux_m``: along x, or along y when tilting about x)
+    and vertically (``uz_m``), m, the drift (ux / wall height) and the cycles this step took."""
 
     tilt_deg: float
     ux_m: float
@@ -125,7 +144,7 @@ class Record:
 @dataclass(frozen=True)
 class Frame:
     """A state of the analysis to show: ``kind`` "equilibrium" or "past collapse", the tilt
-    (deg), the monitored horizontal displacement (m), the blocks' State, their sub-contacts and
+    (deg), the monitored displacement along the load direction (m), the blocks' State, their sub-contacts and
     which blocks are still in the analysis (``active``, (nb,) bool)."""
 
     kind: str
@@ -172,20 +191,36 @@ class TiltResult:
         return drift_limit_angles([r.tilt_deg for r in self.records], [r.drift for r in self.records])
 
 
-def monitored_block(model: Model) -> int:
-    """The movable block whose top is highest; ties go to the one nearest the middle of the wall."""
+def monitored_block(model: Model, tilt_axis: str = "y") -> int:
+    """The movable block whose top is highest; ties go to the one nearest the middle of the
+    wall in x (the mean x of the movable blocks' centroids; the walls are drawn along x). With
+    ``tilt_axis`` "x" (the load along y), remaining ties go to the block farthest along +y: of a
+    building, the top middle block of the leeward wall running along x (wall 2), which the load
+    pushes out of its plane and away from the building."""
     movable = np.flatnonzero(model.block_movable)
     tops = np.array([model.block_shape[b].vertices[:, 2].max() for b in movable])
     highest = movable[tops >= tops.max() - 1e-9 * model.contact_tolerance]
     middle = np.mean([model.block_shape[b].centroid[0] for b in movable])
-    return int(highest[np.argmin(np.abs(model.block_centroid[highest, 0] - middle))])
+    off = np.abs(model.block_centroid[highest, 0] - middle)
+    if tilt_axis == "x":
+        nearest = highest[off <= off.min() + 1e-9 * model.contact_tolerance]
+        return int(nearest[np.argmax(model.block_centroid[nearest, 1])])
+    return int(highest[np.argmin(off)])
 
 
-def monitor_index(model: Model, name: str | None) -> int:
+def check_loading(model: Model, settings: TiltSettings) -> None:
+    """ModelError if ``settings`` load ``model`` where it cannot move: an in-plane model (held
+    in y, :attr:`~drydem.model.assembly.Model.in_plane`) tilted about x."""
+    if settings.tilt_axis == "x" and model.in_plane:
+        raise ModelError(f"{model.source}: tilt_axis = 'x' loads the model along y, out of its plane, but it is an in-plane "
+                         "model (its blocks are held in y); tilt it about y, or give it blocks free in y ([supports])")
+
+
+def monitor_index(model: Model, name: str | None, tilt_axis: str = "y") -> int:
     """The block to monitor: ``name``'s (ModelError if there is none or it is fixed: a fixed
-    block never moves), or by default :func:`monitored_block`."""
+    block never moves), or by default :func:`monitored_block` for ``tilt_axis``."""
     if name is None:
-        return monitored_block(model)
+        return monitored_block(model, tilt_axis)
     block = model.block_index(name)
     if not model.block_movable[block]:
         raise ModelError(f"{model.source}: the monitored block {name!r} is fixed (it cannot move); monitor a movable block")
