@@ -12,7 +12,7 @@ from drydem.errors import DrydemError
 from drydem.io.target import Target
 from drydem.model.assembly import Model
 from drydem.model.parameters import CRITERIA
-from drydem.cli.common import CHECKPOINT, results_folder, signals_interrupt, resolve_target, joint_law_options, main, unit_option
+from drydem.cli.common import CHECKPOINT, results_folder, signals_interrupt, resolve_target, joint_law_options, main, threads_option, unit_option
 
 
 @dataclass(frozen=True)
@@ -103,6 +103,7 @@ def tilt_options(*, adaptive: bool):
               help="With --vtk: keep every N-th equilibrium state (the states past collapse are all kept).")
 @click.option("--video", is_flag=True, help="Also render OUT/collapse.mp4 (GIF if ffmpeg is missing); implies --vtk.")
 @unit_option
+@threads_option
 def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, video, unit) -> None:
     """Tilting-table analysis of TARGET (a built-in wall, a wall or model file, or a
     .wrl/.obj/.stl): collapse angle, pushover curve, Eurocode 8 drift-limit angles, plots.

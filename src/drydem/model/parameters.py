@@ -25,6 +25,10 @@ from drydem.errors import ModelError
 
 #: standard gravity, m/s2
 G = 9.81
+#: the axes a tilting table may turn about (tilt and limit analyses' tilt_axis), and for each, the
+#: horizontal direction the lateral load acts along (0: x, 1: y)
+TILT_AXES = ("y", "x")
+LOAD_DIRECTION = {"y": 0, "x": 1}
 
 
 def is_number(value) -> bool:

@@ -14,14 +14,10 @@ from drydem.analysis.drift import drift_limit_angles
 from drydem.engine.contacts import SubContacts
 from drydem.errors import ModelError
 from drydem.model.assembly import Model
-from drydem.model.parameters import FLAG, G, OneOf, Range, check_fields
+from drydem.model.parameters import FLAG, G, LOAD_DIRECTION, TILT_AXES, OneOf, Range, check_fields
 from drydem.model.state import State
 
 LOADINGS = ("tilt", "multiplier")
-#: the axes the table may turn about (TiltSettings.tilt_axis), and for each, the horizontal
-#: direction the load acts along (0: x, 1: y)
-TILT_AXES = ("y", "x")
-LOAD_DIRECTION = {"y": 0, "x": 1}
 #: how a call of :meth:`~drydem.analysis.tilt.run.TiltRun.equilibrate` ended
 EQUILIBRIUM, FELL, MONITOR_FELL, STOP_DISPLACEMENT, GAVE_UP, MAX_CYCLES = (
     "equilibrium", "fell", "monitored block fell", "stop displacement", "gave up", "max cycles",

@@ -1,0 +1,73 @@
+"""Analyses at scale (issue 18's goals, 2 cores): the 60 x 60 brick in-plane wall's adaptive tilt
+at kn = 3e7 Pa/m in <= 2 minutes, and the ~20,000-block building's gravity settlement in <= 2
+minutes. Prints wall time, cycles, cycle rate and the outcome of each, measured in one run.
+
+Run: python benchmarks/bench_scale.py [--threads N] [--cases wall60 building-large building-small]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+from drydem.analysis.tilt import TiltSettings, tilt_analysis
+from drydem.engine.simulation import Simulation
+from drydem.masonry.building import LARGE, SMALL, building_model
+from drydem.masonry.walls import wall_from_dict
+
+GOAL_S = 120.0
+
+
+def wall_60x60():
+    """A 60-course running-bond wall of 60 bricks per course (half bricks at the ends of every
+    other course): 3,630 bricks on a fixed base, the WD bricks (25 x 5.5 x 12 mm), kn = ks = 3e7."""
+    courses = "\n".join("B" * 60 if row % 2 == 0 else "b" + "B" * 59 + "b" for row in range(60))
+    data = {
+        "wall": {"name": "wall60"}, "brick": {"length_m": 0.025, "height_m": 0.0055, "width_m": 0.012},
+        "material": {"density": 1800.0}, "joint": {"kn": 3e7, "ks": 3e7, "friction": 0.5},
+        "contacts": {"points_per_length": 4}, "supports": {"fix_y": True}, "layout": {"courses": courses},
+    }
+    return wall_from_dict(data, source="wall60").model()
+
+
+def tilt_wall() -> str:
+    model = wall_60x60()
+    start = time.perf_counter()
+    result = tilt_analysis(model, TiltSettings(increment_deg=0.1, adaptive=True))
+    elapsed = time.perf_counter() - start
+    return (f"wall60: {model.n_blocks} blocks, adaptive tilt: collapse {result.collapse_angle_deg} deg, ended by {result.ended_by}, "
+            f"{result.cycles} cycles in {elapsed:.1f} s ({result.cycles / elapsed:.0f} cycles/s), goal {GOAL_S:.0f} s")
+
+
+def settle_building(spec, name: str) -> str:
+    start = time.perf_counter()
+    model = building_model(spec)
+    built = time.perf_counter() - start
+    start = time.perf_counter()
+    simulation = Simulation(model)
+    outcome = simulation.cycle_to_equilibrium()
+    elapsed = time.perf_counter() - start
+    return (f"{name}: {model.n_blocks} blocks built in {built:.1f} s, {simulation.contacts.count} sub-contacts; settlement: "
+            f"converged {outcome.converged} after {outcome.cycles} cycles in {elapsed:.1f} s "
+            f"({outcome.cycles / elapsed:.0f} cycles/s, {elapsed / max(outcome.cycles, 1) / max(simulation.contacts.count, 1) * 1e9:.1f} ns "
+            f"per sub-contact-cycle), goal {GOAL_S:.0f} s")
+
+
+CASES = {"wall60": tilt_wall, "building-small": lambda: settle_building(SMALL, "building-small"),
+         "building-large": lambda: settle_building(LARGE, "building-large")}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--cases", nargs="+", choices=sorted(CASES), default=["building-small", "building-large", "wall60"])
+    parser.add_argument("--threads", type=int, default=None, help="threads of the compiled kernels (default: all cores)")
+    args = parser.parse_args()
+    from drydem.engine.threads import set_threads
+
+    set_threads(args.threads)
+    for case in args.cases:
+        print(CASES[case](), flush=True)
+
+
+if __name__ == "__main__":
+    main()
