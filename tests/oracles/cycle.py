@@ -34,8 +34,9 @@ def _damped(force: np.ndarray, velocity: np.ndarray, alpha: float) -> np.ndarray
     return force - alpha * np.abs(force) * np.sign(velocity)
 
 
-def step(state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment, measure):
-    """One cycle; see :func:`drydem.engine.cycle3d.step` (it always measures the energies)."""
+def step(state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment, measure, work=None):
+    """One cycle; see :func:`drydem.engine.cycle3d.step` (it always measures the energies; ``work``, the
+    compiled kernels' scratch, is not needed here)."""
     pos, vel, omega = state.position, state.velocity, state.angular_velocity
     rot[:] = Rotation.from_quat(state.quaternion[:, [1, 2, 3, 0]]).as_matrix()
     force[:] = blocks.mass[:, None] * np.asarray(gravity)

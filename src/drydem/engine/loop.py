@@ -10,8 +10,6 @@ from typing import NamedTuple
 
 import numba
 import numpy as np
-from numba.core import types
-from numba.extending import overload
 
 from drydem.engine.damping import Damping
 
@@ -177,33 +175,6 @@ def workspace(pairs, nb, width):
     return Workspace(start, entries, np.empty((nc, width)), np.zeros(nc, np.bool_), np.empty((nb, 3)))
 
 
-def call_step(step_function, work, state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment,
-              measure):
-    """``step_function`` with the kernel's :class:`Workspace` ``work`` as its last argument, or
-    without it where ``work`` is None (the NumPy oracle's step). Compiled, the choice is made by
-    type (:func:`_call_step_compiled`), so that a kernel's ``step`` is compiled once, not also
-    for the call without a workspace."""
-    if work is None:
-        return step_function(state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment, measure)
-    return step_function(state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment, measure, work)
-
-
-@overload(call_step, inline="always")
-def _call_step_compiled(step_function, work, state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force,
-                        moment, measure):
-    if isinstance(work, (types.NoneType, types.Omitted)):
-        def without(step_function, work, state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment,
-                    measure):
-            return step_function(state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment, measure)
-        return without
-
-    def with_work(step_function, work, state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment,
-                  measure):
-        return step_function(state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, damping, rot, force, moment, measure,
-                             work)
-    return with_work
-
-
 class LoopSettings(NamedTuple):
     """What one call of a kernel's ``run_cycles`` is to do (:func:`cycle_loop`).
 
@@ -288,8 +259,8 @@ def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neig
             for k in range(3):
                 body[k] = gravity[k] - ground[cycle, k]
         velocity_dt = loop.first_velocity_dt if cycle == 0 else dt
-        unbalanced, speed, kinetic, travel, stiffer = call_step(step_function, work, state, blocks, sub, joint, loop.closure_limit, body, dt,
-                                                                velocity_dt, damping, rot, force, moment, measure)
+        unbalanced, speed, kinetic, travel, stiffer = step_function(state, blocks, sub, joint, loop.closure_limit, body, dt, velocity_dt,
+                                                                    damping, rot, force, moment, measure, work)
         ratio = unbalanced / loop.force_scale
         if not (speed < np.inf and (not measure or kinetic <= DIVERGENCE_FACTOR * g * (travel + loop.travel_slack))):
             return cycle + 1, DIVERGED, ratio, speed
