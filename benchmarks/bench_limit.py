@@ -2,10 +2,11 @@
 (3,631 blocks) and the 3D buildings SMALL (1,936 blocks) and LARGE (19,853 blocks).
 
 Stages: contact detection (ContactTracker at the corners), assembly (equilibrium matrix and the
-LP's columns), the HiGHS solve (scipy.optimize.linprog, as timed around the call) and the
-mechanism (velocities from the duals). Goal: LARGE in <= 60 s on 2 cores.
+LP's columns, or the cones'), the solve (HiGHS: scipy.optimize.linprog; 3D, Clarabel on the exact
+Coulomb cones: timed around the call) and the mechanism (velocities from the duals). Goal: LARGE
+in <= 60 s on 2 cores.
 
-Run: python benchmarks/bench_limit.py [--cases wall60 small large] [--method highs-ipm] [--non-associative]
+Run: python benchmarks/bench_limit.py [--cases wall60 small large] [--method highs-ipm] [--non-associative] [--pyramid]
 """
 
 from __future__ import annotations
@@ -71,23 +72,25 @@ def main() -> None:
     parser.add_argument("--method", default=la.METHOD, choices=list(la.SOLVER_NAMES), help="scipy.optimize.linprog's HiGHS method")
     parser.add_argument("--non-associative", action="store_true")
     parser.add_argument("--tilt-axis", choices=list(la.TILT_AXES), default="y")
+    parser.add_argument("--pyramid", action="store_true", help="3D: the 16-sided pyramid's LP by HiGHS, not the exact cone by Clarabel")
     args = parser.parse_args()
     la.METHOD = args.method
-    solve, mechanism = la.linprog, la._mechanism
+    la.EXACT_CONE = not args.pyramid
+    solve, cone, mechanism = la.linprog, la._clarabel, la._mechanism
     print(f"{'case':>8} {'blocks':>7} {'lambda':>12} {'contacts':>9} {'assembly':>9} {'solve':>9} {'mechanism':>10} {'total':>9}  (s)")
     for case in args.cases:
         start = time.perf_counter()
         model = CASES[case]()
         print(f"  {case}: {model.n_blocks} blocks built in {time.perf_counter() - start:.1f} s", flush=True)
         clock = Clock()
-        la.linprog, la._mechanism = clock.wrap(solve, "solve"), clock.wrap(mechanism, "mechanism")
+        la.linprog, la._clarabel, la._mechanism = clock.wrap(solve, "solve"), clock.wrap(cone, "solve"), clock.wrap(mechanism, "mechanism")
         try:
             start = time.perf_counter()
             result = limit_analysis(model, LimitSettings(non_associative=args.non_associative, tilt_axis=args.tilt_axis),
                                     on_progress=clock.progress)
             total = time.perf_counter() - start
         finally:
-            la.linprog, la._mechanism = solve, mechanism
+            la.linprog, la._clarabel, la._mechanism = solve, cone, mechanism
         s = clock.seconds
         print(f"{case:>8} {model.n_blocks:7d} {result.load_multiplier:12.8f} {s.get('contacts', 0):9.2f} {s.get('assembly', 0):9.2f} "
               f"{s.get('solve', 0):9.2f} {s.get('mechanism', 0):10.2f} {total:9.2f}", flush=True)

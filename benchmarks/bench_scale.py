@@ -16,6 +16,8 @@ from drydem.masonry.building import LARGE, SMALL, building_model
 from drydem.masonry.walls import wall_from_dict
 
 GOAL_S = 120.0
+#: the settlement is given up (and said so) after this many cycles
+MAX_SETTLEMENT_CYCLES = 100_000
 
 
 def wall_60x60():
@@ -45,12 +47,19 @@ def settle_building(spec, name: str) -> str:
     built = time.perf_counter() - start
     start = time.perf_counter()
     simulation = Simulation(model)
-    outcome = simulation.cycle_to_equilibrium()
+    outcome = simulation.cycle_to_equilibrium(max_cycles=MAX_SETTLEMENT_CYCLES, progress=_report(start))
     elapsed = time.perf_counter() - start
     return (f"{name}: {model.n_blocks} blocks built in {built:.1f} s, {simulation.contacts.count} sub-contacts; settlement: "
             f"converged {outcome.converged} after {outcome.cycles} cycles in {elapsed:.1f} s "
             f"({outcome.cycles / elapsed:.0f} cycles/s, {elapsed / max(outcome.cycles, 1) / max(simulation.contacts.count, 1) * 1e9:.1f} ns "
             f"per sub-contact-cycle), goal {GOAL_S:.0f} s")
+
+
+def _report(start: float):
+    """A progress callback printing cycles, unbalanced-force ratio and time so far."""
+    def report(cycles, stats) -> None:
+        print(f"  {cycles} cycles, ratio {stats.ratio:.2e}, {time.perf_counter() - start:.0f} s", flush=True)
+    return report
 
 
 CASES = {"wall60": tilt_wall, "building-small": lambda: settle_building(SMALL, "building-small"),

@@ -166,7 +166,9 @@ def test_limit_refuses_a_results_folder_it_cannot_make_before_the_analysis(tmp_p
 def test_limit_shows_each_stage_on_stderr(tmp_path):
     result = CliRunner().invoke(main, ["limit", "WD3", "--non-associative", "--out", str(tmp_path)])
     assert result.exit_code == 0, result.output
-    stages = [re.sub(r"\d+(\.\d+)?", "N", line.split("] ", 1)[1]) for line in result.stderr.splitlines()]
+    # the kept stage lines "[time] stage"; the live bar's redraws end in carriage returns, not newlines
+    lines = [line.rsplit("\r", 1)[-1] for line in result.stderr.split("\n")]
+    stages = [re.sub(r"\d+(\.\d+)?", "N", line.split("] ", 1)[1]) for line in lines if line.startswith("[")]
     assert stages == ["finding the contacts of N blocks", "assembling the equilibrium matrix (N contact points)",
-                      "solving the associative LP with HiGHS (N equilibrium rows, N contact forces)",
+                      "solving the associative LP with HiGHS (interior point: N rows x N columns, N contact points)",
                       "non-associative iteration N of at most N: solving the LP with HiGHS (lambda N so far)"]

@@ -6,12 +6,20 @@ import numpy as np
 import pytest
 
 import drydem as dd
+from drydem.analysis import limit as la
 from drydem.analysis.limit import LimitAnalysisError, LimitSettings, limit_analysis
 from drydem.analysis.tilt import TiltSettings, tilt_analysis
 from drydem.io.target import load_target
 from conftest import layout_blocks, stack_model
 
 NA = LimitSettings(non_associative=True)
+#: relative accuracy of lambda: in-plane models, HiGHS's vertex (crossover), ~1e-12; 3D models, Clarabel's interior
+#: point on the exact cones, which stops at a relative duality gap of 1e-8 (measured: 0.3 + 4.8e-10, 0.7 - 3e-8)
+IN_PLANE, IN_3D = 1e-9, 1e-7
+
+
+def rel(model: dd.Model) -> float:
+    return IN_PLANE if model.in_plane else IN_3D
 
 
 def in_plane_wall(courses: str, mu: float, kn: float = 1e10) -> dd.Model:
@@ -31,7 +39,7 @@ def test_a_squat_block_slides_at_lambda_mu(mu, supports):
     model = stack_model([0.0055], joint=dd.JointMaterial(friction=mu), supports=supports)
     for settings in (LimitSettings(), NA):
         result = limit_analysis(model, settings)
-        assert result.load_multiplier == pytest.approx(mu, rel=1e-9)
+        assert result.load_multiplier == pytest.approx(mu, rel=rel(model))
         assert result.collapse_angle_deg == pytest.approx(math.degrees(math.atan(mu)))
     # the associative mechanism dilates: it slides up at the friction angle (normality)
     v = limit_analysis(model).velocity[1]
@@ -42,8 +50,9 @@ def test_a_squat_block_slides_at_lambda_mu(mu, supports):
 def test_a_slender_block_and_a_stack_topple_at_lambda_b_over_h(heights):
     # b / h = 10 / 40 for one block, and for four stacked (one rigid body of the full height)
     for supports in (dd.Supports(), dd.Supports(fix_y=True)):
-        result = limit_analysis(slender(heights, supports=supports))
-        assert result.load_multiplier == pytest.approx(0.25, rel=1e-9)
+        model = slender(heights, supports=supports)
+        result = limit_analysis(model)
+        assert result.load_multiplier == pytest.approx(0.25, rel=rel(model))
         # the mechanism: every block turns about y at the same rate, none slides
         turn = result.angular_velocity[1:, 1]
         assert np.allclose(turn, turn[0]) and abs(turn[0]) > 0
@@ -82,7 +91,7 @@ def test_non_associative_never_exceeds_associative(case):
     model = CASES[case]()
     associative, non_associative = limit_analysis(model), limit_analysis(model, NA)
     assert non_associative.converged and non_associative.method == "non-associative"
-    assert non_associative.load_multiplier <= associative.load_multiplier * (1 + 1e-9)
+    assert non_associative.load_multiplier <= associative.load_multiplier * (1 + rel(model))
     assert non_associative.history[0] == pytest.approx(associative.load_multiplier)
 
 
@@ -169,17 +178,17 @@ def test_along_y_a_squat_block_slides_at_mu_and_a_slender_one_topples_at_b_y_ove
     # tilt axis x: the live load along y. A brick 25 x 12 mm, 5.5 mm high: toppling about its long
     # edge needs lambda = 12 / 5.5 = 2.18 > mu: it slides, lambda = mu
     squat = stack_model([0.0055], joint=dd.JointMaterial(friction=mu))
-    assert limit_analysis(squat, LimitSettings(tilt_axis="x")).load_multiplier == pytest.approx(mu, rel=1e-9)
+    assert limit_analysis(squat, LimitSettings(tilt_axis="x")).load_multiplier == pytest.approx(mu, rel=IN_3D)
     # 10 x 12 mm, 40 mm high, mu = 1: along x b/h = 10/40, along y 12/40 (one block, or four stacked)
     for heights in ([0.04], [0.01] * 4):
         model = slender(heights)
-        assert limit_analysis(model).load_multiplier == pytest.approx(10 / 40, rel=1e-9)
+        assert limit_analysis(model).load_multiplier == pytest.approx(10 / 40, rel=IN_3D)
         along_y = limit_analysis(model, LimitSettings(tilt_axis="x"))
-        assert along_y.load_multiplier == pytest.approx(12 / 40, rel=1e-9)
+        assert along_y.load_multiplier == pytest.approx(12 / 40, rel=IN_3D)
         turn = along_y.angular_velocity[1:, 0]  # every block turns about x at the same rate
         assert np.allclose(turn, turn[0]) and abs(turn[0]) > 0
         assert np.allclose(along_y.angular_velocity[1:, 1:], 0.0, atol=1e-9)
-        assert limit_analysis(model, LimitSettings(tilt_axis="x", non_associative=True)).load_multiplier <= 12 / 40 * (1 + 1e-9)
+        assert limit_analysis(model, LimitSettings(tilt_axis="x", non_associative=True)).load_multiplier <= 12 / 40 * (1 + IN_3D)
 
 
 def test_a_load_along_y_on_an_in_plane_model_is_a_clear_error():
@@ -207,9 +216,55 @@ def test_the_limit_command_takes_a_tilt_axis(tmp_path):
     assert result.exit_code == 0, result.output
     assert "LA-A load multiplier (along y) 0.3000" in result.output
     summary = json.loads((tmp_path / "la" / "summary.json").read_text())
-    assert summary["analysis"]["tilt_axis"] == "x" and summary["load_multiplier"] == pytest.approx(0.3, rel=1e-9)
+    assert summary["analysis"]["tilt_axis"] == "x" and summary["load_multiplier"] == pytest.approx(0.3, rel=IN_3D)
     # the stages, with the LP's size, on stderr
     assert "assembling the equilibrium matrix" in result.stderr and " rows x " in result.stderr
     refused = CliRunner().invoke(main, ["limit", "WD2", "--tilt-axis", "x", "--out", str(tmp_path / "wd2")])
     assert refused.exit_code != 0 and "the model is in-plane, held in y" in refused.output
     assert CliRunner().invoke(main, ["limit", "WD2", "--tilt-axis", "z"]).exit_code == 2
+
+
+def block_on_a_slope(slope_deg: float, mu: float) -> dd.Model:
+    """A squat block (25 x 25 x 5 mm) on a fixed slab inclined ``slope_deg`` about x (rising along y)."""
+    from scipy.spatial.transform import Rotation
+
+    from conftest import box_vertices
+
+    tilt = Rotation.from_euler("x", slope_deg, degrees=True).as_matrix().T
+    base = dd.convex_hull(box_vertices([-0.05, -0.05, -0.01], [0.075, 0.075, 0.0]) @ tilt)
+    block = dd.convex_hull(box_vertices([0.0, 0.0, 0.0], [0.025, 0.025, 0.005]) @ tilt)
+    return dd.build_model([dd.Block(name="slope", shape=base, fixed=True), dd.Block(name="block", shape=block)],
+                          density=1800.0, joint=dd.JointMaterial(kn=1e10, ks=1e10, friction=mu))
+
+
+def test_the_exact_cone_finds_the_closed_form_of_a_block_sliding_across_a_slope(monkeypatch):
+    # On a slope alpha (normal (0, -sin, cos)), the load lambda W along x is in the contact plane and
+    # the friction must also hold the down-slope weight W sin alpha: the shear (lambda, sin alpha) W
+    # reaches the cone mu W cos alpha at lambda = sqrt(mu^2 cos^2 - sin^2) (the block is too squat to
+    # rock). The shear points between two vertices of the 16-sided pyramid (at 27 deg from its vertex
+    # along x), where the pyramid falls short of the cone: its lambda is where the line of shear
+    # (., sin alpha) crosses the 16-gon of circumradius mu cos alpha, 1.6 % lower here.
+    alpha, mu = math.radians(20.0), 0.8
+    model = block_on_a_slope(20.0, mu)
+    exact = math.sqrt((mu * math.cos(alpha)) ** 2 - math.sin(alpha) ** 2)
+    cone = limit_analysis(model)
+    assert cone.load_multiplier == pytest.approx(exact, rel=IN_3D)
+    assert cone.status.startswith("Clarabel")
+    # the mechanism: the block slides along its shear and lifts off the slope at the friction angle (normality);
+    # the interior point's duals are accurate to ~1e-5 (measured 4e-5 on the direction)
+    v = cone.velocity[1]
+    normal = np.array([0.0, -math.sin(alpha), math.cos(alpha)])
+    shear = v - (v @ normal) * normal
+    assert v @ normal == pytest.approx(mu * np.linalg.norm(shear), rel=1e-4)
+    upslope = np.array([0.0, math.cos(alpha), math.sin(alpha)])
+    assert shear @ upslope / shear[0] == pytest.approx(-math.sin(alpha) / exact, rel=1e-4)  # along the applied shear
+    # the pyramid's lambda (HiGHS), below the cone's
+    angles = np.arange(17) * 2 * np.pi / 16
+    corner = mu * math.cos(alpha) * np.stack([np.cos(angles), np.sin(angles)], axis=1)
+    s = int(np.flatnonzero((corner[:-1, 1] <= math.sin(alpha)) & (corner[1:, 1] > math.sin(alpha)))[0])
+    share = (math.sin(alpha) - corner[s, 1]) / (corner[s + 1, 1] - corner[s, 1])
+    polygon = corner[s, 0] + share * (corner[s + 1, 0] - corner[s, 0])
+    monkeypatch.setattr(la, "EXACT_CONE", False)
+    pyramid = limit_analysis(model).load_multiplier
+    assert pyramid == pytest.approx(polygon, rel=1e-9)
+    assert pyramid < exact * 0.99

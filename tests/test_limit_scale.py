@@ -1,6 +1,9 @@
 """Limit analysis at scale: the LP in generator form (drydem.analysis.limit._solve) against the
 facet form it replaced (the reference below, the LP as first written), on walls and a small
-building, in-plane and 3D, both load directions, with cohesion and tension; the stages reported."""
+building, in-plane and 3D, both load directions, with cohesion and tension; in 3D, the exact
+Coulomb cone (Clarabel, drydem.analysis.limit._solve_cone) against the pyramid; the stages reported."""
+
+import math
 
 import numpy as np
 import pytest
@@ -70,13 +73,40 @@ SLOW = {case for case in CASES if "3D" in case or "house" in case}
 
 
 @pytest.mark.parametrize("case", [pytest.param(case, marks=[pytest.mark.slow] if case in SLOW else []) for case in CASES])
-def test_the_generator_form_finds_the_lambda_of_the_facet_form(case):
+def test_the_generator_form_finds_the_lambda_of_the_facet_form(case, monkeypatch):
+    monkeypatch.setattr(la, "EXACT_CONE", False)  # in 3D: the pyramid's LP by HiGHS, as the facet form
     model, axis = CASES[case]()
     result = limit_analysis(model, LimitSettings(tilt_axis=axis))
     assert result.load_multiplier == pytest.approx(facet_lambda(model, axis), rel=1e-6, abs=1e-9)
     assert result.load_multiplier > 0
     # equilibrium of the normal forces reported: compressive where the joint has no tension
     assert result.normal_force.min() >= -model.joint.tension * 1e-3 - 1e-9 * result.normal_force.max()
+
+
+def lambda_of(model: dd.Model, axis: str, *, cone: bool, scale: float = 1.0) -> float:
+    """LA-A's lambda with the exact cone (Clarabel) or the 16-sided pyramid (HiGHS), friction and cohesion times ``scale``."""
+    joint = dd.JointMaterial(kn=model.joint.kn, ks=model.joint.ks, friction=model.joint.friction * scale,
+                             cohesion=model.joint.cohesion * scale, tension=model.joint.tension)
+    previous = la.EXACT_CONE
+    la.EXACT_CONE = cone
+    try:
+        return limit_analysis(model.replace(joint=joint), LimitSettings(tilt_axis=axis)).load_multiplier
+    finally:
+        la.EXACT_CONE = previous
+
+
+@pytest.mark.parametrize("case", [case for case in CASES if case in SLOW])
+def test_the_exact_cone_lies_between_the_pyramid_and_its_inscribed_cone(case):
+    # The pyramid (16 sides, circumradius c A + mu N) holds the cone of friction mu cos(pi/16) and cohesion
+    # c cos(pi/16) (its inscribed circle) and lies inside the exact cone (mu, c); lambda grows with the set
+    # of admissible forces, so lambda_cone(0.981 mu, 0.981 c) <= lambda_pyramid <= lambda_cone(mu, c).
+    # Measured: the 8 x 8 walls, equal (the shear along a pyramid vertex); the house, cone 0.4838 against
+    # pyramid 0.4799 (about y) and 0.4523 against 0.4498 (about x): +0.8 % and +0.6 %.
+    model, axis = CASES[case]()
+    cone, pyramid = lambda_of(model, axis, cone=True), lambda_of(model, axis, cone=False)
+    inscribed = lambda_of(model, axis, cone=True, scale=math.cos(math.pi / la.PYRAMID_SIDES))
+    slack = 1e-7 * cone  # Clarabel's relative gap, 1e-8, with a margin
+    assert inscribed - slack <= pyramid <= cone + slack  # all equal where friction does not govern (toppling)
 
 
 def test_a_wall_of_400_bricks_slides_at_mu():

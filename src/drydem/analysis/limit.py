@@ -1,11 +1,14 @@
-"""Limit analysis of rigid blocks: the static (lower-bound) linear program, associative and
-non-associative friction, solved with HiGHS (scipy.optimize.linprog).
+"""Limit analysis of rigid blocks: the static (lower-bound) problem, associative and
+non-associative friction; in-plane models, a linear program solved with HiGHS
+(scipy.optimize.linprog); 3D models, a second-order cone program solved with Clarabel.
 
 Associative (LA-A; Livesley 1978, Gilbert & Melbourne 1994): at every contact point k of the
 model's contact polygons (their corners: 2 points per length), a normal force N_k >= -t A_k
-(t the tensile strength, 0 by default) and a shear force T_k inside the linearised Coulomb
-cone, |T_k| <= c A_k + mu N_k (in-plane models: one tangent, exact; 3D: a 16-sided pyramid
-inscribed in the cone, with a vertex along the live load). Every free degree of freedom of every movable block is in equilibrium under its
+(t the tensile strength, 0 by default) and a shear force T_k inside the Coulomb cone,
+|T_k| <= c A_k + mu N_k (in-plane models: one tangent, a linear program, exact; 3D: two
+tangents, the exact cone, a second-order cone per point, :data:`EXACT_CONE`; or, as before, the
+16-sided pyramid inscribed in it with a vertex along the live load, whose lambda is lower by up to
+2 % where the shear points between two vertices). Every free degree of freedom of every movable block is in equilibrium under its
 weight W (dead load, vertical) plus lambda W horizontal along x (live load: the tilting table's
 lateral component; along y with ``tilt_axis = "x"``, the table tilting about x)::
 
@@ -20,7 +23,8 @@ the collapse angle is atan(lambda).
 Non-associative (LA-NA): friction without dilatancy, by the iterative scheme of Gilbert,
 Casapulla & Ahmed (2006, Computers & Structures 84, 873-887): solve LA-A; then, repeatedly,
 replace each point's friction limit by a fixed shear capacity mu N_k taken from the previous
-solution (a "pseudo-cohesion", whose flow rule has no normal dilatancy) and solve again,
+solution (a "pseudo-cohesion", whose flow rule has no normal dilatancy; in 3D a disc |T_k| <=
+c A_k + mu N_k^prev, a second-order cone with a constant first entry, by Clarabel) and solve again,
 relaxing the normal forces between iterations, until lambda settles. Its limits, as the
 authors state: the non-associative problem has no unique solution and this scheme is not
 guaranteed to find the lowest multiplier (nor to converge; then the last iterate is
@@ -30,7 +34,23 @@ The LP handed to HiGHS writes each point's admissible forces by the generators o
 (its edges) rather than its facets: the same feasible set, so the same lambda, with only the
 equilibrium rows as rows (:func:`_solve`).
 
-Units: the LP is solved in units of the mean block weight and the mean block size (HiGHS can
+Why the cone and Clarabel in 3D (measured, benchmarks/bench_limit.py, 2 shared cores): the
+pyramid's LP has 16 columns per point and HiGHS's interior point (with crossover) scales badly on
+it: the 115-block house takes 6-15 s, SMALL (1,936 blocks, 21,716 points) did not finish in 25
+minutes and LARGE (19,853 blocks, 229,192 points: 119,112 rows x 3,667,073 columns) is out of
+reach. The exact cone needs 3 variables per point (N, T1, T2) and Clarabel's interior point
+(QDLDL) converges in 35-45 iterations whatever the size: the house in 0.1 s, SMALL in 6 s
+(76,758 rows x 65,149 columns), LARGE in ~220 s (806,688 rows x 687,577 columns, ~5.3 s per
+iteration, nearly all in the sparse factorisation; the goal of 60 s is not reached). The cone's lambda is at least the pyramid's
+(its set of admissible forces holds the pyramid's) and at most that of the pyramid of friction
+and cohesion 1 / cos(pi / 16) = 1.0196 times larger (which holds the cone): the house, 0.4838
+against the pyramid's 0.4799 (tilting about y) and 0.4523 against 0.4498 (about x); walls
+sliding or toppling along a pyramid vertex, equal. The interior point has no crossover: lambda is
+a lower bound below the optimum by ~2e-4 on SMALL but ~1 % on LARGE (its lambda: 0.07294 and
+0.07347 at Clarabel's default gap 1e-8, with and without the redundant rows N >= 0; 0.07434 at
+1e-9, :data:`CONE_SETTINGS`), and the mechanism (the duals) is accurate to ~1e-5, not a vertex's.
+
+Units: the LP (and the cone program) is solved in units of the mean block weight and the mean block size (HiGHS can
 return wrong optima on badly scaled input; bricks weigh ~0.03 N).
 """
 
@@ -40,16 +60,17 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+import clarabel
 import numpy as np
 from scipy.optimize import linprog
-from scipy.sparse import coo_matrix, hstack
+from scipy.sparse import coo_matrix, csc_matrix, hstack, vstack
 from scipy.spatial.transform import Rotation
 
 from drydem.engine.contacts import world_points
 from drydem.engine.tracker import ContactTracker
 from drydem.errors import DrydemError
 from drydem.model.assembly import Model
-from drydem.model.parameters import FLAG, G, ContactSettings, OneOf, Range, check_fields
+from drydem.model.parameters import FLAG, G, LOAD_DIRECTION, TILT_AXES, ContactSettings, OneOf, Range, check_fields
 from drydem.model.state import State
 
 #: sides of the linearised friction pyramid for 3D contacts
@@ -68,6 +89,18 @@ METHOD = "highs-ipm"
 #: and these LPs have no pyramid (shear bounded by a fixed capacity), far fewer degenerate pivots
 NA_METHOD = "highs-ds"
 OPTIONS: dict = {}
+#: 3D models: the exact Coulomb cone (a second-order cone per contact point, solved by Clarabel,
+#: :func:`_solve_cone`); False: the 16-sided pyramid's LP by HiGHS (:func:`_solve`), as before
+EXACT_CONE = True
+#: Clarabel's settings, chosen by measurement (benchmarks/bench_limit.py, 2 shared cores): its
+#: QDLDL factorisation is 4 times faster than the default ("auto": faer) on SMALL (5 s against
+#: 22 s, the same 37 iterations; faer on 2 threads is no faster on LARGE either, ~6 s an
+#: iteration against 5.3 s). Every iterate is statically admissible (equilibrium to ~1e-13,
+#: forces inside the cones), so lambda is a lower bound that creeps up to the optimum in the last
+#: iterations; the duality gap tolerance sets how close: on SMALL (optimum 0.176726, 300
+#: iterations at 1e-12), 1e-8 (Clarabel's default) stops at 0.17653 (-1.1e-3, 35 iterations),
+#: 1e-9 at 0.17669 (-2e-4, 43), 1e-10 at 0.17672 (-5e-5, 51)
+CONE_SETTINGS: dict = {"direct_solve_method": "qdldl", "verbose": False, "tol_gap_abs": 1e-9, "tol_gap_rel": 1e-9}
 SOLVER_NAMES = {"highs": "HiGHS's choice", "highs-ds": "dual simplex", "highs-ipm": "interior point"}
 #: equilibrium coefficients below this (round-off of the cross products, in the LP's units) are
 #: left out: HiGHS ignores |values| <= 1e-9 anyway, with a warning
@@ -77,12 +110,6 @@ ZERO = 1e-9
 class LimitAnalysisError(DrydemError):
     """The limit analysis has no answer: unstable under dead load, no free block, solver failure."""
 
-
-#: the axis the table tilts about (as ``drydem tilt --tilt-axis``): "y", the live load along x (a
-#: wall along x loaded in its plane); "x", the live load along y (out of the plane of such a wall)
-TILT_AXES = ("y", "x")
-#: the live load's direction for each tilt axis
-LOAD_DIRECTION = {"y": 0, "x": 1}
 
 #: the rule of each field of :class:`LimitSettings`: at most 10,000 iterations, each a linear
 #: program (minutes for a large wall); the tolerance is a relative change, a change of 100 %
@@ -117,7 +144,7 @@ class LimitSettings:
 @dataclass(frozen=True)
 class LimitResult:
     """load_multiplier : lambda at collapse. collapse_angle_deg : atan(lambda) in degrees.
-    method : "associative" or "non-associative". status : HiGHS's message. iterations and
+    method : "associative" or "non-associative". status : the solver's message. iterations and
     converged : of the non-associative scheme (1 and True for LA-A); history : lambda per
     iteration. velocity : (nb, 3) m/s and angular_velocity : (nb, 3) rad/s, the mechanism,
     normalised so that the fastest point of a block moves at 1 m/s. normal_force : (np,) N."""
@@ -164,11 +191,13 @@ def limit_analysis(model: Model, settings: LimitSettings = LimitSettings(), *,
     """LA-A (and LA-NA with ``settings.non_associative``) of ``model`` (see module docstring).
 
     ``on_progress(stage)`` is called as each stage starts (finding the contacts, assembling the
-    equilibrium matrix, each LP solved by HiGHS: the associative one with its method and size,
-    then each non-associative iteration with the last lambda), with a line that says it, so
+    equilibrium matrix, each problem solved, by HiGHS (in-plane: an LP) or Clarabel (3D: a
+    second-order cone program): the associative one with the solver, its method and size, then
+    each non-associative iteration with the last lambda), with a line that says it, so
     that a command can show where it is; nothing is reported without it. On a large model
     nearly all the time is in the LP (a 60 x 60 brick wall, 3,631 blocks, 2 shared cores:
-    contacts and assembly ~1 s, the associative LP ~90 s; it took ~15 min in the facet form)."""
+    contacts and assembly ~1 s, the associative LP ~90 s; it took ~15 min in the facet form; the
+    3D building SMALL, 1,936 blocks: ~6 s by Clarabel, LARGE, 19,853 blocks: ~4 min)."""
     progress = on_progress or (lambda stage: None)
     problem = _assemble(model, settings.tilt_axis, progress)
     joint, weight = model.joint, problem.weight
@@ -176,22 +205,26 @@ def limit_analysis(model: Model, settings: LimitSettings = LimitSettings(), *,
     cohesion = joint.cohesion * problem.area / weight
     tension = joint.tension * problem.area / weight
 
-    def announce(rows: int, columns: int) -> None:
-        progress(f"solving the associative LP with HiGHS ({SOLVER_NAMES[METHOD]}: {rows} rows x {columns} columns, "
-                 f"{problem.n_points} contact points)")
+    cone = EXACT_CONE and problem.n_tangents == 2
+    solve, name = (_solve_cone, "the SOCP with Clarabel") if cone else (_solve, "the LP with HiGHS")
 
-    lam, normal, duals, status = _solve(problem, friction=friction, cohesion=cohesion, tension=tension, capacity=None,
-                                        announce=announce)
+    def announce(rows: int, columns: int) -> None:
+        kind = (f"exact Coulomb cones, interior point: {rows} rows x {columns} columns, {problem.n_points} second-order cones"
+                if cone else f"{SOLVER_NAMES[METHOD]}: {rows} rows x {columns} columns, {problem.n_points} contact points")
+        progress(f"solving the associative {name.split()[1]} with {name.split()[-1]} ({kind})")
+
+    lam, normal, duals, status = solve(problem, friction=friction, cohesion=cohesion, tension=tension, capacity=None,
+                                       announce=announce)
     forces = normal
     history, converged, iterations = [lam], True, 1
     if settings.non_associative:
         converged = False
         for iterations in range(2, settings.max_iterations + 2):
             progress(f"non-associative iteration {iterations - 1} of at most {settings.max_iterations}: "
-                     f"solving the LP with HiGHS (lambda {lam:.4f} so far)")
+                     f"solving {name} (lambda {lam:.4f} so far)")
             capacity = cohesion + friction * np.maximum(normal, 0.0)
-            lam_new, forces_new, duals_new, status = _solve(problem, friction=friction, cohesion=cohesion, tension=tension, capacity=capacity,
-                                                            method=NA_METHOD)
+            lam_new, forces_new, duals_new, status = solve(problem, friction=friction, cohesion=cohesion, tension=tension, capacity=capacity,
+                                                           method=NA_METHOD)
             history.append(lam_new)
             normal = (1 - settings.relaxation) * normal + settings.relaxation * forces_new
             change = abs(lam_new - lam) / max(abs(lam), 1e-12)
@@ -360,6 +393,75 @@ def _solve(problem: _Problem, *, friction: float, cohesion: np.ndarray, tension:
                                  "(the blocks stand only if pushed the other way)")
     normal = res.x[: n * n_rays].reshape(n_rays, n).sum(axis=0) - floor
     return float(res.x[-1]), normal, res.eqlin.marginals, res.message
+
+
+def _solve_cone(problem: _Problem, *, friction: float, cohesion: np.ndarray, tension: np.ndarray, capacity: np.ndarray | None,
+                announce: Callable[[int, int], None] | None = None, method: str | None = None):
+    """:func:`_solve` for 3D points with the exact Coulomb cone, by Clarabel (``method`` unused).
+
+    Variables: N_k, (T_k1, T_k2) per point, lambda; Clarabel's form ``A x + s = b``, s in cones:
+    the equilibrium rows ``B f + lambda L = -D`` (zero cone: their duals are the mechanism);
+    ``(c A_k + mu N_k, T_k1, T_k2)`` in a second-order cone of dimension 3 (|T_k| <= c A_k + mu N_k)
+    and ``N_k + t A_k >= 0`` (nonnegative cone; left out where the cone implies it, t A_k >= c A_k / mu:
+    all points for the default c = t = 0). Non-associative (``capacity``): ``(capacity_k, T_k)``
+    in the cone, a constant first entry (no dependence on N, no dilatancy); points of zero
+    capacity have no shear variables (a cone with an empty interior stalls the interior point)."""
+    n = problem.n_points
+    equilibrium = problem.equilibrium.tocsc()
+    if capacity is None:
+        sheared = np.arange(n)
+        top, slope = cohesion, friction
+        bounded = np.flatnonzero(tension < cohesion / friction)  # N >= -t not implied by the cone
+    else:
+        sheared = np.flatnonzero(capacity > 0)
+        top, slope = capacity[sheared], 0.0
+        bounded = np.arange(n)
+    m = len(sheared)
+    columns = [equilibrium[:, :n], equilibrium[:, n:2 * n][:, sheared], equilibrium[:, 2 * n:][:, sheared],
+               csc_matrix(problem.live[:, None])]
+    a_eq = hstack(columns, format="csc")
+    n_vars = a_eq.shape[1]
+    # the cones: rows 3 j, 3 j + 1, 3 j + 2 of the j-th sheared point: -(slope N), -T1, -T2
+    j = np.arange(m)
+    rows = np.concatenate([3 * j, 3 * j + 1, 3 * j + 2])
+    cols = np.concatenate([sheared, n + j, n + m + j])
+    values = np.concatenate([np.full(m, -slope), -np.ones(2 * m)])
+    keep = values != 0.0
+    a_cone = coo_matrix((values[keep], (rows[keep], cols[keep])), shape=(3 * m, n_vars))
+    b_cone = np.zeros(3 * m)
+    b_cone[3 * j] = top
+    a_floor = coo_matrix((-np.ones(len(bounded)), (np.arange(len(bounded)), bounded)), shape=(len(bounded), n_vars))
+    a = vstack([a_eq, a_floor, a_cone], format="csc")
+    b = np.concatenate([-problem.dead, tension[bounded], b_cone])
+    cones = [clarabel.ZeroConeT(a_eq.shape[0])] + ([clarabel.NonnegativeConeT(len(bounded))] if len(bounded) else [])
+    cones += [clarabel.SecondOrderConeT(3)] * m
+    cost = np.zeros(n_vars)
+    cost[-1] = -1.0
+    settings = clarabel.DefaultSettings()
+    for key, value in CONE_SETTINGS.items():
+        setattr(settings, key, value)
+    if announce is not None:
+        announce(a.shape[0], n_vars)
+    solution = _clarabel(csc_matrix((n_vars, n_vars)), cost, a, b, cones, settings)
+    status = str(solution.status)
+    if status in ("PrimalInfeasible", "AlmostPrimalInfeasible"):
+        raise LimitAnalysisError(f"{problem.source}: unstable under its dead load alone: no contact forces hold the blocks up "
+                                 "for any load multiplier (a block floating, or resting beyond the edge of its support)")
+    if status in ("DualInfeasible", "AlmostDualInfeasible"):
+        raise LimitAnalysisError(f"{problem.source}: the load multiplier is unbounded: no mechanism can form under the horizontal load")
+    if status not in ("Solved", "AlmostSolved"):
+        raise LimitAnalysisError(f"{problem.source}: Clarabel failed: {status} after {solution.iterations} iterations")
+    x = np.asarray(solution.x)
+    if x[-1] < 0:
+        raise LimitAnalysisError(f"{problem.source}: unstable under its dead load alone: lambda = {x[-1]:.4g} < 0 "
+                                 "(the blocks stand only if pushed the other way)")
+    duals = np.asarray(solution.z)[:a_eq.shape[0]]
+    return float(x[-1]), x[:n].copy(), duals, f"Clarabel: {status} ({solution.iterations} iterations)"
+
+
+def _clarabel(p, q, a, b, cones, settings):
+    """Clarabel's solution of min q x + x P x / 2 subject to A x + s = b, s in ``cones`` (timed apart by the benchmark)."""
+    return clarabel.DefaultSolver(p, q, a, b, cones, settings).solve()
 
 
 def _mechanism(model: Model, problem: _Problem, duals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
