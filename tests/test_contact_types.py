@@ -31,8 +31,8 @@ DENSITY = ContactDensity(along=4, across=4)
 KIND = {npm.FACE_FACE: polyhedra.FACE_FACE, npm.EDGE_FACE: polyhedra.EDGE_FACE, npm.VERTEX_FACE: polyhedra.VERTEX_FACE,
         npm.EDGE_EDGE: polyhedra.EDGE_EDGE}
 #: a placed feature is clean when every face of the placed block is tilted at least this far
-#: from the face it rests on (rad), beyond the face-face limit of 0.1 rad (narrow_phase.FACE_COSINE)
-CLEAN_TILT = 0.15
+#: from the face it rests on (rad), beyond the face-face limit of 0.2 rad (narrow_phase.FACE_COSINE)
+CLEAN_TILT = 0.45
 
 
 def random_block(rng) -> dd.ConvexPolyhedron:
@@ -254,11 +254,11 @@ def cube_on_ground(tilt_deg, a=0.2):
 
 
 def test_shear_stress_is_kept_when_an_edge_contact_turns_into_a_face_contact():
-    """A cube on its edge (20 deg) with a shear stress tau along x at its sub-contacts, turned
+    """A cube on its edge (25 deg) with a shear stress tau along x at its sub-contacts, turned
     about that edge onto its face and re-detected: the new face-face sub-contacts carry the
     same shear stress (merge: nearest old sub-contact's stress times the new area); and back."""
     tau = 1234.5
-    geometry, position, rotation = cube_on_ground(20.0)
+    geometry, position, rotation = cube_on_ground(25.0)
     pair = np.array([[0, 1]])
     edge, _ = npm.narrow_phase(geometry, pair, position, rotation, tolerance=TOLERANCE, density=DENSITY)
     assert list(npm.contact_kinds(npm.find(geometry, pair, position, rotation, tolerance=TOLERANCE, density=DENSITY))) == [npm.EDGE_FACE]
@@ -345,7 +345,7 @@ def test_a_cube_falling_off_its_edge_lands_with_the_rigid_bodys_angular_velocity
     (phi0, w0), phi1, w1 = history[-1], face_angle(), abs(sim.state.angular_velocity[1, 1])
     omega = w0 + (w1 - w0) * phi0 / (phi0 - phi1)  # at the landing angle 0, interpolated
     # 0.5 %: the rigid theory leaves out the pivot's elastic closure and the contact's change of
-    # kind on the way (edge-face points, then at 0.1 rad the face grid's edge row), and the
+    # kind on the way (edge-face points, then at 0.2 rad the face grid's edge row), and the
     # explicit integrator (second order) takes ~2000 steps of 2.7e-4 s for the fall; measured 6.5e-4
     assert omega == pytest.approx(omega_exact, rel=5e-3)
 
@@ -375,11 +375,11 @@ def test_any_overlap_gives_bounded_finite_contacts(along, across):
         assert found.kind[k] in (npm.FACE_FACE, npm.EDGE_FACE, npm.VERTEX_FACE, npm.EDGE_EDGE)
 
 
-@pytest.mark.parametrize("tilt_deg, kind, count", [(0.0, npm.FACE_FACE, 16), (1e-3, npm.FACE_FACE, 16), (3.0, npm.FACE_FACE, 4), (10.0, npm.EDGE_FACE, 4)])
+@pytest.mark.parametrize("tilt_deg, kind, count", [(0.0, npm.FACE_FACE, 16), (1e-3, npm.FACE_FACE, 16), (3.0, npm.FACE_FACE, 4), (25.0, npm.EDGE_FACE, 4)])
 def test_almost_parallel_faces_stay_a_face_contact(tilt_deg, kind, count):
     """A cube on a slab, its face lifted about an edge: flat or nearly (the far side within the
-    tolerance) all 4 x 4 points; rocked 3 deg (below the 0.1 rad face-face limit) still a face
-    contact, the grid's edge row touching; at 10 deg an edge-face contact, 4 points along it."""
+    tolerance) all 4 x 4 points; rocked 3 deg (below the 0.2 rad face-face limit) still a face
+    contact, the grid's edge row touching; at 25 deg an edge-face contact, 4 points along it."""
     geometry, position, rotation = cube_on_ground(tilt_deg)
     found = npm.find(geometry, np.array([[0, 1]]), position, rotation, tolerance=TOLERANCE, density=DENSITY)
     assert found.kind[0] == kind and found.count[0] == count
