@@ -206,12 +206,12 @@ def limit_analysis(model: Model, settings: LimitSettings = LimitSettings(), *,
     tension = joint.tension * problem.area / weight
 
     cone = EXACT_CONE and problem.n_tangents == 2
-    solve, name = (_solve_cone, "the SOCP with Clarabel") if cone else (_solve, "the LP with HiGHS")
+    solve, program, solver = (_solve_cone, "SOCP", "Clarabel") if cone else (_solve, "LP", "HiGHS")
 
     def announce(rows: int, columns: int) -> None:
         kind = (f"exact Coulomb cones, interior point: {rows} rows x {columns} columns, {problem.n_points} second-order cones"
                 if cone else f"{SOLVER_NAMES[METHOD]}: {rows} rows x {columns} columns, {problem.n_points} contact points")
-        progress(f"solving the associative {name.split()[1]} with {name.split()[-1]} ({kind})")
+        progress(f"solving the associative {program} with {solver} ({kind})")
 
     lam, normal, duals, status = solve(problem, friction=friction, cohesion=cohesion, tension=tension, capacity=None,
                                        announce=announce)
@@ -221,7 +221,7 @@ def limit_analysis(model: Model, settings: LimitSettings = LimitSettings(), *,
         converged = False
         for iterations in range(2, settings.max_iterations + 2):
             progress(f"non-associative iteration {iterations - 1} of at most {settings.max_iterations}: "
-                     f"solving {name} (lambda {lam:.4f} so far)")
+                     f"solving the {program} with {solver} (lambda {lam:.4f} so far)")
             capacity = cohesion + friction * np.maximum(normal, 0.0)
             lam_new, forces_new, duals_new, status = solve(problem, friction=friction, cohesion=cohesion, tension=tension, capacity=capacity,
                                                            method=NA_METHOD)
@@ -381,16 +381,8 @@ def _solve(problem: _Problem, *, friction: float, cohesion: np.ndarray, tension:
     if announce is not None:
         announce(a_eq.shape[0] + (0 if a_ub is None else a_ub.shape[0]), a_eq.shape[1])
     res = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=b_eq, bounds=bounds, method=method or METHOD, options=OPTIONS)
-    if res.status == 2:
-        raise LimitAnalysisError(f"{problem.source}: unstable under its dead load alone: no contact forces hold the blocks up "
-                                 "for any load multiplier (a block floating, or resting beyond the edge of its support)")
-    if res.status == 3:
-        raise LimitAnalysisError(f"{problem.source}: the load multiplier is unbounded: no mechanism can form under the horizontal load")
-    if res.status != 0:
-        raise LimitAnalysisError(f"{problem.source}: HiGHS failed: {res.message}")
-    if res.x[-1] < 0:
-        raise LimitAnalysisError(f"{problem.source}: unstable under its dead load alone: lambda = {res.x[-1]:.4g} < 0 "
-                                 "(the blocks stand only if pushed the other way)")
+    outcome = {0: SOLVED, 2: INFEASIBLE, 3: UNBOUNDED}.get(res.status, FAILED)
+    _check_outcome(problem.source, outcome, res.x[-1] if outcome == SOLVED else None, f"HiGHS failed: {res.message}")
     normal = res.x[: n * n_rays].reshape(n_rays, n).sum(axis=0) - floor
     return float(res.x[-1]), normal, res.eqlin.marginals, res.message
 
@@ -444,19 +436,34 @@ def _solve_cone(problem: _Problem, *, friction: float, cohesion: np.ndarray, ten
         announce(a.shape[0], n_vars)
     solution = _clarabel(csc_matrix((n_vars, n_vars)), cost, a, b, cones, settings)
     status = str(solution.status)
-    if status in ("PrimalInfeasible", "AlmostPrimalInfeasible"):
-        raise LimitAnalysisError(f"{problem.source}: unstable under its dead load alone: no contact forces hold the blocks up "
-                                 "for any load multiplier (a block floating, or resting beyond the edge of its support)")
-    if status in ("DualInfeasible", "AlmostDualInfeasible"):
-        raise LimitAnalysisError(f"{problem.source}: the load multiplier is unbounded: no mechanism can form under the horizontal load")
-    if status not in ("Solved", "AlmostSolved"):
-        raise LimitAnalysisError(f"{problem.source}: Clarabel failed: {status} after {solution.iterations} iterations")
+    outcome = CLARABEL_OUTCOMES.get(status, FAILED)
     x = np.asarray(solution.x)
-    if x[-1] < 0:
-        raise LimitAnalysisError(f"{problem.source}: unstable under its dead load alone: lambda = {x[-1]:.4g} < 0 "
-                                 "(the blocks stand only if pushed the other way)")
+    _check_outcome(problem.source, outcome, x[-1] if outcome == SOLVED else None,
+                   f"Clarabel failed: {status} after {solution.iterations} iterations")
     duals = np.asarray(solution.z)[:a_eq.shape[0]]
     return float(x[-1]), x[:n].copy(), duals, f"Clarabel: {status} ({solution.iterations} iterations)"
+
+
+#: how a solve ended (:func:`_check_outcome`), and Clarabel's statuses for them (any other: FAILED)
+SOLVED, INFEASIBLE, UNBOUNDED, FAILED = "solved", "infeasible", "unbounded", "failed"
+CLARABEL_OUTCOMES = {"Solved": SOLVED, "AlmostSolved": SOLVED, "PrimalInfeasible": INFEASIBLE, "AlmostPrimalInfeasible": INFEASIBLE,
+                     "DualInfeasible": UNBOUNDED, "AlmostDualInfeasible": UNBOUNDED}
+
+
+def _check_outcome(source: str, outcome: str, lam: float | None, failure: str) -> None:
+    """Raise LimitAnalysisError naming ``source`` unless the solve ended SOLVED with lambda >= 0:
+    infeasible (no forces hold the dead load), unbounded (no mechanism), ``failure`` (the
+    solver's own words) or a negative ``lam`` (the blocks stand only if pushed the other way)."""
+    if outcome == INFEASIBLE:
+        raise LimitAnalysisError(f"{source}: unstable under its dead load alone: no contact forces hold the blocks up "
+                                 "for any load multiplier (a block floating, or resting beyond the edge of its support)")
+    if outcome == UNBOUNDED:
+        raise LimitAnalysisError(f"{source}: the load multiplier is unbounded: no mechanism can form under the horizontal load")
+    if outcome != SOLVED:
+        raise LimitAnalysisError(f"{source}: {failure}")
+    if lam < 0:
+        raise LimitAnalysisError(f"{source}: unstable under its dead load alone: lambda = {lam:.4g} < 0 "
+                                 "(the blocks stand only if pushed the other way)")
 
 
 def _clarabel(p, q, a, b, cones, settings):

@@ -29,7 +29,7 @@ import numpy as np
 
 from drydem.engine.damping import dashpot_force, dashpot_per_area, has_dashpots, local_damping
 from drydem.engine.joints import normal_law, shear_law, stiffer_than_timestep
-from drydem.engine.loop import FASTMATH, cycle_loop, workspace
+from drydem.engine.loop import FASTMATH, block_maxima, cycle_loop, workspace
 from drydem.model.rotation import mat_t_vec, mat_vec, quaternion_to_matrix, rotate_by_vector
 
 
@@ -215,22 +215,7 @@ def integrate(state, rot, blocks, force, moment, damping, dt, velocity_dt, gravi
         measures[i, 0] = np.sqrt(f2)
         measures[i, 1] = np.sqrt(m2) / blocks.radius[i]
         measures[i, 2] = speed
-    return _maxima(measures)
-
-
-@numba.njit(cache=True)
-def _maxima(measures):
-    """The largest unbalanced force (or moment / radius) and speed of the moving blocks
-    (:class:`~drydem.engine.loop.Workspace` ``measures``), in block order: serial, so that a
-    NaN goes through ``max`` exactly as it did in the serial kernel."""
-    max_unbalanced = 0.0
-    max_speed = 0.0
-    for i in range(measures.shape[0]):
-        if measures[i, 2] < 0.0:  # not moving
-            continue
-        max_speed = max(max_speed, measures[i, 2])
-        max_unbalanced = max(max_unbalanced, measures[i, 0], measures[i, 1])
-    return max_unbalanced, max_speed
+    return block_maxima(measures)
 
 
 #: below this many blocks :func:`rotations` runs serially: starting a parallel loop costs ~1-2 us,

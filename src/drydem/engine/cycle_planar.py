@@ -24,7 +24,7 @@ import numpy as np
 
 from drydem.engine.damping import dashpot_force, dashpot_per_area, has_dashpots, local_damping
 from drydem.engine.joints import normal_law, shear_law, stiffer_than_timestep
-from drydem.engine.loop import FASTMATH, cycle_loop, workspace
+from drydem.engine.loop import FASTMATH, block_maxima, cycle_loop, workspace
 from drydem.model.rotation import rotate_about_y
 
 #: below this turn of a contact normal in one cycle (rad), 1 / cos t = 1 + t^2 / 2 + 5 t^4 / 24 and
@@ -181,22 +181,8 @@ def integrate(state, blocks, force, moment, damping, dt, velocity_dt, gravity, w
         measures[i, 0] = fx * fx + fz * fz
         measures[i, 1] = arm_moment * arm_moment
         measures[i, 2] = speed
-    unbalanced_sq, speed = _maxima(measures)
+    unbalanced_sq, speed = block_maxima(measures)
     return np.sqrt(unbalanced_sq), speed
-
-
-@numba.njit(cache=True)
-def _maxima(measures):
-    """The largest squared unbalanced force (or moment / radius) and speed of the moving blocks,
-    in block order (:func:`drydem.engine.cycle3d._maxima`)."""
-    max_unbalanced_sq = 0.0
-    max_speed = 0.0
-    for i in range(measures.shape[0]):
-        if measures[i, 2] < 0.0:  # not moving
-            continue
-        max_speed = max(max_speed, measures[i, 2])
-        max_unbalanced_sq = max(max_unbalanced_sq, measures[i, 0], measures[i, 1])
-    return max_unbalanced_sq, max_speed
 
 
 @numba.njit(cache=True)

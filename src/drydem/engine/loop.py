@@ -175,6 +175,22 @@ def workspace(pairs, nb, width):
     return Workspace(start, entries, np.empty((nc, width)), np.zeros(nc, np.bool_), np.empty((nb, 3)))
 
 
+@numba.njit(cache=True)
+def block_maxima(measures):
+    """The largest unbalanced measure (columns 0 and 1: force and moment / radius, or their
+    squares) and the largest speed (column 2) of the moving blocks (speed >= 0) in a
+    :class:`Workspace`'s ``measures``, in block order: serial, so that a NaN goes through ``max``
+    exactly as it did in the serial kernels."""
+    max_unbalanced = 0.0
+    max_speed = 0.0
+    for i in range(measures.shape[0]):
+        if measures[i, 2] < 0.0:  # not moving
+            continue
+        max_speed = max(max_speed, measures[i, 2])
+        max_unbalanced = max(max_unbalanced, measures[i, 0], measures[i, 1])
+    return max_unbalanced, max_speed
+
+
 class LoopSettings(NamedTuple):
     """What one call of a kernel's ``run_cycles`` is to do (:func:`cycle_loop`).
 
