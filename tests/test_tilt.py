@@ -174,10 +174,10 @@ def test_drift_limit_angles_are_interpolated_on_the_pushover_curve():
     theta = np.arange(0.0, 10.0, 0.5)
     drift = np.where(theta <= 6, theta / 1000, 0.006 + (theta - 6) * 0.003)
     angles = drift_limit_angles(theta, drift)
-    assert angles["0.005"] == pytest.approx(5.0)
-    assert angles["0.0075"] == pytest.approx(6.5)
-    assert angles["0.01"] == pytest.approx(6 + 4 / 3)
-    assert drift_limit_angles(theta, drift / 100)["0.01"] is None
+    assert angles[0.005] == pytest.approx(5.0)
+    assert angles[0.0075] == pytest.approx(6.5)
+    assert angles[0.01] == pytest.approx(6 + 4 / 3)
+    assert drift_limit_angles(theta, drift / 100)[0.01] is None
 
 
 def test_monitored_block_is_the_top_block_nearest_the_middle(benchmark_wall):

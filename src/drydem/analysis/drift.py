@@ -15,21 +15,22 @@ import numpy as np
 EC8_DRIFT_LIMITS = (0.005, 0.0075, 0.01)
 
 
-def drift_limit_angles(angle_deg, drift, limits=EC8_DRIFT_LIMITS) -> dict[str, float | None]:
+def drift_limit_angles(angle_deg, drift, limits=EC8_DRIFT_LIMITS) -> dict[float, float | None]:
     """Angle at which ``drift`` first reaches each limit, linearly interpolated between the
     recorded equilibrium states (``angle_deg`` increasing); None where it never does.
-    Keys are the limits written as in the summary file ("0.005", "0.0075", "0.01")."""
+    Keys are the limits as numbers (0.005, 0.0075, 0.01); the summary file, JSON, writes them
+    as the strings "0.005", "0.0075", "0.01"."""
     angle, d = np.asarray(angle_deg, float), np.asarray(drift, float)
-    result: dict[str, float | None] = {}
+    result: dict[float, float | None] = {}
     for limit in limits:
         reached = np.flatnonzero(d >= limit)
         if reached.size == 0:
-            result[repr(limit)] = None
+            result[limit] = None
             continue
         k = int(reached[0])
         if k == 0:
-            result[repr(limit)] = float(angle[0])
+            result[limit] = float(angle[0])
             continue
         t = (limit - d[k - 1]) / (d[k] - d[k - 1])
-        result[repr(limit)] = float(angle[k - 1] + t * (angle[k] - angle[k - 1]))
+        result[limit] = float(angle[k - 1] + t * (angle[k] - angle[k - 1]))
     return result

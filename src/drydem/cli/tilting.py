@@ -186,7 +186,7 @@ def _tilt_outputs(found: Target, model: Model, result, folder: Path, series) -> 
     for line in _tilt_verdict(result, model):
         click.echo(line)
     dls = result.drift_limit_angles_deg
-    click.echo("drift limits    " + ", ".join(f"{float(k):.2%}: " + ("not reached" if v is None else f"{v:.2f} deg") for k, v in dls.items()))
+    click.echo("drift limits    " + ", ".join(f"{k:.2%}: " + ("not reached" if v is None else f"{v:.2f} deg") for k, v in dls.items()))
     if result.lost_blocks and result.stable_under_gravity:
         first = min(theta for _, theta in result.lost_blocks)
         click.echo(f"lost blocks     {len(result.lost_blocks)} fell out of the model, the first at {first:.2f} deg (listed in summary.json)")

@@ -159,7 +159,7 @@ def tilt_summary(result: TiltResult, model: Model) -> dict:
         "last_equilibrium_deg": result.last_equilibrium_deg,
         "stable_under_gravity": result.stable_under_gravity,
         "ended_by": result.ended_by,
-        "drift_limit_angles_deg": result.drift_limit_angles_deg,
+        "drift_limit_angles_deg": {repr(limit): angle for limit, angle in result.drift_limit_angles_deg.items()},
         "monitored_block": result.monitored_block,
         "wall_height_m": result.wall_height_m,
         "lost_blocks": [{"block": name, "tilt_deg": tilt} for name, tilt in result.lost_blocks],

@@ -183,7 +183,7 @@ class TiltResult:
         return None if self.collapse_angle_deg is None else math.tan(math.radians(self.collapse_angle_deg))
 
     @property
-    def drift_limit_angles_deg(self) -> dict[str, float | None]:
+    def drift_limit_angles_deg(self) -> dict[float, float | None]:
         return drift_limit_angles([r.tilt_deg for r in self.records], [r.drift for r in self.records])
 
 
