@@ -12,7 +12,7 @@ import time
 
 from drydem.analysis.tilt import TiltSettings, tilt_analysis
 from drydem.engine.simulation import Simulation
-from drydem.masonry.building import LARGE, SMALL, building_model
+from drydem.masonry.building import builtin_building
 from drydem.masonry.walls import wall_from_dict
 
 GOAL_S = 120.0
@@ -41,9 +41,9 @@ def tilt_wall() -> str:
             f"{result.cycles} cycles in {elapsed:.1f} s ({result.cycles / elapsed:.0f} cycles/s), goal {GOAL_S:.0f} s")
 
 
-def settle_building(spec, name: str) -> str:
+def settle_building(name: str) -> str:
     start = time.perf_counter()
-    model = building_model(spec)
+    model = builtin_building(name)
     built = time.perf_counter() - start
     start = time.perf_counter()
     simulation = Simulation(model)
@@ -62,8 +62,8 @@ def _report(start: float):
     return report
 
 
-CASES = {"wall60": tilt_wall, "building-small": lambda: settle_building(SMALL, "building-small"),
-         "building-large": lambda: settle_building(LARGE, "building-large")}
+CASES = {"wall60": tilt_wall, "building-small": lambda: settle_building("building-small"),
+         "building-large": lambda: settle_building("building-large")}
 
 
 def main() -> None:

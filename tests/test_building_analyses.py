@@ -15,7 +15,9 @@ from drydem.cli import main
 from drydem.io.model_file import load_model, save_model
 from drydem.io.target import load_target
 from drydem.io.vtk import VtkSeries
-from drydem.masonry.building import BUILDING_JOINT, BUILDINGS, SMALL, BuildingSpec, building_model
+from drydem.masonry.building import (
+    BUILDING_JOINT, BUILDINGS, FULL_SCALE_JOINT, LARGE, SMALL, BuildingSpec, buckling_joint_stiffness, building_model,
+)
 from drydem.model.parameters import JointMaterial
 from drydem.report.plots import is_wall_like, mechanism_figure
 
@@ -96,6 +98,15 @@ def test_the_built_in_buildings_are_targets():
     result = CliRunner().invoke(main, ["designs"])
     assert result.exit_code == 0 and "building-small" in result.output and "19853" in result.output
 
+
+
+def test_building_large_joints_are_stiff_enough_for_its_walls_to_stand():
+    # its 9.6 m leaf, 0.12 m thick, buckles as a free column below 2.1e10 Pa/m (Greenhill,
+    # tests/test_statics.py checks the engine agrees): the walls' 1e9 was 20 times too soft
+    height = LARGE.courses * LARGE.brick_height_m
+    critical = buckling_joint_stiffness(height, LARGE.brick_height_m, LARGE.brick_width_m)
+    assert critical == pytest.approx(2.08e10, rel=0.01)  # 12 rho g L^3 / (1.986^3 h t^2), by hand
+    assert BUILDINGS["building-large"].joint == FULL_SCALE_JOINT and FULL_SCALE_JOINT.kn >= 2 * critical > 2 * BUILDING_JOINT.kn
 
 def test_a_building_exported_is_read_back_the_same(tmp_path):
     model = building_model(TINY)

@@ -5,6 +5,7 @@ import pytest
 
 import drydem as dd
 from conftest import BRICK, stack_model
+from drydem.masonry.building import buckling_joint_stiffness
 
 UNDAMPED = dd.SolverSettings(damping=0.0)
 
@@ -60,3 +61,44 @@ def test_mass_scaling_reaches_the_same_equilibrium():
     scaled = dd.Simulation(stack_model(heights, solver=dd.SolverSettings(ratio=1e-9, mass_scaling=True)))
     assert plain.cycle_to_equilibrium().converged and scaled.cycle_to_equilibrium().converged
     np.testing.assert_allclose(scaled.state.position, plain.state.position, rtol=0, atol=1e-10)
+
+
+
+#: a full-scale brick column: 40 courses of a 240 x 120 x 80 mm brick, thickness t along x
+COLUMN = {"courses": 40, "t": 0.12, "b": 0.24, "h": 0.08}
+
+
+def leaning_column(kn: float, lean_top_m: float) -> dd.Model:
+    """COLUMN on a fixed base, joints kn = ks, brick k shifted in x by lean_top_m (1 - cos(pi
+    z_k / 2L)): the imperfection of the cantilever's first mode."""
+    t, b, h, courses = COLUMN["t"], COLUMN["b"], COLUMN["h"], COLUMN["courses"]
+    blocks = [dd.Block(name="base", shape=dd.box([-1.0, -1.0, -0.01], [1.0, 1.0, 0.0]), fixed=True)]
+    for k in range(courses):
+        dx = lean_top_m * (1.0 - np.cos(0.5 * np.pi * (k + 0.5) / courses))
+        blocks.append(dd.Block(name=f"brick{k}", shape=dd.box([dx - t / 2, -b / 2, k * h], [dx + t / 2, b / 2, (k + 1) * h])))
+    return dd.build_model(blocks, density=1800.0, joint=dd.JointMaterial(kn=kn, ks=kn, friction=0.6),
+                          solver=dd.SolverSettings(ratio=1e-6))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("height_over_greenhill, stands", [(0.9, True), (1.1, False)])
+def test_dry_stack_buckles_under_its_own_weight_beyond_greenhills_height(height_over_greenhill, stands):
+    # Elastic joints make a tall dry stack a column of stiffness EI = kn h b t^3 / 12, which
+    # buckles under its own weight beyond Greenhill's height (buckling_joint_stiffness): the
+    # joints are made soft enough for the column to be 0.9 or 1.1 times that height (L_cr
+    # scales as kn^(1/3)). Below it a slightly leaning stack settles, its lean amplified by less
+    # than the linear 1 / (1 - (L / L_cr)^3); above it the lean grows without bound (the
+    # engine's side of building-large's failure to settle at kn = 1e9, issue 18)
+    critical = buckling_joint_stiffness(COLUMN["courses"] * COLUMN["h"], COLUMN["h"], COLUMN["t"])
+    lean = 1e-3 * COLUMN["t"]
+    model = leaning_column(critical / height_over_greenhill**3, lean)
+    sim = dd.Simulation(model)
+    result = sim.cycle_to_equilibrium(max_cycles=400_000)
+    top = model.n_blocks - 1
+    growth = (sim.state.position[top, 0] - model.block_centroid[top, 0]) / lean
+    load = height_over_greenhill**3
+    if stands:
+        assert result.converged
+        assert 0.0 < growth < load / (1.0 - load)
+    else:
+        assert not result.converged and growth > 10.0

@@ -65,7 +65,7 @@ from drydem.errors import ModelError
 from drydem.masonry.layout import BRICK_SIZE, BrickSize
 from drydem.model.assembly import Block, Model, build_model
 from drydem.model.geometry import ConvexPolyhedron, box
-from drydem.model.parameters import ContactSettings, JointMaterial, Range, SolverSettings, check_fields, refuse
+from drydem.model.parameters import G, ContactSettings, JointMaterial, Range, SolverSettings, check_fields, refuse
 
 #: the most blocks a building may have: twice the largest DEM masonry models (~10^5 blocks)
 MAX_BLOCKS = 200_000
@@ -337,12 +337,39 @@ LARGE = BuildingSpec(length_m=14.4, width_m=9.72, storeys=3, storey_height_cours
                      brick_height_m=0.08, windows_per_wall=4, window_width_bricks=5, window_height_courses=18,
                      sill_courses=11, door_height_courses=28)
 
+#: building-large's joints: kn = ks = 5e10 Pa/m, E = kn h = 4 GPa over its 80 mm courses (a brick
+#: masonry's modulus) and 2.4 times :func:`buckling_joint_stiffness` of its 9.6 m leaf. At
+#: BUILDING_JOINT's 1e9 the leaf is 20 times too soft: its settlement never converged, the
+#: walls bulging out of plane from the round-off up (issue 18)
+FULL_SCALE_JOINT = JointMaterial(kn=5e10, ks=5e10)
+
+
+def buckling_joint_stiffness(height_m: float, course_m: float, thickness_m: float, density: float = 1800.0) -> float:
+    """The joint stiffness kn, Pa/m, below which a free-standing dry leaf ``height_m`` tall
+    buckles under its own weight: Greenhill's (1881) height L_cr = 1.986 (EI / q)^(1/3)
+    (Timoshenko & Gere, Theory of Elastic Stability, 2nd ed., 2.13) with the stack's bending
+    stiffness per breadth EI = kn h t^3 / 12 (each joint's rotational stiffness kn t^3 / 12
+    smeared over a course h) and its weight q = rho g t, solved for kn:
+    kn = 12 rho g L^3 / (1.986^3 h t^2). Returns and piers braced by cross walls stand at less
+    (building-small stands at 0.6 times its full height's value)."""
+    return 12.0 * density * G * height_m**3 / (1.986**3 * course_m * thickness_m**2)
+
+
+@dataclass(frozen=True)
+class BuiltinBuilding:
+    """A built-in building: its geometry and its joints' default material."""
+
+    spec: BuildingSpec
+    joint: JointMaterial
+
+
 #: the built-in buildings, by their TARGET name (``drydem designs`` lists them)
-BUILDINGS = {"building-small": SMALL, "building-large": LARGE}
+BUILDINGS = {"building-small": BuiltinBuilding(SMALL, BUILDING_JOINT), "building-large": BuiltinBuilding(LARGE, FULL_SCALE_JOINT)}
 
 
 def builtin_building(name: str) -> Model | None:
-    """The model of the built-in building ``name`` (:data:`BUILDINGS`, the defaults of
-    :func:`building_model`, its source the name), or None if there is none of that name."""
-    spec = BUILDINGS.get(name)
-    return None if spec is None else building_model(spec, source=name)
+    """The model of the built-in building ``name`` (:data:`BUILDINGS`: its geometry and joint,
+    the other defaults of :func:`building_model`, its source the name), or None if there is
+    none of that name."""
+    building = BUILDINGS.get(name)
+    return None if building is None else building_model(building.spec, joint=building.joint, source=name)
