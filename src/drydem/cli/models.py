@@ -4,19 +4,21 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
-import numpy as np
 
 from drydem.masonry import designs
 from drydem.errors import DrydemError
-from drydem.io.target import Target
-from drydem.model.assembly import Model
-from drydem.masonry.imperfections import Imperfections
-from drydem.engine.simulation import Simulation
 from drydem.cli.common import (
     _factor, IMPERFECTION_OPTIONS, imperfection_options, imperfections_from_options, main, resolve_target, unit_option,
 )
+
+if TYPE_CHECKING:
+    from drydem.engine.simulation import Simulation
+    from drydem.io.target import Target
+    from drydem.masonry.imperfections import Imperfections
+    from drydem.model.assembly import Model
 
 
 @main.command()
@@ -25,10 +27,11 @@ from drydem.cli.common import (
 @click.option("--strict", is_flag=True, help="Fail if a wall breaks the competition brief.")
 @unit_option
 def check(target: str, settle: bool, strict: bool, unit: str) -> None:
-    """Validate TARGET (a built-in wall, a wall or model file, or a .wrl/.obj/.stl) and print
+    """Validate TARGET (a built-in wall, a wall or model file, or a .wrl/.obj/.stl/.json) and print
     its blocks, contacts and timestep."""
     from drydem.masonry.brief import brief_violations
     from drydem.analysis.support import unsupported
+    from drydem.engine.simulation import Simulation
 
     found = resolve_target(target, unit)
     model = found.model
@@ -66,6 +69,7 @@ def _fail_if_strict(strict: bool, violations: list[str], found: Target) -> None:
 
 
 def _settle(sim: Simulation) -> None:
+    import numpy as np
     from tqdm import tqdm
 
     model = sim.model
@@ -102,7 +106,8 @@ def list_designs() -> None:
     from drydem.masonry.building import BUILDINGS
 
     click.echo(f"\n{'name':<16} {'3D building':<28} {'plan':>13} {'blocks':>6}")
-    for name, spec in BUILDINGS.items():
+    for name, building in BUILDINGS.items():
+        spec = building.spec
         title = f"{spec.storeys} storeys, {spec.windows_per_wall} windows a wall"
         plan = f"{spec.length_m:g} x {spec.width_m:g} m"
         click.echo(f"{name:<16} {title:<28} {plan:>13} {spec.block_count:>6}")
@@ -172,20 +177,28 @@ def show(target: str, out: Path | None, strict: bool, unit: str, seed: int, heig
 @main.command()
 @click.argument("target")
 @click.argument("output", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--overwrite", is_flag=True, help="Replace OUTPUT if it exists (else an existing file is kept and the command fails).")
 @unit_option
-def export(target: str, output: Path, unit: str) -> None:
-    """Write TARGET's blocks to OUTPUT: a model file (.toml), ParaView (.vtu) or a mesh (.obj,
-    .stl: block names, shapes and fixed blocks; not the material, joint, contacts, supports or
-    solver, which only a .toml keeps). OUTPUT is written whole or not at all."""
+def export(target: str, output: Path, overwrite: bool, unit: str) -> None:
+    """Write TARGET's blocks to OUTPUT: a model file (.toml), ParaView (.vtu), an Itasca 3DEC command
+    file (.dat, .3ddat: blocks, supports, joint, density, gravity) or a mesh (.obj,
+    .stl, or .json, a list of compas Meshes: block names, shapes and fixed blocks; not the
+    material, joint, contacts, supports or solver, which a .toml keeps). OUTPUT is written
+    whole or not at all, and an existing one is replaced only with --overwrite."""
+    from drydem.io.compas_json import write_compas
+    from drydem.io.itasca import write_3dec
     from drydem.io.mesh import write_mesh
     from drydem.io.model_file import save_model
     from drydem.files import replaced_atomically, writable
     from drydem.io.vtk import write_vtu
 
-    writers = {".toml": save_model, ".vtu": write_vtu, ".obj": write_mesh, ".stl": write_mesh}
+    writers = {".toml": save_model, ".vtu": write_vtu, ".obj": write_mesh, ".stl": write_mesh, ".json": write_compas,
+               ".dat": write_3dec, ".3ddat": write_3dec}
     writer = writers.get(output.suffix.lower())
     if writer is None:
         raise click.ClickException(f"{output}: unknown output type {output.suffix!r}; drydem writes {', '.join(writers)}")
+    if output.is_file() and not overwrite:
+        raise click.ClickException(f"{output}: exists; pass --overwrite to replace it, or another OUTPUT")
     try:
         writable(output)
         found = resolve_target(target, unit)
@@ -194,6 +207,6 @@ def export(target: str, output: Path, unit: str) -> None:
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     click.echo(f"{found.name}: {found.model.n_blocks} blocks -> {output}")
-    if writer is write_mesh:
+    if writer in (write_mesh, write_compas):
         click.echo(f"note: {output} keeps the block names, shapes and fixed blocks, not the material, joint, contacts, "
                    "supports or solver settings (export to .toml for those)", err=True)

@@ -14,7 +14,7 @@ from drydem.masonry.building import BUILDINGS, builtin_building
 from drydem.masonry.walls import Wall, is_wall_file, wall_from_dict
 
 #: file suffixes read as geometry to import, each closed convex shape a block
-MESH_SUFFIXES = {".wrl": "VRML", ".vrml": "VRML", ".obj": "OBJ", ".stl": "STL"}
+MESH_SUFFIXES = {".wrl": "VRML", ".vrml": "VRML", ".obj": "OBJ", ".stl": "STL", ".json": "compas JSON"}
 
 
 @dataclass(frozen=True)
@@ -32,7 +32,7 @@ class Target:
 def load_target(target: str, *, unit_m: float = 1.0) -> Target:
     """Resolve ``target``: the name of a built-in wall or building (``drydem designs``;
     :data:`drydem.masonry.building.BUILDINGS`), a wall file or a
-    model file (.toml), or geometry to import (.wrl, .obj, .stl; coordinates times ``unit_m``
+    model file (.toml), or geometry to import (.wrl, .obj, .stl, compas .json; coordinates times ``unit_m``
     give metres). Imported blocks stand on a fixed base block (drydem.model.assembly.base_under) and
     get the default material and options. ModelError says what was tried."""
     path = Path(target)
@@ -60,15 +60,20 @@ def load_target(target: str, *, unit_m: float = 1.0) -> Target:
 
 
 def imported_model(path: Path, *, unit_m: float = 1.0) -> tuple[Model, list[str]]:
-    """The blocks of a VRML, OBJ or STL file, density 1800 kg/m3, the default joint and
-    options, no supports (``drydem export`` writes it as a model file to edit), and notes on
-    what was assumed. Blocks the file marks fixed (drydem.io.mesh) are the supports; a file
+    """The blocks of a VRML, OBJ, STL or compas JSON file, density 1800 kg/m3 (or a compas_dem
+    block's material's), the default joint and options, no supports (``drydem export`` writes it
+    as a model file to edit), and notes on what was assumed. Blocks the file marks fixed
+    (drydem.io.mesh, drydem.io.compas_json) are the supports; a file
     with none gets a fixed base block under its blocks (drydem.model.assembly.base_under), and a note."""
+    from drydem.io.compas_json import read_compas
     from drydem.io.mesh import read_mesh
     from drydem.io.vrml import read_vrml
 
-    if MESH_SUFFIXES[path.suffix.lower()] == "VRML":
+    kind = MESH_SUFFIXES[path.suffix.lower()]
+    if kind == "VRML":
         blocks, notes = read_vrml(path, unit_m=unit_m), []
+    elif kind == "compas JSON":
+        blocks, notes = read_compas(path, unit_m=unit_m)
     else:
         blocks, notes = read_mesh(path, unit_m=unit_m)
     if not any(b.fixed for b in blocks):

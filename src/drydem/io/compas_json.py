@@ -1,0 +1,321 @@
+"""Blocks from compas JSON files (compas meshes, compas_dem block models) and blocks to them.
+
+compas (https://compas.dev, ``compas.json_dump``; compas/data/encoders.py) writes each object
+as ``{"dtype": "package.module/Class", "data": {...}, "name": ..., "guid": ...}``, a subclass
+listing its parents' dtypes under ``"inheritance"``. drydem parses these files itself, without
+compas, and reads:
+
+* a compas Mesh (dtype ``compas.datastructures/Mesh``; compas/datastructures/mesh/mesh.py,
+  ``Mesh.__data__``): ``data["vertex"]`` maps each vertex key (an integer, as a string) to its
+  attributes ``x``, ``y``, ``z`` (one that is missing takes ``data["default_vertex_attributes"]``'s
+  value); ``data["face"]`` maps each face key to its vertex keys, counter-clockwise seen from
+  outside; ``data["attributes"]`` holds the mesh's own attributes. The block is named after the
+  mesh (its ``"name"``) and is fixed when ``attributes["is_support"]`` is true, the key with
+  which compas_dem's vault templates mark supports (compas_dem/models/blockmodel.py,
+  ``BlockModel.from_barrelvault``);
+* a list of meshes, or an object mapping block names to meshes;
+* a compas_dem block model (dtype ``compas_dem.models/BlockModel``, or any model whose
+  ``inheritance`` names ``compas_model.models/Model``; compas_model/models/model.py,
+  ``Model.__data__``): ``data["elements"]`` maps guids to elements, each a block
+  (compas_dem/elements/block.py, ``Block.__data__``): ``"geometry"`` a Mesh in the element's
+  frame, ``"transformation"`` null or a compas Transformation (``{"matrix": 4 x 4}``),
+  ``"is_support"`` (the block is fixed), ``"name"``, ``"material"`` null or the guid of one of
+  ``data["materials"]``, whose ``"density"`` (kg/m3), if it has one, is the block's.
+  ``data["tree"]`` nests the elements: an element's geometry goes to the model by its own
+  transformation, then its parents', then the model's ``data["transformation"]``
+  (compas_model/elements/element.py, ``Element.compute_modeltransformation``; a 4 x 4 matrix
+  acts on homogeneous points, as compas.geometry.transform_points). ``data["graph"]["node"]``
+  gives each element its graph node, the block index of compas_dem's ``BlockModel.add_support``;
+  the blocks are read in that order. The contacts on the graph's edges are not read (drydem
+  finds its own); modifiers (cuts of one element by another) are refused; features are not
+  read, as compas_dem's ``Block.compute_elementgeometry`` does not apply them.
+
+Names that several blocks share (compas names every mesh made from a box ``Box`` and every
+compas_dem block ``Block``) get their position appended (``Block-3``: the graph node or the
+index in the list), and a note says so. Each block must be a closed convex surface
+(drydem.io.mesh.closed_convex_block); errors name the file and the mesh or element.
+
+:func:`write_compas` writes a JSON list of compas Meshes, one per block in model order: named
+after the block, ``attributes["is_support"]`` its fixed flag, vertex keys 0, 1, ... in the
+block's vertex order, faces as drydem orients them (counter-clockwise seen from outside, as
+compas expects), no guid (compas makes one on loading; the same model gives the same file).
+``compas.json_load`` returns the list of Meshes; in compas_dem, each goes to a BlockModel by
+``add_support_from_mesh`` or ``add_block_from_mesh`` after its ``attributes["is_support"]``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from drydem.errors import ModelError
+from drydem.io.mesh import closed_convex_block
+from drydem.model.assembly import Block, Model
+
+MESH_DTYPE = "compas.datastructures/Mesh"
+MODEL_DTYPE = "compas_model.models/Model"
+#: compas's transformations (compas/geometry/transformations), each ``{"matrix": 4 x 4}``
+TRANSFORMATION_DTYPES = tuple(f"compas.geometry/{kind}" for kind in
+                              ("Transformation", "Translation", "Rotation", "Scale", "Reflection", "Projection", "Shear"))
+#: the mesh attribute (and compas_dem element key) that marks a fixed block
+SUPPORT_KEY = "is_support"
+#: what drydem reads, for messages
+READS = "a compas Mesh, a list or object of Meshes, or a compas_dem BlockModel (as compas.json_dump writes them)"
+
+
+@dataclass(frozen=True)
+class _Part:
+    """A mesh to make a block of: its name in the file, its position (list index or graph
+    node, appended to a shared name), the mesh's JSON, the 4 x 4 matrix placing it, whether it
+    is fixed, its density (kg/m3, None: the model's) and where it is, for messages."""
+
+    name: str
+    index: int
+    mesh: dict
+    matrix: np.ndarray
+    fixed: bool
+    density: float | None
+    where: str
+
+
+def read_compas(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], list[str]]:
+    """The blocks of a compas JSON file (coordinates times ``unit_m``, m) and notes on what was
+    assumed (names made unique). See the module docstring for the formats."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise ModelError(f"{path}: not a text file (byte {exc.start} is not UTF-8); drydem reads {READS}") from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ModelError(f"{path}: not JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}; drydem reads {READS}") from None
+    except RecursionError:
+        raise ModelError(f"{path}: its JSON is nested too deeply to read; drydem reads {READS}") from None
+    parts = _parts(data, str(path))
+    if not parts:
+        raise ModelError(f"{path}: no mesh: the file holds no block")
+    counts: dict[str, int] = {}
+    for part in parts:
+        counts[part.name] = counts.get(part.name, 0) + 1
+    blocks = [_block(part, part.name if counts[part.name] == 1 else f"{part.name}-{part.index}", unit_m) for part in parts]
+    shared = [name for name, n in counts.items() if n > 1]
+    notes = [f"{path}: {sum(counts[n] for n in shared)} blocks share the names {', '.join(map(repr, shared))}: "
+             f"each is named NAME-N after its position in the file (graph node or list index)"] if shared else []
+    return blocks, notes
+
+
+def write_compas(model: Model, path: str | Path) -> None:
+    """Every block as a compas Mesh in a JSON list (see the module docstring), coordinates to
+    full double precision so that the blocks read back as they were."""
+    fixed = model.block_fixed.all(axis=1)
+    meshes = [_mesh_json(name, shape, bool(is_fixed))
+              for name, shape, is_fixed in zip(model.block_name, model.block_shape, fixed)]
+    Path(path).write_text(json.dumps(meshes, indent=1) + "\n", encoding="utf-8")
+
+
+def _mesh_json(name: str, shape, fixed: bool) -> dict:
+    """A block's shape as compas's Mesh.__data__ lays it out."""
+    vertices = {str(i): dict(zip("xyz", xyz)) for i, xyz in enumerate(shape.vertices.tolist())}
+    faces = {str(f): [int(i) for i in face] for f, face in enumerate(shape.faces)}
+    data = {"attributes": {SUPPORT_KEY: fixed}, "default_vertex_attributes": {"x": 0.0, "y": 0.0, "z": 0.0},
+            "default_edge_attributes": {}, "default_face_attributes": {}, "vertex": vertices, "face": faces,
+            "facedata": {f: {} for f in faces}, "edgedata": {}, "max_vertex": len(vertices) - 1, "max_face": len(faces) - 1}
+    return {"dtype": MESH_DTYPE, "data": data, "name": name}
+
+
+def _parts(data, source: str) -> list[_Part]:
+    """The meshes of the file's top-level value, by its kind."""
+    if isinstance(data, list):
+        return [_mesh_part(item, _name(item, f"{source}: mesh {k}"), k, f"{source}: mesh {k}") for k, item in enumerate(data)]
+    if not isinstance(data, dict):
+        raise ModelError(f"{source}: the file holds a JSON {type(data).__name__}; drydem reads {READS}")
+    if "dtype" not in data:
+        return [_mesh_part(item, key, k, f"{source}: mesh") for k, (key, item) in enumerate(data.items())]
+    if _is(data, MODEL_DTYPE):
+        return _model_parts(data, source)
+    if not _is(data, MESH_DTYPE):
+        raise ModelError(f"{source}: the file holds a {data['dtype']!r}, not a {MESH_DTYPE!r} or a {MODEL_DTYPE!r}; "
+                         f"drydem reads {READS}")
+    return [_mesh_part(data, _name(data, source), 0, f"{source}: mesh")]
+
+
+def _is(data: dict, dtype: str) -> bool:
+    """Whether a compas object is of ``dtype`` or inherits from it (its "inheritance" list)."""
+    inheritance = data.get("inheritance") or []
+    return data.get("dtype") == dtype or (isinstance(inheritance, list) and dtype in inheritance)
+
+
+def _name(data, where: str) -> str | None:
+    name = data.get("name") if isinstance(data, dict) else None
+    if name is not None and not isinstance(name, str):
+        raise ModelError(f"{where}: the name must be a string, not {name!r}")
+    return name
+
+
+def _mesh_part(data, name: str | None, index: int, where: str) -> _Part:
+    """A mesh of a list or an object, or the file's only one, in model coordinates; one without
+    a name is called "Mesh", as compas calls it."""
+    where = where if name is None else f"{where} {name!r}"
+    mesh = _mesh(data, where)
+    attributes = _object(mesh["data"].get("attributes") or {}, f"{where}: attributes")
+    fixed = _flag(attributes.get(SUPPORT_KEY, False), f"{where}: {SUPPORT_KEY}")
+    return _Part(name or "Mesh", index, mesh, np.eye(4), fixed, None, where)
+
+
+def _mesh(data, where: str) -> dict:
+    """``data``, checked to be a compas Mesh with a data object."""
+    if not isinstance(data, dict) or "dtype" not in data:
+        raise ModelError(f"{where}: not a compas object (no 'dtype'); drydem reads {READS}")
+    if not _is(data, MESH_DTYPE):
+        raise ModelError(f"{where}: a {data['dtype']!r}, not a {MESH_DTYPE!r}; drydem reads {READS}")
+    _object(data.get("data"), f"{where}: data")
+    return data
+
+
+def _model_parts(data: dict, source: str) -> list[_Part]:
+    """The blocks of a compas_dem BlockModel, in graph-node order, placed in model coordinates."""
+    body = _object(data.get("data"), f"{source}: data")
+    elements = _object(body.get("elements"), f"{source}: elements")
+    materials = _object(body.get("materials") or {}, f"{source}: materials")
+    graph = _object(body.get("graph"), f"{source}: graph")
+    model_matrix = _matrix(body.get("transformation"), f"{source}: the model's transformation")
+    parents = _parents(_object(body.get("tree"), f"{source}: tree"), elements, source)
+    for edge, attributes in _edges(graph, source):
+        if _object(attributes, f"{source}: graph edge {edge}").get("modifiers"):
+            raise ModelError(f"{source}: graph edge {edge} has modifiers (cuts of one element by another); "
+                             "drydem reads blocks as their meshes are: apply the modifiers in compas first")
+    nodes = _object(graph.get("node"), f"{source}: graph nodes")
+    parts = []
+    for node, attributes in sorted(nodes.items(), key=lambda item: _key(item[0], f"{source}: graph node")):
+        guid = _object(attributes, f"{source}: graph node {node}").get("element")
+        if not isinstance(guid, str) or guid not in elements:
+            raise ModelError(f"{source}: graph node {node}: its element {guid!r} is not in the model's elements")
+        where = f"{source}: element {guid} (graph node {node})"
+        element = _element(elements, guid, source)
+        matrix = model_matrix
+        for above in [*reversed(parents.get(guid, [])), guid]:  # the root's first: model T ... parent T element T
+            transformation = _element(elements, above, source).get("transformation")
+            matrix = matrix @ _matrix(transformation, f"{source}: element {above}: transformation")
+        name = _name(element, where) or "Block"
+        parts.append(_Part(name, int(node), _mesh(element.get("geometry"), f"{where}: geometry"), matrix,
+                           _flag(element.get(SUPPORT_KEY, False), f"{where}: {SUPPORT_KEY}"),
+                           _density(element.get("material"), materials, where), f"{where}: {name!r}"))
+    return parts
+
+
+def _element(elements: dict, guid: str, source: str) -> dict:
+    """The data of the element ``guid``."""
+    return _object(_object(elements[guid], f"{source}: element {guid}").get("data"), f"{source}: element {guid}: data")
+
+
+def _edges(graph: dict, source: str) -> list[tuple[str, object]]:
+    """Each edge of a compas Graph's adjacency ``edge`` (u -> v -> attributes), as (u-v, attributes)."""
+    edges = _object(graph.get("edge") or {}, f"{source}: graph edges")
+    return [(f"{u}-{v}", attributes)
+            for u, nbrs in edges.items() for v, attributes in _object(nbrs, f"{source}: graph edge {u}").items()]
+
+
+def _parents(tree: dict, elements: dict, source: str) -> dict[str, list[str]]:
+    """Each element's ancestors in the model's tree (compas_model ElementNode children), nearest first."""
+    parents: dict[str, list[str]] = {}
+
+    def walk(node, above: list[str]) -> None:
+        for child in _list(_object(node, f"{source}: tree node").get("children") or [], f"{source}: tree children"):
+            guid = _object(child, f"{source}: tree node").get("element")
+            if guid is not None and (not isinstance(guid, str) or guid not in elements):
+                raise ModelError(f"{source}: the tree names the element {guid!r}, which is not in the model's elements")
+            if guid is not None:
+                parents[guid] = above
+            walk(child, above if guid is None else [guid, *above])
+
+    walk(tree.get("root") or {}, [])
+    return parents
+
+
+def _block(part: _Part, name: str, unit_m: float) -> Block:
+    """The closed convex block of a part's mesh, placed by its matrix, times ``unit_m``."""
+    data, where = part.mesh["data"], part.where
+    defaults = _object(data.get("default_vertex_attributes") or {}, f"{where}: default_vertex_attributes")
+    vertices = _object(data.get("vertex"), f"{where}: vertex")
+    index = {key: k for k, key in enumerate(vertices)}
+    points = np.array([[_number(_object(attributes, f"{where}: vertex {key}").get(axis, defaults.get(axis)),
+                                f"{where}: vertex {key}: {axis}") for axis in "xyz"]
+                       for key, attributes in vertices.items()], dtype=float).reshape(-1, 3)
+    faces = []
+    for key, face in _object(data.get("face"), f"{where}: face").items():
+        face = _list(face, f"{where}: face {key}")
+        if len(face) < 3:
+            raise ModelError(f"{where}: face {key} has {len(face)} vertices; a face needs at least 3")
+        missing = [v for v in face if str(v) not in index]
+        if missing:
+            raise ModelError(f"{where}: face {key} refers to vertex {missing[0]!r}, which the mesh does not have")
+        faces.append([index[str(v)] for v in face])
+    homogeneous = np.hstack([points, np.ones((len(points), 1))]) @ part.matrix.T
+    placed = homogeneous[:, :3] / homogeneous[:, 3:]
+    block = closed_convex_block(placed * unit_m, faces, name=name, where=where)
+    return replace(block, fixed=part.fixed, density=part.density)
+
+
+def _matrix(value, where: str) -> np.ndarray:
+    """The 4 x 4 matrix of a compas Transformation (identity for null)."""
+    if value is None:
+        return np.eye(4)
+    value = _object(value, where)
+    if value.get("dtype") not in TRANSFORMATION_DTYPES:
+        raise ModelError(f"{where}: a {value.get('dtype')!r}, not a compas transformation ({', '.join(TRANSFORMATION_DTYPES)})")
+    rows = _list(_object(value.get("data"), f"{where}: data").get("matrix"), f"{where}: matrix")
+    matrix = np.array([[_number(x, f"{where}: matrix") for x in _list(row, f"{where}: matrix")] for row in rows], dtype=float)
+    if matrix.shape != (4, 4):
+        raise ModelError(f"{where}: the matrix must be 4 x 4, not {' x '.join(map(str, matrix.shape))}")
+    return matrix
+
+
+def _density(material, materials: dict, where: str) -> float | None:
+    """The density (kg/m3) of an element's material, None if it has none (the model's default)."""
+    if material is None:
+        return None
+    if not isinstance(material, str) or material not in materials:
+        raise ModelError(f"{where}: its material {material!r} is not in the model's materials")
+    density = _object(_object(materials[material], f"{where}: material").get("data"), f"{where}: material data").get("density")
+    return None if density is None else _number(density, f"{where}: material density")
+
+
+def _key(key: str, where: str) -> int:
+    try:
+        return int(key)
+    except ValueError:
+        raise ModelError(f"{where} {key!r}: a key must be an integer") from None
+
+
+def _number(value, where: str) -> float:
+    """A finite JSON number (a boolean is not one, nor an integer too large for a float)."""
+    finite = (isinstance(value, float) and math.isfinite(value)) or (
+        isinstance(value, int) and not isinstance(value, bool) and abs(value) < 1e300)
+    if not finite:
+        raise ModelError(f"{where}: {json.dumps(value)[:40]} is not a finite number")
+    return float(value)
+
+
+def _flag(value, where: str) -> bool:
+    if not isinstance(value, bool):
+        raise ModelError(f"{where}: {json.dumps(value)[:40]} is not true or false")
+    return value
+
+
+def _object(value, where: str) -> dict:
+    if not isinstance(value, dict):
+        raise ModelError(f"{where}: must be a JSON object, not {json.dumps(value)[:40]}")
+    return value
+
+
+def _list(value, where: str) -> list:
+    if not isinstance(value, list):
+        raise ModelError(f"{where}: must be a JSON list, not {json.dumps(value)[:40]}")
+    return value
