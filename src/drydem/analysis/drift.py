@@ -13,6 +13,13 @@ import numpy as np
 
 #: EN 1998-1 4.4.3.2 drift limits (the paper's Section 5)
 EC8_DRIFT_LIMITS = (0.005, 0.0075, 0.01)
+#: what each of :data:`EC8_DRIFT_LIMITS` is for, EN 1998-1 4.4.3.2 (1) a) to c): the buildings whose
+#: damage limitation state it is; the 1 % one is the DLS of Savalle et al. (2022, Section 5)
+EC8_DRIFT_MEANINGS = {
+    0.005: "brittle non-structural elements attached",
+    0.0075: "ductile non-structural elements",
+    0.01: "non-structural elements not interfering, or none (the DLS of Savalle et al. 2022)",
+}
 
 
 def drift_limit_angles(angle_deg, drift, limits=EC8_DRIFT_LIMITS) -> dict[float, float | None]:

@@ -31,9 +31,8 @@ def limit(target, non_associative, friction, tilt_axis, out, overwrite, unit) ->
     solving it with HiGHS, and each non-associative iteration with its lambda so far."""
     from drydem.analysis.limit import LimitSettings, limit_analysis
     from drydem.model.parameters import LOAD_DIRECTION
-    from drydem.analysis.tilt import wall_height
     from drydem.io.results import limit_summary, write_summary
-    from drydem.report.plots import mechanism_figure
+    from drydem.report.plots import limit_mechanism_figure
     from tqdm import tqdm
 
     found = resolve_target(target, unit)
@@ -66,9 +65,8 @@ def limit(target, non_associative, friction, tilt_axis, out, overwrite, unit) ->
     runtime = time.perf_counter() - start
     write_summary(out, limit_summary(result, settings, model, runtime))
     label = "LA-NA" if non_associative else "LA-A"
-    moved = result.mechanism_state(model, 0.1 * wall_height(model))
-    mechanism_figure(model, [(f"{label} mechanism (scaled)", moved, frozenset())], out / "mechanism.png",
-                     load_direction=LOAD_DIRECTION[tilt_axis])
+    limit_mechanism_figure(model, result, out / "mechanism.png", title=f"{label} mechanism (shape exaggerated)",
+                           load_direction=LOAD_DIRECTION[tilt_axis])
     click.echo(f"{found.name}: {label} load multiplier (along {'xy'[tilt_axis == 'x']}) {result.load_multiplier:.4f}, collapse angle {result.collapse_angle_deg:.2f} deg")
     if non_associative:
         state = "converged" if result.converged else "NOT converged (last iterate reported)"

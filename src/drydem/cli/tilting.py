@@ -5,14 +5,17 @@ from __future__ import annotations
 import functools
 from dataclasses import dataclass, fields
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
 from drydem.errors import DrydemError
-from drydem.io.target import Target
-from drydem.model.assembly import Model
 from drydem.model.parameters import CRITERIA
 from drydem.cli.common import CHECKPOINT, results_folder, signals_interrupt, resolve_target, joint_law_options, main, threads_option, unit_option
+
+if TYPE_CHECKING:
+    from drydem.io.target import Target
+    from drydem.model.assembly import Model
 
 
 @dataclass(frozen=True)
@@ -106,7 +109,7 @@ def tilt_options(*, adaptive: bool):
 @threads_option
 def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, video, unit) -> None:
     """Tilting-table analysis of TARGET (a built-in wall, a wall or model file, or a
-    .wrl/.obj/.stl): collapse angle, pushover curve, Eurocode 8 drift-limit angles, plots.
+    .wrl/.obj/.stl/.json): collapse angle, pushover curve, Eurocode 8 drift-limit angles, plots.
     Exits 1 when equilibrium could not be reached within max_cycles (no verdict), 130 or 143
     when interrupted (the last equilibrium is kept for --resume)."""
     from tqdm import tqdm
@@ -178,7 +181,8 @@ def _tilt_outputs(found: Target, model: Model, result, folder: Path, series) -> 
     last = result.last_equilibrium_deg
     lost_by_then = frozenset(name for name, theta in result.lost_blocks if last is not None and theta <= last)
     states = [
-        ("last equilibrium" if last is not None else "under gravity", result.collapse_state or result.final_state, lost_by_then),
+        (f"last equilibrium ({last:.2f} deg)" if last is not None else "under gravity", result.collapse_state or result.final_state,
+         lost_by_then),
         (f"past collapse ({result.ended_by})", result.final_state, frozenset(name for name, _ in result.lost_blocks)),
     ]
     mechanism_figure(model, states, folder / "mechanism.png", monitored=result.monitored_block,

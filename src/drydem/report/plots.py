@@ -1,6 +1,9 @@
 """Figures of a tilting analysis: pushover curve (paper Figs 9-11) and mechanism (Figs 7-8);
-of a shaking-table analysis: the response history (:func:`history_figure`); of a Monte Carlo
-run: the histogram of its angles (:func:`histogram_figure`).
+of a limit analysis: its mechanism (:func:`limit_mechanism_figure`); of a shaking-table
+analysis: the response history (:func:`history_figure`); of a Monte Carlo run: the histogram
+of its angles (:func:`histogram_figure`). The pushover and the mechanisms are also given as
+Figures, unwritten (``*_drawing``), to look at or check their artists; each file is written whole
+or not at all (:func:`saved`).
 
 matplotlib is imported inside the functions, so the engine does not load it. Figures are
 :class:`matplotlib.figure.Figure` objects made by :func:`new_figure`, outside pyplot: drawing
@@ -10,16 +13,22 @@ figure is left open in pyplot's list.
 
 from __future__ import annotations
 
+from collections import Counter
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from drydem.analysis.drift import EC8_DRIFT_LIMITS
-from drydem.analysis.shake import History
-from drydem.analysis.tilt import TiltResult
+from drydem.analysis.drift import EC8_DRIFT_LIMITS, EC8_DRIFT_MEANINGS
+from drydem.analysis.tilt import TiltResult, wall_height
 from drydem.errors import DrydemError
+from drydem.files import replaced_atomically
 from drydem.model.assembly import Model
 from drydem.model.state import State
+
+if TYPE_CHECKING:  # annotations only: the limit analysis imports scipy.optimize
+    from drydem.analysis.limit import LimitResult
+    from drydem.analysis.shake import History
 
 
 def new_figure(**options):
@@ -47,15 +56,46 @@ def figure_path(path: str | Path) -> Path:
     return path
 
 
+def saved(fig, path: Path) -> Path:
+    """Write ``fig`` to ``path`` at 150 dpi, whole or not at all (:func:`~drydem.files.replaced_atomically`)."""
+    with replaced_atomically(path) as partial:
+        fig.savefig(partial, dpi=150, bbox_inches="tight", pad_inches=0.1)
+    return path
+
+
 def pushover_figure(result: TiltResult, path: Path, *, title: str = "") -> Path:
-    """Tilt angle against the monitored horizontal displacement, with the EC8 drift limits."""
-    fig = new_figure(figsize=(6.4, 4.4), layout="constrained")
+    """:func:`pushover_drawing` written to ``path``."""
+    return saved(pushover_drawing(result, title=title), path)
+
+
+#: colour and line style of each of the EC8 drift limits on a pushover curve
+DRIFT_STYLES = {0.005: ("tab:purple", ":"), 0.0075: ("tab:brown", "-."), 0.01: ("tab:green", "--")}
+
+
+def pushover_drawing(result: TiltResult, *, title: str = ""):
+    """The pushover curve, a Figure: tilt angle against the monitored horizontal displacement,
+    mm; the EN 1998-1 4.4.3.2 drift limits (lines at limit x wall height) named by the
+    buildings they are for (:data:`~drydem.analysis.drift.EC8_DRIFT_MEANINGS`), each with the
+    angle at which the curve first reaches it, marked on the curve, or "not reached"; the
+    blocks lost on the way (:func:`draw_lost_blocks`), so that a plateau where bricks fell is
+    not read as ductility; the collapse angle."""
+    fig = new_figure(figsize=(7.2, 6.4), layout="constrained")
     ax = fig.subplots()
     ux_mm = np.array([r.ux_m for r in result.records]) * 1e3
-    tilt = [r.tilt_deg for r in result.records]
+    tilt = np.array([r.tilt_deg for r in result.records])
     ax.plot(ux_mm, tilt, "-", marker="." if len(tilt) < 60 else None, color="tab:blue", label="equilibrium states")
-    for limit, style in zip(EC8_DRIFT_LIMITS, (":", "-.", "--")):
-        ax.axvline(limit * result.wall_height_m * 1e3, color="0.4", linestyle=style, linewidth=1, label=f"drift {limit:.2%}")
+    angles = result.drift_limit_angles_deg
+    for limit in EC8_DRIFT_LIMITS:
+        colour, style = DRIFT_STYLES[limit]
+        x_mm, at = limit * result.wall_height_m * 1e3, angles[limit]
+        reached = "not reached" if at is None else f"reached at {at:.2f} deg"
+        ax.axvline(x_mm, color=colour, linestyle=style, linewidth=1.2,
+                   label=f"drift {limit * 100:g} %, {EC8_DRIFT_MEANINGS[limit]}: {reached}")
+        if at is not None:
+            ax.plot(x_mm, at, "o", color=colour, markersize=5)
+            ax.annotate(f"{limit * 100:g} %: {at:.2f} deg", (x_mm, at), xytext=(7, -2), textcoords="offset points",
+                        fontsize="small", color=colour, va="top", bbox=dict(facecolor="white", edgecolor="none", pad=0.5))
+    draw_lost_blocks(ax, result.lost_blocks, ux_mm, tilt)
     if result.collapse_angle_deg is not None:
         ax.axhline(result.collapse_angle_deg, color="tab:red", linewidth=1, label=f"collapse {result.collapse_angle_deg:.2f} deg")
     ylabel = "tilt angle (deg)" if result.settings.loading == "tilt" else "atan(load multiplier) (deg)"
@@ -64,9 +104,31 @@ def pushover_figure(result: TiltResult, path: Path, *, title: str = "") -> Path:
     ax.set_xlim(left=min(0.0, ux_mm.min(initial=0.0)))
     ax.set_ylim(bottom=0.0)
     ax.grid(alpha=0.3)
-    ax.legend(loc="lower right", fontsize="small")
-    fig.savefig(path, dpi=150)
-    return path
+    fig.legend(loc="outside lower center", fontsize="small", title="Eurocode 8 damage limitation (EN 1998-1 4.4.3.2) and failures",
+               title_fontsize="small")
+    return fig
+
+
+def draw_lost_blocks(ax, lost_blocks: list[tuple[str, float]], ux_mm: np.ndarray, tilt_deg: np.ndarray, *, listed: int = 3) -> None:
+    """Mark on a pushover curve (``ux_mm``, ``tilt_deg`` increasing) each tilt at which blocks
+    were lost (``lost_blocks``: name, tilt in deg): an orange triangle at that tilt on the
+    curve's first state at or past it (beside the curve's end if past its last state, e.g. in
+    the collapse), labelled "N blocks lost at X deg", and the jump to that state drawn over in
+    orange: a local failure, not ductility. Past the first ``listed`` tilts, the rest share one label."""
+    events = sorted(Counter(t for _, t in lost_blocks).items())
+    rest = sum(n for _, n in events[listed:])
+    jumps = []  # x, y of each jump, then nan: one line
+    for k, (tilt, n) in enumerate(events):
+        i = int(np.searchsorted(tilt_deg, tilt - 1e-9))
+        if 0 < i < len(tilt_deg):
+            jumps += [(ux_mm[i - 1], tilt_deg[i - 1]), (ux_mm[i], tilt_deg[i]), (np.nan, np.nan)]
+        x_mm = ux_mm[min(i, len(ux_mm) - 1)] if len(ux_mm) else 0.0
+        when = " (past the last equilibrium)" if i == len(tilt_deg) else ""
+        label = (f"{n} block{'s' * (n > 1)} lost at {tilt:.2f} deg{when}" if k < listed else
+                 f"{rest} more blocks lost at {events[listed][0]:.2f} to {events[-1][0]:.2f} deg" if k == listed else None)
+        ax.plot(x_mm, tilt, "v", color="tab:orange", markeredgecolor="k", markersize=8, label=label, gid="lost blocks", zorder=3)
+    if jumps:
+        ax.plot(*np.transpose(jumps), color="tab:orange", linewidth=2.5, label="jump where blocks fell: a local failure, not ductility")
 
 
 def history_figure(history: History, path: Path, *, title: str = "", monitored: str = "",
@@ -106,8 +168,7 @@ def history_figure(history: History, path: Path, *, title: str = "", monitored: 
         ax.grid(alpha=0.3)
         ax.legend(loc="upper right", fontsize="small")
     turn_ax.set_xlim(t[0], right)
-    fig.savefig(path, dpi=150)
-    return path
+    return saved(fig, path)
 
 
 def xz_outline(points: np.ndarray) -> np.ndarray:
@@ -123,24 +184,28 @@ def block_outlines(model: Model, state: State, blocks: np.ndarray) -> list[np.nd
     return [xz_outline(model.world_vertices(b, state.position[b], state.quaternion[b])) for b in blocks]
 
 
-def draw_displacements(fig, ax, outlines: list[np.ndarray], magnitude_mm: np.ndarray, *, title: str,
-                       norm=None, marker: tuple[np.ndarray, str] | None = None) -> None:
+def draw_displacements(fig, ax, outlines: list[np.ndarray], magnitude_mm: np.ndarray, *, title: str, norm=None,
+                       colorbar: bool = True):
     """The renderer of mechanisms and videos: block outlines coloured by displacement magnitude
-    (mm, on ``norm``, default 0 to the largest), a colour bar, an optional ``marker`` (x-z point,
-    label) for the monitored block, equal axes."""
+    (mm, on ``norm``, default 0 to the largest), a colour bar unless ``colorbar`` is False (a
+    figure of several panels draws one for all), equal axes. Returns the coloured collection."""
     from matplotlib.collections import PolyCollection
     from matplotlib.colors import Normalize
 
     norm = norm or Normalize(0.0, float(magnitude_mm.max(initial=0.0)) or 1.0)
     polys = PolyCollection(outlines, array=magnitude_mm, cmap="viridis", norm=norm, edgecolors="k", linewidths=0.3)
     ax.add_collection(polys)
-    fig.colorbar(polys, ax=ax, label="displacement (mm)", shrink=0.8)
-    if marker is not None:
-        ax.plot(*marker[0], "r+", markersize=10, label=marker[1])
-        ax.legend(loc="upper right", fontsize="small")
+    if colorbar:
+        fig.colorbar(polys, ax=ax, label="displacement (mm)", shrink=0.8)
     ax.autoscale_view()
     ax.set_aspect("equal")
     ax.set(title=title, xlabel="x (m)", ylabel="z (m)")
+    return polys
+
+
+#: how blocks lost (fallen out of the model) are drawn: faded, dashed, where they were taken out
+LOST_STYLE = dict(facecolors="0.75", edgecolors="0.3", linewidths=0.6, linestyles="--", alpha=0.35,
+                  label="lost: fell out of the model (drawn where taken out)")
 
 
 def is_wall_like(model: Model) -> bool:
@@ -161,66 +226,135 @@ def is_wall_like(model: Model) -> bool:
 VIEW_AZIMUTH = {0: -25.0, 1: 65.0}
 
 
-def draw_blocks_3d(fig, ax, model: Model, state: State, blocks: np.ndarray, values: np.ndarray, *, title: str,
-                   norm=None, colours=None, marker: tuple[np.ndarray, str] | None = None, load_direction: int = 0,
-                   label: str = "displacement (mm)") -> None:
-    """A 3D model in perspective on ``ax`` (a 3D axes): the faces of ``blocks`` at ``state``
-    coloured by ``values`` (one per block, on ``norm``, with a colour bar ``label``) or by
-    ``colours`` (one per block), an optional ``marker`` (x-y-z point, label), true proportions,
-    seen from the side the load (``load_direction`` 0: x, 1: y) pushes towards."""
-    from matplotlib.colors import Normalize
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
-
+def block_faces(model: Model, state: State, blocks) -> tuple[list[np.ndarray], np.ndarray]:
+    """The faces of ``blocks`` at ``state`` (each its world vertices, m) and, for each face, the
+    position in ``blocks`` of its block."""
     faces, owner = [], []
     for k, b in enumerate(blocks):
         world = model.world_vertices(b, state.position[b], state.quaternion[b])
         faces += [world[f] for f in model.block_shape[b].faces]
         owner += [k] * len(model.block_shape[b].faces)
-    owner = np.array(owner, dtype=int)
+    return faces, np.array(owner, dtype=int)
+
+
+def draw_blocks_3d(fig, ax, model: Model, state: State, blocks: np.ndarray, values: np.ndarray, *, title: str,
+                   norm=None, colours=None, marker: tuple[np.ndarray, str] | None = None, load_direction: int = 0,
+                   label: str = "displacement (mm)", lost: np.ndarray = (), colorbar: bool = True):
+    """A 3D model in perspective on ``ax`` (a 3D axes): the faces of ``blocks`` at ``state``
+    coloured by ``values`` (one per block, on ``norm``, with a colour bar ``label`` unless
+    ``colorbar`` is False) or by ``colours`` (one per block), the ``lost`` blocks faded
+    (:data:`LOST_STYLE`), an optional ``marker`` (x-y-z point, label: for the caller's legend),
+    true proportions, seen from the side the load (``load_direction`` 0: x, 1: y) pushes
+    towards. Returns the collection of ``blocks``' faces."""
+    from matplotlib.colors import Normalize
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    faces, owner = block_faces(model, state, blocks)
     polys = Poly3DCollection(faces, edgecolors="k", linewidths=0.15)
     if colours is None:
         norm = norm or Normalize(0.0, float(np.max(values, initial=0.0)) or 1.0)
         polys.set_array(np.asarray(values)[owner])
         polys.set_cmap("viridis")
         polys.set_norm(norm)
-        fig.colorbar(polys, ax=ax, label=label, shrink=0.6, pad=0.14)
+        if colorbar:
+            fig.colorbar(polys, ax=ax, label=label, shrink=0.6, pad=0.14)
     else:
         polys.set_facecolor([colours[k] for k in owner])
     ax.add_collection3d(polys)
-    points = np.concatenate(faces) if faces else np.zeros((1, 3))
+    gone = block_faces(model, state, lost)[0]
+    if gone:
+        ax.add_collection3d(Poly3DCollection(gone, **LOST_STYLE))
+    points = np.concatenate(faces + gone) if faces + gone else np.zeros((1, 3))
     lo, hi = points.min(0), points.max(0)
     ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]), xlabel="x (m)", ylabel="y (m)", zlabel="z (m)", title=title)
     ax.set_box_aspect(np.maximum(hi - lo, 1e-3 * (hi - lo).max()))
     ax.view_init(elev=22.0, azim=VIEW_AZIMUTH.get(load_direction, -60.0))
     if marker is not None:
         ax.plot(*[[c] for c in marker[0]], "r+", markersize=12, markeredgewidth=2, label=marker[1], zorder=10)
-        ax.legend(loc="upper left", fontsize="small")
+    return polys
 
 
 def mechanism_figure(model: Model, states: list[tuple[str, State, frozenset[str]]], path: Path, *, monitored: str | None = None,
                      load_direction: int = 0) -> Path:
-    """The model at each of ``states`` (label, State, names of blocks to leave out, e.g. those
-    fallen away by then), blocks coloured by the magnitude of their displacement from the model
-    file, each panel on its own scale (millimetres at equilibrium, decimetres past collapse): a
-    wall in its plane (x-z), a deep 3D model such as a building in 3D (:func:`is_wall_like`),
-    seen from the side the load (``load_direction`` 0: x, 1: y) pushes towards."""
+    """:func:`mechanism_drawing` written to ``path``."""
+    return saved(mechanism_drawing(model, states, monitored=monitored, load_direction=load_direction), path)
+
+
+def mechanism_drawing(model: Model, states: list[tuple[str, State, frozenset[str]]], *, monitored: str | None = None,
+                      load_direction: int = 0):
+    """The model at each of ``states`` (label, State, names of the blocks lost by then), a
+    Figure (:func:`panels_drawing`): blocks coloured by the magnitude of their displacement from
+    the model file, every panel on one logarithmic scale, so that millimetres at equilibrium and
+    decimetres past collapse both show (a thousandth of the largest and less share its darkest
+    colour)."""
+    from matplotlib.colors import LogNorm
+
+    magnitudes = [np.linalg.norm(state.position - model.block_centroid, axis=1) * 1e3 for _, state, _ in states]
+    lost = [np.isin(model.block_name, list(names)) for _, _, names in states]
+    largest = max(float(m[~gone].max(initial=0.0)) for m, gone in zip(magnitudes, lost)) or 1.0
+    norm = LogNorm(largest * 1e-3, largest)
+    panels = [(label, state, np.clip(m, norm.vmin, None), gone) for (label, state, _), m, gone in zip(states, magnitudes, lost)]
+    return panels_drawing(model, panels, norm=norm, label="displacement (mm, log scale)",
+                          monitored=monitored, load_direction=load_direction)
+
+
+#: how far a limit-analysis mechanism is drawn: its fastest point moved this share of the wall height
+MECHANISM_DRAWN_HEIGHTS = 0.1
+
+
+def limit_mechanism_figure(model: Model, result: LimitResult, path: Path, *, title: str, load_direction: int = 0) -> Path:
+    """:func:`limit_mechanism_drawing` written to ``path``."""
+    return saved(limit_mechanism_drawing(model, result, title=title, load_direction=load_direction), path)
+
+
+def limit_mechanism_drawing(model: Model, result: LimitResult, *, title: str, load_direction: int = 0):
+    """The collapse mechanism of a limit analysis, a Figure (:func:`panels_drawing`): the blocks
+    moved along it until its fastest point has moved :data:`MECHANISM_DRAWN_HEIGHTS` of the wall
+    height (the shape exaggerated), coloured by their centroid's virtual displacement divided by
+    the largest: a mechanism has a shape, not a magnitude."""
+    from matplotlib.colors import Normalize
+
+    speed = np.linalg.norm(result.velocity, axis=1)
+    state = result.mechanism_state(model, MECHANISM_DRAWN_HEIGHTS * wall_height(model))
+    panels = [(title, state, speed / (speed.max(initial=0.0) or 1.0), np.zeros(model.n_blocks, dtype=bool))]
+    return panels_drawing(model, panels, norm=Normalize(0.0, 1.0), label="virtual displacement (normalised: largest 1)",
+                          load_direction=load_direction)
+
+
+def panels_drawing(model: Model, panels: list[tuple[str, State, np.ndarray, np.ndarray]], *, norm, label: str,
+                   monitored: str | None = None, load_direction: int = 0):
+    """The model at each of ``panels`` (title, State, a value per block on ``norm``, lost: (nb,)
+    bool) side by side, a Figure: a wall in its plane (x-z), a deep 3D model such as a building
+    in 3D (:func:`is_wall_like`) seen from the side the load (``load_direction`` 0: x, 1: y)
+    pushes towards. Blocks in the model are coloured by their value, one colour bar ``label``
+    for all panels; lost blocks are faded (:data:`LOST_STYLE`); the ``monitored`` block is
+    outlined in red (marked + in 3D). The legend is under the panels, on no block."""
+    from matplotlib.collections import PolyCollection
+    from matplotlib.patches import Polygon
+
     flat = is_wall_like(model)
-    fig = new_figure(figsize=(5.6 * len(states), 4.2) if flat else (6.4 * len(states), 5.6), layout="constrained")
-    axes = fig.subplots(1, len(states), squeeze=False, subplot_kw=None if flat else {"projection": "3d"})
-    for ax, (label, state, hidden) in zip(axes[0], states):
-        blocks = np.array([b for b, name in enumerate(model.block_name) if name not in hidden])
-        magnitude = np.linalg.norm(state.position[blocks] - model.block_centroid[blocks], axis=1) * 1e3
-        marker = None
-        if flat:
-            if monitored is not None:
-                marker = (state.position[model.block_index(monitored), [0, 2]], f"monitored: {monitored}")
-            draw_displacements(fig, ax, block_outlines(model, state, blocks), magnitude, title=label, marker=marker)
-        else:
-            if monitored is not None:
-                marker = (state.position[model.block_index(monitored)], f"monitored: {monitored}")
-            draw_blocks_3d(fig, ax, model, state, blocks, magnitude, title=label, marker=marker, load_direction=load_direction)
-    fig.savefig(path, dpi=150)
-    return path
+    fig = new_figure(figsize=(5.2 * len(panels) + 1.2, 4.0) if flat else (6.4 * len(panels) + 1.2, 6.2), layout="constrained")
+    axes = fig.subplots(1, len(panels), squeeze=False, sharex=flat, sharey=flat, subplot_kw=None if flat else {"projection": "3d"})[0]
+    for ax, (title, state, values, lost) in zip(axes, panels):
+        kept, gone = np.flatnonzero(~lost), np.flatnonzero(lost)
+        if not flat:
+            marker = None if monitored is None else (state.position[model.block_index(monitored)], f"monitored: {monitored}")
+            polys = draw_blocks_3d(fig, ax, model, state, kept, values[kept], title=title, norm=norm, lost=gone, marker=marker,
+                                   load_direction=load_direction, colorbar=False)
+            continue
+        polys = draw_displacements(fig, ax, block_outlines(model, state, kept), values[kept], title=title, norm=norm, colorbar=False)
+        if gone.size:
+            ax.add_collection(PolyCollection(block_outlines(model, state, gone), **LOST_STYLE))
+        if monitored is not None:
+            outline = block_outlines(model, state, [model.block_index(monitored)])[0]
+            ax.add_patch(Polygon(outline, fill=False, edgecolor="red", linewidth=1.8, zorder=3, label=f"monitored: {monitored}"))
+        ax.autoscale_view()
+    bar = fig.colorbar(polys, ax=list(axes), label=label, shrink=0.8)
+    bar.ax.yaxis.set_major_formatter("{x:g}")  # 0.1, 1, 10 rather than powers of ten
+    legend = {text: handle for ax in axes for handle, text in zip(*ax.get_legend_handles_labels())}
+    if legend:
+        fig.legend(legend.values(), legend.keys(), loc="outside lower center", ncols=len(legend), fontsize="small")
+    return fig
 
 
 #: colours of the layout drawing, by unit kind (drydem.masonry.layout)
@@ -245,8 +379,9 @@ def layout_figure(model: Model, path: Path, *, kinds: list[str] | None = None, v
         marker = None if monitored is None else (model.block_centroid[model.block_index(monitored)], f"monitored: {monitored}")
         draw_blocks_3d(fig, ax, model, State.at_rest(model.block_centroid), np.arange(model.n_blocks), np.zeros(model.n_blocks),
                        colours=[KIND_COLOURS[k] for k in kinds], title=title, marker=marker)
-        fig.savefig(path, dpi=150)
-        return path
+        if marker is not None:
+            fig.legend(loc="outside lower center", fontsize="small")
+        return saved(fig, path)
     outlines = block_outlines(model, State.at_rest(model.block_centroid), np.arange(model.n_blocks))
     fig = new_figure(figsize=(8.0, 4.4), layout="constrained")
     ax = fig.subplots()
@@ -264,8 +399,7 @@ def layout_figure(model: Model, path: Path, *, kinds: list[str] | None = None, v
     ax.set_aspect("equal")
     ax.set(title=title, xlabel="x (m)", ylabel="z (m)")
     ax.legend(handles=legend, loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize="small")
-    fig.savefig(path, dpi=150)
-    return path
+    return saved(fig, path)
 
 
 def histogram_figure(angles_deg, path: Path, *, title: str = "", mean_deg: float | None = None, p05_deg: float | None = None,
@@ -291,5 +425,4 @@ def histogram_figure(angles_deg, path: Path, *, title: str = "", mean_deg: float
     ax.set(xlabel=xlabel, ylabel="samples", title=title)
     ax.grid(alpha=0.3)
     ax.legend(loc="best", fontsize="small")
-    fig.savefig(path, dpi=150)
-    return path
+    return saved(fig, path)
