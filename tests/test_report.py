@@ -107,3 +107,107 @@ def test_drawing_a_figure_leaves_the_matplotlib_backend_alone(tmp_path):
     assert ran.returncode == 0, ran.stderr
     assert ran.stdout.split() == ["False", "svg"]
     assert figure.read_bytes().startswith(b"\x89PNG") and figure.stat().st_size > 5_000
+
+
+#: a two-block model file: a fixed base and a pier 25 mm long, 55 mm high, on the base's edge
+#: so that it falls off once it overturns (a rigid block overturns at atan(b / h) = atan(25 / 55)
+#: = 24.44 deg, its limit load multiplier b / h = 0.4545)
+PIER = """
+[material]
+density = 1800.0
+[joint]
+kn = 1e8
+ks = 1e8
+friction = 0.5
+[supports]
+fix_y = true
+[[block]]
+name = "base"
+fixed = true
+box = { min = [-0.01, -0.006, -0.01], max = [0.035, 0.006, 0.0] }
+[[block]]
+name = "pier"
+box = { min = [0.0, -0.006, 0.0], max = [0.025, 0.006, 0.055] }
+"""
+MIXED_STUDY = """
+[study]
+name = "mixed"
+[[grid]]
+name = "mine"
+targets = ["pier.toml"]
+kn = [1e8]
+protocol = ["fixed"]
+increment_deg = 1.0
+[[grid]]
+name = "limit"
+analysis = "limit"
+targets = ["pier.toml", "WD3"]
+"""
+
+
+def test_a_sweep_over_a_users_model_file_and_a_paper_wall_reports_both(tmp_path):
+    (tmp_path / "pier.toml").write_text(PIER)
+    (tmp_path / "mixed.toml").write_text(MIXED_STUDY)
+    out = tmp_path / "results"
+    swept = CliRunner().invoke(main, ["sweep", str(tmp_path / "mixed.toml"), "--out", str(out), "--workers", "1"])
+    assert swept.exit_code == 0 and "3 runs done (0 failed)" in swept.output, swept.output
+    reported = CliRunner().invoke(main, ["report", str(out)])
+    assert reported.exit_code == 0, reported.output
+    text = (out / "report" / "report.md").read_text()
+    # the user's: the pier's collapse angle, the last whole degree below the rigid block's 24.44 deg
+    # (its joints at kn = 1e8 soften it by less than 0.44 deg), and its limit angle and multiplier
+    assert "| pier.toml | kn 1e+08 Pa/m, ks 1e+08 Pa/m | 0.5 | 4 | fixed | 1 | 24.0 |" in text
+    assert "| pier.toml | 0.5 | associative | 24.4 | 0.4545 |" in text
+    assert "Targets: 1 (`pier.toml`); tilting runs: 1; limit analyses: 1; failed runs: 0." in text
+    assert "(figures/yours1_pier-toml_pushover.png)" in text
+    assert (out / "report" / "figures" / "yours1_pier-toml_pushover.png").stat().st_size > 5_000
+    # the paper's: WD3's LA-A beside the paper's 26.5 deg (Table 2); drydem's 26.6 as in the README
+    assert "| WD3 | 19.8 | 26.5 / 26.6 | 24.5 / - |" in text
+    assert "WD3" not in section(text, "Your targets: limit analyses") and "pier" not in section(text, "Table 2")
+    html = (out / "report" / "report.html").read_text()
+    assert "Your targets: tilting runs" in html and "pier.toml" in html and "Table 2: collapse angles" in html
+    assert html.count("<img") == len(FIGURES) + 1 and html.count("<table>") == 3 + 2
+
+
+def section(text: str, title: str) -> str:
+    """The Markdown section whose heading starts with ``title``, up to the next heading."""
+    start = text.index(f"## {title}")
+    end = text.find("\n## ", start + 1)
+    return text[start:] if end < 0 else text[start:end]
+
+
+def test_a_file_named_after_a_paper_wall_or_a_paper_wall_at_another_friction_is_yours(tmp_path):
+    from drydem.report.study import paper_wall
+
+    def retargeted(record, target, **changes):
+        record["spec"] |= {"target": target} | changes
+        record["id"] = RunSpec(**record["spec"]).id
+        return record
+
+    named_wd3 = retargeted(tilt_record("WD3", 3e7), str(tmp_path / "walls" / "WD3.toml"))
+    rough = retargeted(tilt_record("WD3", 3e7), "WD3", friction=0.7)
+    piers = [retargeted(tilt_record("WD5", 1e8, protocol="fixed"), str(tmp_path / folder / "pier.toml")) for folder in ("a", "b")]
+    standing = retargeted(tilt_record("WD6", 1e7), "perforated_wall")
+    standing["summary"] |= {"collapse_angle_deg": None, "stable_under_gravity": False}
+    standing["pushover"] = []
+    undecided = retargeted(tilt_record("WD7", 1e10), "perforated_wall")
+    undecided["summary"] |= {"collapse_angle_deg": None, "last_equilibrium_deg": 22.9, "ended_by": "no equilibrium within max_cycles"}
+    broken = RunSpec(analysis="limit", target=str(tmp_path / "a" / "pier.toml"), protocol="associative")
+    failed = {"id": broken.id, "spec": broken.__dict__, "status": "failed", "error": "ModelError: made up"}
+    records = [named_wd3, rough, *piers, standing, undecided, failed, tilt_record("WD3", 3e7, points=4)]
+    assert [paper_wall(r) for r in records] == [None] * 7 + ["WD3"]
+    assert paper_wall(retargeted(tilt_record("WD3", 3e7), "wd3", friction=0.5)) == "WD3"  # the built-in's name, case aside
+    for record in records:
+        write_record(tmp_path, record)
+    text = build_report(tmp_path).markdown.read_text()
+    # Table 3 takes the paper's WD3 alone: int(5 + 3 log10(3) + 3) = 9 deg (tilt_record)
+    assert "| WD3 | 19.8 | 20.1 | 9.0 |" in section(text, "Table 3")
+    yours = section(text, "Your targets: tilting runs")
+    assert "| WD3.toml | kn 3e+07 Pa/m, ks 3e+07 Pa/m | - | - | adaptive | 0.1 | 9.0 |" in yours
+    assert "| WD3 | kn 3e+07 Pa/m, ks 3e+07 Pa/m | 0.7 | - | adaptive | 0.1 | 9.0 |" in yours
+    for folder in ("a", "b"):  # two files of one name: named by the ends of their paths; int(5 + 3 log10(10) + 5) = 13 deg
+        assert f"| {folder}/pier.toml | kn 1e+08 Pa/m, ks 1e+08 Pa/m | - | - | fixed | 0.1 | 13.0 |" in yours
+    assert "| perforated_wall | kn 1e+07 Pa/m, ks 1e+07 Pa/m | - | - | adaptive | 0.1 | cannot stand |" in yours
+    assert "| perforated_wall | kn 1e+10 Pa/m, ks 1e+10 Pa/m | - | - | adaptive | 0.1 | >= 22.9 |" in yours
+    assert f"- `{broken.id}`: ModelError: made up" in section(text, "Your targets: runs without published values")
+    assert text.count("(figures/yours") == 5  # one pushover figure per target with a curve: the 5 targets

@@ -7,7 +7,11 @@ it has runs with a stress-dependent joint law, the calibrated law against the ex
 ``drydem montecarlo``'s folder), the scatter of their collapse angles against the experiments'.
 
 The paper's tables and figures are of constant joints: a run with a joint law is never taken
-for the constant-kn run at its kn.
+for the constant-kn run at its kn. They take the runs of the paper's walls as the paper ran
+them (:func:`paper_wall`: a built-in WD1-WD7 at the paper's friction); every other tilting or
+limit run (a wall or model file of the user's, even one named WD3.toml, drydem's other built-in
+targets, a paper wall at another friction) is the user's: its own section (:func:`_yours`), with
+its collapse and DLS angles and its pushover curves, and no published values beside them.
 
 A figure or table whose runs are missing says so instead of failing: a report can be built
 from a study still running. A corrupt record is left out, and the report names its file.
@@ -26,7 +30,8 @@ from drydem.analysis.drift import EC8_DRIFT_LIMITS
 from drydem.errors import DrydemError
 from drydem.masonry.published import savalle2022
 from drydem.parametric.records import RecordError, load_records
-from drydem.report.joints import joint_law, relative_error_percent, wall_of
+from drydem.files import replaced_atomically
+from drydem.report.joints import joint_law, law_words, relative_error_percent
 from drydem.report.plots import new_figure
 
 DESIGNS = [f"WD{k}" for k in range(1, 8)]
@@ -43,8 +48,48 @@ MONTECARLO_NOTE = (
     "a sample that cannot stand under its own weight counting as 0 deg (samples: how many; std with ddof = 1; p05 the 5th "
     "percentile), with the imperfections drawn; experiment: the mean and CoV "
     "of the wall's tests (Savalle et al. 2022, Table 1; '-': not one of its walls).")
+YOURS = "Your targets"
+YOURS_TITLE = f"{YOURS}: runs without published values"
+YOURS_NOTE = (
+    "Runs of targets the paper did not analyse (wall, model and geometry files, named by file; drydem's other built-in "
+    "targets) and of its walls at a friction other than its {friction:g}: drydem's results alone, with no published values to "
+    "compare them with. kn, ks, friction, points: the run's overrides, else its model's as recorded ('-': not recorded). "
+    "Collapse angle: the last tilt in equilibrium; '>= X': no equilibrium within max_cycles after X deg, and no collapse "
+    "either (a lower bound); 'cannot stand': the model falls under its own weight. DLS: the tilt at which the monitored "
+    "drift first reaches 1 % (EN 1998-1 4.4.3.2, the paper's damage limit state); '-': never before the collapse.")
+#: the drift of the damage limit state, the paper's DLS angle (Savalle et al. 2022, Section 5)
+DLS_DRIFT = 0.01
 NOTE = ("drydem's WD1-WD7 are reconstructions that obey the competition brief, not the original drawings "
         "(which drydem does not have): compare trends and rankings, not single numbers.")
+
+
+def paper_wall(record: dict) -> str | None:
+    """The paper's wall (WD1-WD7) a run analyses as the paper did, so that its published values
+    compare: its target is the built-in wall's name (case aside, as
+    :func:`drydem.masonry.designs.find` reads it; a file is the user's, whatever its name) and its
+    friction the paper's (None: the wall's own, which is the paper's). None for every other run."""
+    spec = record["spec"]
+    design = next((d for d in DESIGNS if d.lower() == str(spec["target"]).lower()), None)
+    friction = spec.get("friction")
+    return design if friction is None or _close(friction, savalle2022()["wall"]["friction"]) else None
+
+
+def angle_text(summary: dict) -> str:
+    """A tilting run's collapse angle for a table: the angle (deg); ">= X" for a run that found
+    no equilibrium within max_cycles past its last one (X deg) and no collapse either (a lower
+    bound, no verdict); "cannot stand" for a model that falls under its own weight; "-" else."""
+    from drydem.analysis.tilt import NO_EQUILIBRIUM
+
+    if summary.get("ended_by") == NO_EQUILIBRIUM:  # records of earlier versions gave that tilt as the collapse angle
+        return f">= {summary.get('last_equilibrium_deg', summary['collapse_angle_deg']):.1f}"
+    if summary.get("collapse_angle_deg") is None and summary.get("stable_under_gravity") is False:
+        return "cannot stand"
+    return _cell(summary.get("collapse_angle_deg"))
+
+
+def dls_angle(summary: dict) -> float | None:
+    """A tilting run's DLS angle (deg): the tilt at 1 % drift (:data:`DLS_DRIFT`), None if never reached."""
+    return summary["drift_limit_angles_deg"].get(repr(DLS_DRIFT))
 
 
 class Runs:
@@ -57,7 +102,7 @@ class Runs:
     def tilts(self, design: str, *, protocol: str | None = None) -> list[dict]:
         """The tilting runs of ``design`` with constant joints (no joint law: those are
         :mod:`drydem.report.joints`'), of ``protocol`` when given."""
-        return [r for r in self.ok if r["spec"]["analysis"] == "tilt" and joint_law(r) is None and wall_of(r) == design
+        return [r for r in self.ok if r["spec"]["analysis"] == "tilt" and joint_law(r) is None and paper_wall(r) == design
                 and (protocol is None or r["spec"]["protocol"] == protocol)]
 
     def tilt(self, design: str, kn: float, *, ks: float | None = None, points: int = POINTS, protocol: str | None = None) -> dict | None:
@@ -74,15 +119,9 @@ class Runs:
         return None if run is None else run["summary"]["collapse_angle_deg"]
 
     def angle_cell(self, design: str, kn: float) -> str:
-        """The collapse angle for a table; for a run that found no equilibrium within max_cycles
-        past its last one, and no collapse either, ">= that tilt" (a lower bound, no verdict)."""
-        from drydem.analysis.tilt import NO_EQUILIBRIUM
-
+        """The collapse angle for a table (:func:`angle_text`), "-" without the run."""
         run = self.tilt(design, kn)
-        summary = {} if run is None else run["summary"]
-        if summary.get("ended_by") == NO_EQUILIBRIUM:  # records of earlier versions gave that tilt as the collapse angle
-            return f">= {summary.get('last_equilibrium_deg', summary['collapse_angle_deg']):.1f}"
-        return _cell(summary.get("collapse_angle_deg"))
+        return "-" if run is None else angle_text(run["summary"])
 
     def capacity(self, design: str, kn: float) -> float | None:
         """The angle the objective of the calibration uses (:func:`drydem.parametric.calibrate.wall_angle`:
@@ -94,10 +133,10 @@ class Runs:
 
     def dls(self, design: str, kn: float) -> float | None:
         run = self.tilt(design, kn)
-        return None if run is None else run["summary"]["drift_limit_angles_deg"]["0.01"]
+        return None if run is None else dls_angle(run["summary"])
 
     def limit(self, design: str, method: str) -> float | None:
-        found = [r for r in self.ok if r["spec"]["analysis"] == "limit" and wall_of(r) == design and r["summary"]["method"] == method]
+        found = [r for r in self.ok if r["spec"]["analysis"] == "limit" and paper_wall(r) == design and r["summary"]["method"] == method]
         return found[0]["summary"]["collapse_angle_deg"] if found else None
 
     def stiffnesses(self, design: str, *, protocol: str | None = None) -> list[float]:
@@ -141,6 +180,7 @@ def build_report(results: Path, out: Path | None = None) -> Report:
         f"# Report of the study in `{results}`",
         f"{len(runs.ok)} runs recorded ({len(runs.failed)} failed). {NOTE} Published values: {paper['source'].split(' - ')[0]}.",
         *([_corrupt(records.corrupt)] if records.corrupt else []),
+        *_yours(records.valid, figures, paper),
         _table2(runs, paper), _table3(runs, paper), _table4(runs, paper),
         *_laws(records.valid, runs),
         _figure(figures, "fig03_contact_points", "Fig. 3: collapse angle of WD3 against contact points per length, kn = 3e7",
@@ -155,12 +195,18 @@ def build_report(results: Path, out: Path | None = None) -> Report:
         *_montecarlo(results, figures, paper),
     ]
     text = "\n\n".join(sections) + "\n"
-    (out / "report.md").write_text(text)
+    _write(out / "report.md", text)
     body = markdown.markdown(text, extensions=["tables"])
-    (out / "report.html").write_text(f"<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>drydem report</title>"
-                                     f"<style>table{{border-collapse:collapse}}td,th{{border:1px solid #999;padding:2px 6px}}</style>"
-                                     f"</head><body>\n{body}\n</body></html>\n")
+    _write(out / "report.html", f"<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>drydem report</title>"
+                             f"<style>table{{border-collapse:collapse}}td,th{{border:1px solid #999;padding:2px 6px}}</style>"
+                             f"</head><body>\n{body}\n</body></html>\n")
     return Report(out / "report.md", out / "report.html", records.corrupt)
+
+
+def _write(path: Path, text: str) -> None:
+    """``text`` written to ``path`` whole or not at all (:func:`~drydem.files.replaced_atomically`)."""
+    with replaced_atomically(path) as partial:
+        partial.write_text(text, encoding="utf-8")
 
 
 def _ida(figures: Path, runs: Runs) -> list[str]:
@@ -192,6 +238,109 @@ def _laws(records: list[dict], runs: Runs) -> list[str]:
         return [f"## {LAWS_TITLE}\n\n{caption}"]
     constant = {d: runs.capacity(d, 3e7) for d in experiment if runs.tilt(d, 3e7) is not None}
     return [_table(LAWS_TITLE, *law_table(best, constant, experiment)) + f"\n\n{caption}"]
+
+
+#: where a run's summary records the settings of its model (:func:`drydem.io.results.model_summary`)
+MODEL_SETTINGS = {"kn": ("joint", "kn"), "ks": ("joint", "ks"), "friction": ("joint", "friction"),
+                  "points": ("contacts", "points_per_length")}
+
+
+def _recorded(record: dict, table: str) -> dict:
+    """A table of the run's model as its summary records it ({} for a failed run or a record without it)."""
+    return ((record.get("summary") or {}).get("model") or {}).get(table) or {}
+
+
+def _setting(record: dict, key: str):
+    """The run's ``key`` (:data:`MODEL_SETTINGS`): its override, else its model's as recorded; None if neither says."""
+    value = record["spec"].get(key)
+    table, name = MODEL_SETTINGS[key]
+    return _recorded(record, table).get(name) if value is None else value
+
+
+def _joints(record: dict) -> str:
+    """The run's joint stiffness in words (:func:`law_words`: kn, ks, the law if not constant), as
+    its model records it, else from its overrides; "-" where neither gives kn and ks."""
+    kn, ks = _setting(record, "kn"), _setting(record, "ks")
+    if kn is None or ks is None:
+        return "-"
+    joint = {key: value for key, value in _recorded(record, "joint").items() if key not in ("kn", "ks")}
+    return law_words(json.dumps(joint) if joint else joint_law(record) or "{}", kn, ks)
+
+
+def _settings(record: dict) -> dict[str, str]:
+    """The settings of one of the user's tilting runs, in words, by column of its table."""
+    spec = record["spec"]
+    friction, points = _setting(record, "friction"), _setting(record, "points")
+    return {"joints": _joints(record), "friction": _cell(friction, "{:g}"), "points": _cell(points, "{:g}"), "protocol": spec["protocol"],
+            "increment (deg)": _cell(spec["increment_deg"], "{:g}")}
+
+
+def _target_labels(records: list[dict]) -> dict[str, str]:
+    """Each target's name in the report: its file's name (a built-in's name), or where targets
+    share it, the shortest ending of its path that no other target has (``a/pier.toml``)."""
+    targets = sorted({r["spec"]["target"] for r in records})
+
+    def ending(target: str, parts: int) -> str:
+        return "/".join(Path(target).parts[-parts:])
+
+    labels = {}
+    for target in targets:
+        parts = 1
+        while parts < len(Path(target).parts) and sum(ending(t, parts) == ending(target, parts) for t in targets) > 1:
+            parts += 1
+        labels[target] = ending(target, parts)
+    return labels
+
+
+def _yours(records: list[dict], figures: Path, paper: dict) -> list[str]:
+    """The sections of the user's runs (module docstring), none without any: the tilting and
+    limit runs that :func:`paper_wall` leaves out of the paper's tables, in a table each (the
+    collapse and DLS angles; the limit angle and multiplier), the failed ones named with their
+    errors, and per target a figure of its pushover curves, with the EC8 drift limits."""
+    mine = [r for r in records if r["spec"]["analysis"] in ("tilt", "limit") and paper_wall(r) is None]
+    if not mine:
+        return []
+    labels = _target_labels(mine)
+    mine.sort(key=lambda r: (labels[r["spec"]["target"]], r["spec"]["analysis"], [_setting(r, k) or 0 for k in MODEL_SETTINGS],
+                             r["spec"]["protocol"], r["spec"]["increment_deg"] or 0))
+    ok = [r for r in mine if r["status"] == "ok"]
+    tilts, limits = ([r for r in ok if r["spec"]["analysis"] == analysis] for analysis in ("tilt", "limit"))
+    failed = [r for r in mine if r["status"] != "ok"]
+    intro = (f"## {YOURS_TITLE}\n\nTargets: {len(labels)} ({', '.join(f'`{label}`' for label in sorted(labels.values()))}); "
+             f"tilting runs: {len(tilts)}; limit analyses: {len(limits)}; failed runs: {len(failed)}."
+             f"\n\n{YOURS_NOTE.format(friction=paper['wall']['friction'])}")
+    if failed:
+        intro += "\n\nFailed runs:\n\n" + "\n".join(f"- `{r['id']}`: {r['error']}" for r in failed)
+    sections = [intro]
+    if tilts:
+        rows = [[labels[r["spec"]["target"]], *_settings(r).values(), angle_text(r["summary"]), _cell(dls_angle(r["summary"]))]
+                for r in tilts]
+        header = ["target", *_settings(tilts[0]), "collapse angle (deg)", "DLS angle, 1 % drift (deg)"]
+        sections.append(_table(f"{YOURS}: tilting runs", header, rows))
+    if limits:
+        rows = [[labels[r["spec"]["target"]], _cell(_setting(r, "friction"), "{:g}"), r["summary"]["method"],
+                 _cell(r["summary"]["collapse_angle_deg"]), _cell(r["summary"].get("load_multiplier"), "{:.4f}")] for r in limits]
+        sections.append(_table(f"{YOURS}: limit analyses",
+                               ["target", "friction", "method", "collapse angle (deg)", "load multiplier"], rows))
+    for k, target in enumerate(dict.fromkeys(r["spec"]["target"] for r in tilts if r["pushover"])):
+        curves = [r for r in tilts if r["spec"]["target"] == target and r["pushover"]]
+        name = "yours{}_{}_pushover".format(k + 1, "".join(c if c.isalnum() or c in "-_" else "-" for c in Path(target).name))
+        sections.append(_figure(figures, name, f"{YOURS}: pushover curves of {labels[target]}, EC8 drift limits dashed",
+                                lambda ax, curves=curves: _run_curves(ax, curves)))
+    return sections
+
+
+def _run_curves(ax, runs: list[dict]) -> bool:
+    """The pushover curves of ``runs`` (one target's), each labelled by the settings that differ
+    between them, and the EC8 drift limits of the target's height."""
+    settings = [_settings(r) for r in runs]
+    differ = [key for key in settings[0] if len({s[key] for s in settings}) > 1] or ["protocol"]
+    for run, setting in zip(runs, settings):
+        _plot_pushover(ax, run, ", ".join(setting[key] if key in ("joints", "protocol") else f"{key} {setting[key]}" for key in differ))
+    _drift_lines(ax, runs[-1]["summary"]["wall_height_m"])
+    ax.set(xlabel="monitored displacement (mm)", ylabel="tilt (deg)", xlim=(0, None))
+    _legend(ax)
+    return True
 
 
 @dataclass(frozen=True)
@@ -295,7 +444,7 @@ def _table2(runs: Runs, paper: dict) -> str:
         rows.append([d, _cell(exp)] + [f"{_cell(p)} / {o}" for p, o in zip((la_a, la_na, dem9, dem10), ours)])
     return _table("Table 2: collapse angles (deg), paper / drydem",
                   ["wall", "experiment", "LA-A", "LA-NA", "DEM kn = 1e9", "DEM kn = 1e10"], rows) + (
-        "\n\n>= X: no equilibrium within max_cycles at the step after X deg, and no collapse either: a lower bound.")
+        "\n\nA cell '>= X': no equilibrium within max_cycles at the step after X deg, and no collapse either: a lower bound.")
 
 
 def _table3(runs: Runs, paper: dict) -> str:
@@ -331,7 +480,8 @@ def _figure(folder: Path, name: str, caption: str, draw, *, panels: int = 1) -> 
     axes = fig.subplots(1, panels, squeeze=False)
     drew = draw(axes[0][0] if panels == 1 else axes[0])
     path = folder / f"{name}.png"
-    fig.savefig(path, dpi=120)
+    with replaced_atomically(path) as partial:
+        fig.savefig(partial, dpi=120)
     missing = "" if drew else " (no runs for this figure in the study)"
     return f"## {caption}{missing}\n\n![{name}](figures/{path.name})"
 
@@ -364,6 +514,18 @@ def _stiffness(ax, runs: Runs, paper: dict) -> bool:
     return drew
 
 
+def _plot_pushover(ax, run: dict, label: str) -> None:
+    """A run's pushover curve: tilt (deg) against the monitored displacement (mm)."""
+    curve = np.array(run["pushover"])
+    ax.plot(curve[:, 1] * 1e3, curve[:, 0], label=label)
+
+
+def _drift_lines(ax, height_m: float | None) -> None:
+    """The EC8 drift limits (EN 1998-1 4.4.3.2) of a wall ``height_m`` high as displacements (mm), dashed."""
+    for limit in EC8_DRIFT_LIMITS if height_m is not None else ():
+        ax.axvline(limit * height_m * 1e3, color="0.5", linestyle="--", linewidth=0.8)
+
+
 def _pushover(axes, runs: Runs, designs: list[str]) -> bool:
     drew = False
     for ax, d in zip(axes, designs):
@@ -372,11 +534,9 @@ def _pushover(axes, runs: Runs, designs: list[str]) -> bool:
             run = runs.tilt(d, kn, protocol="fixed")
             if not run["pushover"]:  # unstable under its own weight: no curve
                 continue
-            curve = np.array(run["pushover"])
-            ax.plot(curve[:, 1] * 1e3, curve[:, 0], label=f"kn {kn:.0e}")
+            _plot_pushover(ax, run, f"kn {kn:.0e}")
             height = run["summary"]["wall_height_m"]
-        for limit in EC8_DRIFT_LIMITS if height is not None else ():
-            ax.axvline(limit * height * 1e3, color="0.5", linestyle="--", linewidth=0.8)
+        _drift_lines(ax, height)
         drew |= height is not None
         ax.set(title=d, xlabel="monitored displacement (mm)", ylabel="tilt (deg)", xlim=(0, None))
         _legend(ax)
@@ -400,8 +560,7 @@ def _ks(axes, runs: Runs) -> bool:
     wd6 = runs.tilts("WD6", protocol="fixed")
     for ax, kn in zip(axes, (1e7, 4e7, 7e7, 1e8)):
         for run in sorted((r for r in wd6 if _close(r["spec"]["kn"], kn) and r["pushover"]), key=lambda r: r["spec"]["ks"]):
-            curve = np.array(run["pushover"])
-            ax.plot(curve[:, 1] * 1e3, curve[:, 0], label=f"ks {run['spec']['ks']:.0e}")
+            _plot_pushover(ax, run, f"ks {run['spec']['ks']:.0e}")
             drew = True
         ax.set(title=f"WD6, kn {kn:.0e}", xlabel="displacement (mm)", ylabel="tilt (deg)", xlim=(0, None))
         _legend(ax)
