@@ -75,3 +75,135 @@ def test_the_objective_of_a_kn_is_the_mean_error_of_its_records_with_a_fallen_wa
     records["WD2"] = record(error="ModelError: made up")
     with pytest.raises(CalibrationError, match="runs without a collapse angle:\n  WD2: ModelError: made up\n  WD7: no equilibrium under gravity"):
         calibration_error(records)
+
+
+# --- the calibration's file and the objective's noise (issue 19) ------------------------------
+
+
+def jittery_angle(spec) -> float:
+    """A made-up collapse angle (deg): growing with log kn, with a jitter of up to 0.2 deg that
+    changes wholly with a 0.1 % change of kn (sin of kn/10 Pa/m: 1e3 rad or more), as round-off
+    changes a run's path."""
+    return 10.0 + 2.0 * math.log10(spec.kn / 1e7) + 0.1 * (1.0 + math.sin(spec.kn / 10.0))
+
+
+def jittery_run(spec) -> dict:
+    """Stands for drydem.parametric.sweep.run_one (in threads): a tilting record at once."""
+    from dataclasses import asdict
+
+    summary = {"collapse_angle_deg": jittery_angle(spec), "drift_limit_angles_deg": {"0.01": 1.0}, "wall_height_m": 0.1,
+               "stable_under_gravity": True, "ended_by": "stop displacement"}
+    return {"id": spec.id, "spec": asdict(spec), "status": "ok", "error": None, "summary": summary, "pushover": [], "runtime_s": 0.0}
+
+
+@pytest.fixture
+def made_up_runs(monkeypatch):
+    """Runs are jittery_run, in threads (a made-up record at once)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from drydem.parametric import sweep as sweep_module
+    from drydem.parametric import workers
+
+    monkeypatch.setattr(sweep_module, "run_one", jittery_run)
+    monkeypatch.setattr(workers, "local_executor", ThreadPoolExecutor)
+
+
+def test_the_calibration_file_holds_every_evaluation_the_best_and_the_noise_at_the_best_kn(tmp_path, made_up_runs):
+    import json
+    from concurrent.futures import ThreadPoolExecutor
+
+    from drydem.parametric.calibrate import StiffnessSearch, calibrate_stiffness, experimental_angles
+
+    search = StiffnessSearch(("WD1", "WD6"), kn_min=1e5, kn_max=1e9)  # the least error inside, where WD6's made-up angle is 7.8 deg
+    out = tmp_path / "calibration.json"
+    seen = []  # (evaluations, finished) in the file as each kn is evaluated: written after each one
+
+    def evaluated(kn, error, outcome):
+        seen.append((len(json.loads(out.read_text())["evaluations"]), json.loads(out.read_text())["finished"]) if out.exists() else None)
+
+    with ThreadPoolExecutor(2) as executor:
+        result = calibrate_stiffness(search, tmp_path, executor, out=out, on_evaluation=evaluated)
+    searched = len(result.evaluations)
+    assert seen == [None] + [(k, False) for k in range(1, searched)] + [(searched, False)] * 2  # then the two probes
+    written = json.loads(out.read_text())
+    assert written["finished"] and written["settings"] == search.settings()
+    assert [e["kn"] for e in written["evaluations"]] == sorted(e.kn for e in result.evaluations)
+    assert written["best"]["error"] == min(e["error"] for e in written["evaluations"]) == result.best_error
+    # the probes: the best kn x (1 -+ 0.1 %); the noise: the range over them and the kn evaluated within 2 % of the best
+    # (jittery_angle, the oracle)
+    assert [p["kn"] for p in written["probes"]] == pytest.approx([result.best_kn * 0.999, result.best_kn * 1.001], rel=1e-12)
+    kns = [e.kn for e in result.evaluations if 1 / 1.02 <= e.kn / result.best_kn <= 1.02] + [p["kn"] for p in written["probes"]]
+    assert len(kns) > 3 and sorted(kns) == written["noise"]["kn"]
+    angles = {d: [jittery_angle(spec) for kn in kns for spec in search.runs(kn) if spec.target == d] for d in search.designs}
+    assert written["noise"]["angles_deg"] == pytest.approx({d: max(a) - min(a) for d, a in angles.items()})
+    experiment = experimental_angles()
+    errors = [mean_absolute_relative_error({d: angles[d][k] for d in angles}, experiment) for k in range(3)]
+    assert written["noise"]["spread"] == pytest.approx(max(errors) - min(errors))
+    assert 0.0 < written["noise"]["largest_deg"] <= 0.2
+    # one 0.1 deg tilt step on WD6 (7.8 deg in the paper's Table 1) of the two walls
+    assert (written["noise"]["step"], written["noise"]["step_wall"]) == (pytest.approx(0.1 / (2 * 7.8)), "WD6")
+    assert written["noise"]["error"] == max(written["noise"]["spread"], written["noise"]["step"])
+
+
+def test_noise_probes_are_a_tenth_of_a_percent_from_the_best_kn_and_inside_the_range_searched():
+    from drydem.parametric.calibrate import probe_stiffnesses
+
+    assert probe_stiffnesses(1e8, 1e7, 1e9) == pytest.approx((0.999e8, 1.001e8))
+    assert probe_stiffnesses(1e9, 1e7, 1e9) == pytest.approx((0.999e9, 0.998e9))
+    assert probe_stiffnesses(1e7, 1e7, 1e9) == pytest.approx((1.001e7, 1.002e7))
+
+
+def calibrate_command(tmp_path, *options):
+    from click.testing import CliRunner
+
+    from drydem.cli import main
+
+    return CliRunner().invoke(main, ["calibrate", str(tmp_path / "results"), "--designs", "WD1,WD6", "--kn-min", "1e5",
+                                     "--workers", "2", *options])
+
+
+def test_calibrate_prints_the_noise_and_keeps_a_finished_calibration_unless_told(tmp_path, made_up_runs):
+    import json
+
+    first = calibrate_command(tmp_path)
+    assert first.exit_code == 0, first.output
+    assert "objective noise ~" in first.output and "smaller differences of the error are not meaningful" in first.output
+    path = tmp_path / "results" / "calibration.json"
+    written = path.read_text()
+    assert f"calibration     {path}" in first.output and json.loads(written)["finished"]
+    again = calibrate_command(tmp_path)
+    assert again.exit_code == 1 and "Traceback" not in again.output
+    assert f"{path}: already holds a finished calibration; pass --overwrite to replace it, or another --out" in again.output
+    other = calibrate_command(tmp_path, "--ks-ratio", "0.5")
+    assert "already holds a calibration with other settings (ks_ratio)" in other.output and path.read_text() == written
+    assert calibrate_command(tmp_path, "--ks-ratio", "0.5", "--overwrite").exit_code == 0
+    assert json.loads(path.read_text())["settings"]["ks_ratio"] == 0.5
+
+
+def test_an_interrupted_calibration_goes_on_from_its_file_and_a_foreign_file_is_kept(tmp_path, made_up_runs):
+    from drydem.parametric.calibrate import StiffnessSearch, calibration_content, write_calibration
+
+    path = tmp_path / "results" / "calibration.json"
+    path.parent.mkdir()
+    search = StiffnessSearch(("WD1", "WD6"), kn_min=1e5)
+    write_calibration(path, calibration_content(search, []))  # what a calibration killed before its first kn leaves
+    assert calibrate_command(tmp_path).exit_code == 0
+    for foreign in ("not a calibration", "[]", '{"finished": false, "settings": []}', '{"finished": 0, "settings": {}}'):
+        path.write_text(foreign)
+        refused = calibrate_command(tmp_path)
+        assert refused.exit_code == 1 and f"{path}: exists and is not a drydem calibration; pass --overwrite" in refused.output
+        assert path.read_text() == foreign
+
+
+def test_a_calibration_converts_to_a_dataframe_of_its_evaluations_and_probes(tmp_path, made_up_runs):
+    from concurrent.futures import ThreadPoolExecutor
+
+    from drydem.parametric.calibrate import StiffnessSearch, calibrate_stiffness
+
+    with ThreadPoolExecutor(2) as executor:
+        result = calibrate_stiffness(StiffnessSearch(("WD1", "WD6"), kn_min=1e5), tmp_path, executor)
+    frame = result.to_dataframe()
+    assert list(frame.columns) == ["kn_Pa_m", "ks_Pa_m", "error", "probe", "angle_WD1_deg", "angle_WD6_deg"]
+    assert len(frame) == len(result.evaluations) + 2 and frame["probe"].sum() == 2
+    assert frame.loc[~frame["probe"], "error"].min() == frame.attrs["best_error"] == result.best_error
+    assert frame.attrs["noise"] == result.noise and not (tmp_path / "calibration.json").exists()  # no out, no file

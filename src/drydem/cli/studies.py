@@ -77,7 +77,9 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
 @click.argument("results_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), help="Report folder (default: RESULTS_DIR/report).")
 def report(results_dir: Path, out: Path | None) -> None:
-    """Write the report of a study (Markdown, HTML, PNG figures in the style of the paper);
+    """Write the report of a study (Markdown, HTML, PNG figures): the paper's tables and figures
+    with drydem's values beside the published ones, and the runs of your own targets (wall,
+    model and geometry files, other built-in targets) in their own tables and pushover figures;
     corrupt records are left out and named."""
     from drydem.report.study import build_report
 
@@ -100,23 +102,29 @@ def report(results_dir: Path, out: Path | None) -> None:
 @click.option("--ks-ratio", type=float, default=1.0, show_default=True, help="ks = ratio x kn.")
 @click.option("--increment", type=float, default=0.1, show_default=True, help="Tilt step of the (adaptive) runs, deg.")
 @joint_law_options
+@click.option("--out", type=click.Path(path_type=Path), help="The calibration's JSON file (default: RESULTS_DIR/calibration.json).")
+@click.option("--overwrite", is_flag=True, help="Replace a finished calibration, or one with other settings, in --out (kept otherwise).")
 @workers_option
 @scheduler_option
-def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, joint_law, workers, scheduler) -> None:
+def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, joint_law, out, overwrite, workers, scheduler) -> None:
     """Find the kn that best reproduces the experimental collapse angles (paper Table 1) of
-    DESIGNS, reusing and adding runs in RESULTS_DIR (the paper's post-diction, Section 4.4);
-    every option is checked before anything runs. With a stress-dependent joint law
+    DESIGNS, reusing and adding runs in RESULTS_DIR (the paper's post-diction, Section 4.4),
+    then measure how noisy the objective is at that kn; every option is checked before anything
+    runs. The calibration (every kn evaluated, the best, the noise) is written to --out as it
+    goes; an interrupted one goes on. With a stress-dependent joint law
     (--joint-model and its keys), the law's shape is kept and its kn (ks = ratio x kn) fitted."""
-    from drydem.parametric.calibrate import StiffnessSearch, calibrate_stiffness
-    from drydem.files import writable_folder
+    from drydem.parametric.calibrate import CALIBRATION_FILE, NEIGHBOURHOOD, StiffnessSearch, calibrate_stiffness, check_calibration_file
+    from drydem.files import writable, writable_folder
     from drydem.parametric.workers import open_workers
 
     search = StiffnessSearch(tuple(d.strip() for d in designs.split(",") if d.strip()), kn_min, kn_max, ks_ratio, increment, joint_law)
     problems = search.problems(name=lambda field: "--" + field.replace("_", "-"))
     if problems:
         raise click.ClickException("\n".join(problems))
+    out = out or results_dir / CALIBRATION_FILE
     try:
         writable_folder(results_dir)
+        check_calibration_file(writable(out), search, overwrite=overwrite)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     law = f" of the joint law {joint_law}" if joint_law else ""
@@ -131,11 +139,19 @@ def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, joint_l
         with open_workers(workers, scheduler) as pool, signals_interrupt() as received:
             click.echo(f"running on {pool.where}")
             try:
-                result = calibrate_stiffness(search, results_dir, pool.executor, in_flight=pool.slots, on_evaluation=evaluated)
+                result = calibrate_stiffness(search, results_dir, pool.executor, out=out, overwrite=overwrite, in_flight=pool.slots,
+                                             on_evaluation=evaluated)
             except KeyboardInterrupt:
-                click.echo(f"\ninterrupted ({received.name}); the finished runs are recorded in {results_dir}; the same command reuses them",
-                           err=True)
+                click.echo(f"\ninterrupted ({received.name}); the finished runs are recorded in {results_dir}, the kn evaluated in {out}; "
+                           "the same command goes on", err=True)
                 raise SystemExit(128 + received.number) from None
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
+    noise = result.noise
     click.echo(f"best kn         {result.best_kn:.4g} Pa/m (ks = {ks_ratio:g} kn): mean absolute error {result.best_error:.2%}")
+    moved = f" ({noise['wall']})" if noise["largest_deg"] else ""
+    click.echo(f"objective noise ~{noise['error']:.2%}: smaller differences of the error are not meaningful (the larger of its range "
+               f"over the {len(noise['kn'])} kn within {NEIGHBOURHOOD - 1:.0%} of the best, {noise['spread']:.2%}, collapse angles up to "
+               f"{noise['largest_deg']:.2g} deg apart{moved}, "
+               f"and its step for one {increment:g} deg tilt step on {noise['step_wall']}, {noise['step']:.2%})")
+    click.echo(f"calibration     {out}")

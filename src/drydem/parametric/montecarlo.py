@@ -298,6 +298,31 @@ class MonteCarloOutcome:
     corrupt: tuple[str, ...]
     summary: dict
 
+    def to_dataframe(self):
+        """The samples as a pandas DataFrame (:func:`samples_dataframe` of :attr:`summary`)."""
+        return samples_dataframe(self.summary)
+
+
+#: the columns of a sample's row (:func:`sample_entry`'s keys)
+SAMPLE_COLUMNS = ("index", "seed", "status", "collapse_angle_deg", "dls_angle_deg", "ended_by", "runtime_s", "error")
+
+
+def samples_dataframe(summary: dict):
+    """A Monte Carlo run's samples, from its top ``summary`` (:func:`run_summary`, as in
+    ``OUT/summary.json``), as a pandas DataFrame
+    (:func:`drydem.analysis.tilt.settings.data_frame`), one row per sample in index order:
+    ``index``, ``seed``, ``status``, ``collapse_angle_deg`` (0 for a wall that cannot stand,
+    NaN without a verdict), ``dls_angle_deg``, ``ended_by``, ``runtime_s``, ``error`` (missing
+    unless it failed); ``attrs``: the statistics (``collapse_angle_deg``, ``dls_angle_deg``),
+    ``excluded``, ``settings`` and ``target``."""
+    from drydem.analysis.tilt.settings import data_frame
+
+    samples = summary["samples"]
+    columns = {name: [sample.get(name) for sample in samples] for name in SAMPLE_COLUMNS}
+    for name in ("collapse_angle_deg", "dls_angle_deg"):
+        columns[name] = [np.nan if angle is None else angle for angle in columns[name]]
+    return data_frame(columns, {name: summary[name] for name in ("collapse_angle_deg", "dls_angle_deg", "excluded", "settings", "target")})
+
 
 def monte_carlo(wall: Wall, settings: MonteCarloSettings, folder: Path, executor: Executor, *, target: dict,
                 in_flight: int | None = None, on_sample: Callable[[dict], None] | None = None) -> MonteCarloOutcome:

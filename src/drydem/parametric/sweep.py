@@ -23,7 +23,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from drydem.errors import DrydemError
-from drydem.parametric.records import RecordError, read_record, record_path, write_record
+from drydem.parametric.records import RecordError, load_records, read_record, record_path, write_record
 from drydem.parametric.study import PULSE_PREFIX, RunSpec, ground_motion
 
 
@@ -234,6 +234,34 @@ def sweep(runs: Iterable[RunSpec], results: Path, executor: Executor, *, retry_f
             release(results, spec.id, fd)
     return SweepOutcome(finished=finished, skipped=plan.recorded + skipped, failed=failed, elsewhere=elsewhere,
                         corrupt=tuple(str(exc) for exc in plan.corrupt))
+
+
+def records_dataframe(results: Path):
+    """The run records of a results folder (:func:`drydem.parametric.records.load_records`) as a
+    pandas DataFrame (:func:`drydem.analysis.tilt.settings.data_frame`), one row per valid
+    record in name order: ``id``, ``status``, ``error``, ``runtime_s``, the run's parameters
+    (:class:`~drydem.parametric.study.RunSpec`'s fields, kn and ks as ``kn_Pa_m`` and
+    ``ks_Pa_m``), then every number, text or flag of its summary under the summary's own name
+    (``collapse_angle_deg``, ``ended_by``, ``max_rotation_rad``, ...; a column holds None or
+    NaN where a run's analysis has no such value) and a tilting run's drift-limit angles as
+    ``drift_LIMIT_angle_deg``; ``attrs``: ``corrupt``, the corrupt records' errors, left out.
+    DrydemError if ``results`` is not a folder."""
+    from drydem.analysis.tilt.settings import data_frame
+
+    if not Path(results).is_dir():
+        raise DrydemError(f"{results}: no such results folder (a sweep's --out, which holds runs/ID.json)")
+    loaded = load_records(results)
+    units = {"kn": "kn_Pa_m", "ks": "ks_Pa_m"}
+    rows = []
+    for record in loaded.valid:
+        row = {"id": record["id"], "status": record["status"], "error": record.get("error"), "runtime_s": record.get("runtime_s")}
+        row |= {units.get(key, key): value for key, value in record["spec"].items()}
+        summary = record.get("summary", {})
+        row |= {key: value for key, value in summary.items() if key not in row and isinstance(value, (int, float, str, type(None)))}
+        row |= {f"drift_{limit}_angle_deg": angle for limit, angle in summary.get("drift_limit_angles_deg", {}).items()}
+        rows.append(row)
+    names = list(dict.fromkeys(name for row in rows for name in row))
+    return data_frame({name: [row.get(name) for row in rows] for name in names}, {"corrupt": [str(exc) for exc in loaded.corrupt]})
 
 
 def _submit(executor: Executor, spec: RunSpec, fd: int, results: Path) -> Future:
