@@ -1,5 +1,6 @@
 """numba's cache of the compiled engine follows every source it is compiled from (drydem.compiled_cache)."""
 
+import ast
 import os
 import pathlib
 import shutil
@@ -66,10 +67,24 @@ def test_compiled_modules_are_keyed_on_what_they_import():
     assert "drydem.engine.narrow_phase" not in planar
 
 
+def test_every_compiled_module_checks_its_cache_folder_last():
+    # compiled_cache.check(__name__) as the last statement: none of the module's functions can be
+    # called (and loaded from the cache) before it, and no module is left unchecked
+    for name in compiled_cache.compiled_modules():
+        last = ast.parse(compiled_cache.module_file(name).read_text(encoding="utf-8")).body[-1]
+        assert ast.unparse(last) == "compiled_cache.check(__name__)", name
+
+
+def test_the_cache_check_is_not_a_source_of_the_kernels():
+    # every compiled module imports compiled_cache to call check: editing it must not throw away
+    # every cached kernel
+    assert "drydem.compiled_cache" not in compiled_cache.dependencies("drydem.engine.cycle3d")
+
+
 def test_cache_folders_are_where_numba_writes(tmp_path):
     # every module with cached functions has its folder found (numba's private cache attribute
     # still there), in __pycache__ beside the sources or, with NUMBA_CACHE_DIR, under it, and
-    # the stamp is written there on import
+    # the stamp is written there when a compiled module of the folder is imported
     names = [n for n in compiled_cache.compiled_modules() if compiled_cache.cache_folder(n) is not None]
     assert {
         "drydem.engine.joints", "drydem.engine.damping", "drydem.engine.loop", "drydem.engine.cycle3d", "drydem.engine.inertia",

@@ -85,7 +85,7 @@ def test_obj_export_then_check_keeps_the_base_fixed_and_adds_no_second_one(tmp_p
     assert result.exit_code == 0 and "not the material, joint, contacts, supports or solver settings" in result.stderr
     result = CliRunner().invoke(main, ["check", str(path)])
     assert result.exit_code == 0 and "blocks          171 (170 movable, 1 fixed)" in result.output
-    assert result.stderr == ""
+    assert [line for line in result.stderr.splitlines() if not line.startswith("compil")] == []  # no note (a cold cache says it compiles)
 
 
 def test_an_unnamed_mesh_prints_what_it_assumed(tmp_path):
@@ -123,9 +123,18 @@ def test_a_failed_export_keeps_the_old_file_whole(tmp_path, monkeypatch):
     monkeypatch.setattr(drydem.io.model_file, "save_model", half_written)
     out = tmp_path / "wall.toml"
     out.write_text("the old file")
-    fails(["export", "WD3", out], "wall.toml: cannot write: No space left on device")
+    fails(["export", "WD3", out, "--overwrite"], "wall.toml: cannot write: No space left on device")
     assert out.read_text() == "the old file" and [p.name for p in tmp_path.iterdir()] == ["wall.toml"]
 
+
+
+def test_export_keeps_an_existing_file_unless_told_to_overwrite_it(tmp_path):
+    out = tmp_path / "wall.toml"
+    out.write_text("a model edited by hand")
+    fails(["export", "WD3", out], "wall.toml: exists; pass --overwrite to replace it")
+    assert out.read_text() == "a model edited by hand"
+    result = CliRunner().invoke(main, ["export", "WD3", str(out), "--overwrite"])
+    assert result.exit_code == 0 and out.read_text().startswith("[material]")
 
 def test_a_name_a_mesh_cannot_keep_is_refused_before_writing(tmp_path):
     model = dd.build_model([dd.Block(name="base", shape=dd.box([0, 0, -1], [1, 1, 0]), fixed=True),
@@ -133,7 +142,7 @@ def test_a_name_a_mesh_cannot_keep_is_refused_before_writing(tmp_path):
     save_model(model, tmp_path / "padded.toml")
     out = tmp_path / "wall.obj"
     out.write_text("the old file")
-    fails(["export", tmp_path / "padded.toml", out], "block ' padded': a mesh file cannot keep this name")
+    fails(["export", tmp_path / "padded.toml", out, "--overwrite"], "block ' padded': a mesh file cannot keep this name")
     assert out.read_text() == "the old file" and sorted(p.name for p in tmp_path.iterdir()) == ["padded.toml", "wall.obj"]
 
 
@@ -172,3 +181,28 @@ def test_limit_shows_each_stage_on_stderr(tmp_path):
     assert stages == ["finding the contacts of N blocks", "assembling the equilibrium matrix (N contact points)",
                       "solving the associative LP with HiGHS (interior point: N rows x N columns, N contact points)",
                       "non-associative iteration N of at most N: solving the LP with HiGHS (lambda N so far)"]
+
+
+def test_ctrl_c_while_a_checkpoint_is_written_comes_after_it_is_whole(tmp_path, monkeypatch):
+    # a SIGTERM that landed inside numpy's savez once ended a tilt with a ValueError from the
+    # zip file's cleanup instead of the interrupt (tests/test_cli.py, SIGTERM while saving)
+    import os
+    import signal
+
+    from drydem.engine import checkpoint
+
+    real_savez = np.savez
+
+    def interrupted_savez(file, **arrays):
+        os.kill(os.getpid(), signal.SIGINT)  # delivered at once, were it not held
+        real_savez(file, **arrays)
+
+    monkeypatch.setattr(checkpoint.np, "savez", interrupted_savez)
+    sim = dd.Simulation(dd.build_model([dd.Block(name="base", shape=dd.box([0, 0, -1], [1, 1, 0]), fixed=True),
+                                        dd.Block(name="brick", shape=dd.box([0, 0, 0], [1, 1, 1]))], density=1800.0))
+    path = tmp_path / "checkpoint.npz"
+    with pytest.raises(KeyboardInterrupt):
+        checkpoint.save_checkpoint(path, sim.snapshot(), {"theta_deg": 1.5})
+    snapshot, progress = checkpoint.load_checkpoint(path)
+    assert float(progress["theta_deg"]) == 1.5 and np.array_equal(snapshot.state.position, sim.state.position)
+    assert [p.name for p in tmp_path.iterdir()] == ["checkpoint.npz"]

@@ -4,7 +4,9 @@ before any work, and write each file whole or not at all."""
 from __future__ import annotations
 
 import os
+import signal
 import tempfile
+import threading
 import tomllib
 from contextlib import contextmanager
 from pathlib import Path
@@ -62,6 +64,28 @@ def replaced_atomically(path: str | Path):
     finally:
         temporary.unlink(missing_ok=True)
 
+
+
+@contextmanager
+def uninterrupted():
+    """Hold SIGINT and SIGTERM until the block ends, then deliver them to the handlers in force
+    before it. A writer that a KeyboardInterrupt stops half-way may fail on its own cleanup and
+    mask the interrupt with another error (numpy's savez: "Can't close the ZIP file while there
+    is an open writing handle"): what is written is written, then the interrupt comes. Python
+    runs signal handlers in the main thread only: elsewhere this holds nothing."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    held: list[int] = []
+    previous = {number: signal.signal(number, lambda received, frame: held.append(received))
+                for number in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, signal.SIG_DFL if handler is None else handler)
+        for number in held:
+            signal.raise_signal(number)
 
 def read_toml(path: Path) -> tuple[dict, str]:
     """A TOML file's tables and its text (for line numbers); ModelError naming the file if it

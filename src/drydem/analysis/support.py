@@ -20,6 +20,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from drydem import compiled_cache
 from drydem.engine.contacts import SubContacts, world_points
 
 #: a contact carries its upper block when its normal is within 60 deg of the vertical
@@ -66,3 +67,6 @@ def _longest_paths(lower, upper, closure, n_blocks):
     for k in range(lower.shape[0]):
         settlement[upper[k]] = max(settlement[upper[k]], settlement[lower[k]] + closure[k])
     return settlement
+
+
+compiled_cache.check(__name__)  # last: none of the functions above is loaded from a stale cache

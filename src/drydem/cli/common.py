@@ -1,23 +1,29 @@
 """What the commands share: the ``drydem`` group, target loading, results folders, interruption,
-and the options of several commands (units, workers, joint laws, imperfections)."""
+and the options of several commands (units, workers, joint laws, imperfections).
+
+The command modules import at module level only what their options need, the rest in the
+commands: ``drydem --help`` imports neither numba, scipy, numpy nor matplotlib (tests/test_start.py)."""
 
 from __future__ import annotations
 
 import functools
 import itertools
+import math
 import signal
 from contextlib import contextmanager
 from datetime import datetime
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
-import numpy as np
 
 from drydem import __version__
 from drydem.errors import DrydemError
-from drydem.io.target import Target, load_target
 from drydem.model.parameters import JOINT_MODELS
-from drydem.masonry.imperfections import Imperfections
+
+if TYPE_CHECKING:
+    from drydem.io.target import Target
+    from drydem.masonry.imperfections import Imperfections
 
 
 #: the tilting analysis' checkpoint in its results folder, and the file it is written to first
@@ -29,7 +35,7 @@ CHECKPOINT_PARTIAL = ".checkpoint.partial.npz"
 UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001}
 
 unit_option = click.option("--unit", type=click.Choice(list(UNITS)), default="m", show_default=True,
-                           help="Length unit of imported geometry (.wrl, .obj, .stl).")
+                           help="Length unit of imported geometry (.wrl, .obj, .stl, compas .json).")
 
 
 workers_option = click.option("--workers", type=click.IntRange(min=1), help="Local processes (default: all cores).")
@@ -85,6 +91,8 @@ def joint_law_options(command):
 
 def resolve_target(target: str, unit: str = "m") -> Target:
     """Load TARGET or exit with its error; print to stderr what an imported file could not say."""
+    from drydem.io.target import load_target
+
     try:
         found = load_target(target, unit_m=UNITS[unit])
     except DrydemError as exc:
@@ -96,8 +104,12 @@ def resolve_target(target: str, unit: str = "m") -> Target:
 
 @click.group()
 @click.version_option(__version__, prog_name="drydem")
-def main() -> None:
+@click.pass_context
+def main(ctx: click.Context) -> None:
     """drydem: discrete element analysis of dry-joint masonry."""
+    from drydem.compiled_cache import compile_notice
+
+    ctx.with_resource(compile_notice())  # a first run says it compiles the kernels, and for how long
 
 #: what ``drydem shake`` writes in its results folder
 SHAKE_OUTPUTS = ("summary.json", "history.csv", "history.png", "vtk", "shake.mp4", "shake.gif")
@@ -150,14 +162,14 @@ def signals_interrupt():
 
 def _amplitude_mm(ctx, param, value):
     """An imperfection amplitude, mm: not given (None), or a finite number >= 0."""
-    if value is not None and not (np.isfinite(value) and value >= 0.0):
+    if value is not None and not (math.isfinite(value) and value >= 0.0):
         raise click.BadParameter(f"{value!r}: must be a finite number >= 0 (mm)")
     return value
 
 
 def _factor(ctx, param, value):
     """A drawing factor: a finite number > 0."""
-    if not (np.isfinite(value) and value > 0.0):
+    if not (math.isfinite(value) and value > 0.0):
         raise click.BadParameter(f"{value!r}: must be a finite number > 0")
     return value
 
@@ -191,6 +203,8 @@ def imperfections_from_options(height_sd: float | None, height_distribution: str
                                misalignment_sd: float | None) -> Imperfections | None:
     """The imperfections the options of :func:`imperfection_options` ask for (an amplitude not
     given is zero); None where no amplitude is given: the perfect wall."""
+    from drydem.masonry.imperfections import Imperfections
+
     amplitudes = {"height_sd_mm": height_sd, "flatness_sd_mm": flatness_sd, "misalignment_sd_mm": misalignment_sd}
     if all(value is None for value in amplitudes.values()):
         return None

@@ -3,14 +3,17 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
 from drydem.errors import DrydemError
-from drydem.io.target import Target
-from drydem.model.assembly import Model
 from drydem.cli.common import results_folder, signals_interrupt, resolve_target, joint_law_options, main, threads_option, unit_option
 from drydem.cli.tilting import _render
+
+if TYPE_CHECKING:
+    from drydem.io.target import Target
+    from drydem.model.assembly import Model
 
 
 #: the pulses of ``drydem shake --pulse`` (drydem.analysis.shake.PULSES, not imported here to keep
@@ -86,7 +89,7 @@ def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequenc
           damping_ratio, rayleigh_mass, rayleigh_stiffness, kn, ks, friction, points, density, joint_law, monitor, out, overwrite, vtk,
           save_every, video, unit) -> None:
     """Shaking-table analysis of TARGET (a built-in wall, a wall or model file, or a
-    .wrl/.obj/.stl): the time history of the model under a ground motion, a --motion record or
+    .wrl/.obj/.stl/.json): the time history of the model under a ground motion, a --motion record or
     a --pulse (give one), from rest under gravity. Writes history.csv (the monitored block's
     response, row by row as the run goes), history.png and summary.json (whether and when blocks
     fell, peak and residual response, PGA, damping). Exits 130 or 143 when interrupted (the

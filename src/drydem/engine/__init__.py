@@ -2,11 +2,20 @@
 and planar), inertia and timestep, and the :class:`Simulation` that cycles a model to equilibrium.
 
 Public API: :class:`Simulation` (its ``state``, ``contacts``, ``blocks``, ``timestep``,
-``run_cycles``), :class:`ContactTracker`, :class:`~drydem.engine.loop.LoopSettings`.
+``run_cycles``), :class:`ContactTracker`, :class:`~drydem.engine.loop.LoopSettings`, imported at
+their first use (drydem.lazy_attribute): ``drydem.engine.threads`` alone loads no kernel.
 """
 
-from drydem.engine.loop import LoopSettings
-from drydem.engine.simulation import ENGINES, EquilibriumResult, Simulation, Snapshot, StepStats
-from drydem.engine.tracker import ContactTracker
+from drydem import lazy_attribute
 
-__all__ = ["ENGINES", "ContactTracker", "EquilibriumResult", "LoopSettings", "Simulation", "Snapshot", "StepStats"]
+#: the API imported at its first use: name -> the module that defines it
+LAZY = {
+    "LoopSettings": "drydem.engine.loop", "ContactTracker": "drydem.engine.tracker",
+    **{name: "drydem.engine.simulation" for name in ("ENGINES", "EquilibriumResult", "Simulation", "Snapshot", "StepStats")},
+}
+
+__all__ = list(LAZY)
+
+
+def __getattr__(name: str):
+    return lazy_attribute(__name__, LAZY, name)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from drydem import compiled_cache
 from drydem.model.boxes import overlapping_pairs
 from drydem.model.geometry import FlatGeometry
 
@@ -32,3 +33,6 @@ def bounding_boxes(geom, position, rotation):
                 lo[b, k] = min(lo[b, k], w)
                 hi[b, k] = max(hi[b, k], w)
     return lo, hi
+
+
+compiled_cache.check(__name__)  # last: none of the functions above is loaded from a stale cache

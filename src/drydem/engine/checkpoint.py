@@ -4,7 +4,7 @@ One ``.npz`` file holds a :class:`drydem.engine.simulation.Snapshot` (block stat
 shear history, neighbour list, blocks still in the analysis) and the analysis' own progress
 (arrays and scalars by name). It is written to a temporary file and renamed
 (:func:`drydem.files.replaced_atomically`), so a kill while writing leaves the previous
-checkpoint intact.
+checkpoint intact; Ctrl-C or SIGTERM while it is written waits for it (:func:`drydem.files.uninterrupted`).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 from drydem.engine.contacts import NeighbourList, SubContacts
 from drydem.engine.simulation import Snapshot
 from drydem.errors import DrydemError
-from drydem.files import replaced_atomically
+from drydem.files import replaced_atomically, uninterrupted
 from drydem.model.state import State
 
 _PARTS = {"state": State, "contacts": SubContacts, "neighbours": NeighbourList, "broad_state": State}
@@ -29,7 +29,7 @@ def save_checkpoint(path: Path, snapshot: Snapshot, progress: dict) -> None:
     arrays |= {"active": snapshot.active, "cycles": snapshot.cycles, "time_s": snapshot.time_s,
                "scaled_timestep": np.nan if snapshot.scaled_timestep is None else snapshot.scaled_timestep}
     arrays |= {f"progress.{name}": np.asarray(value) for name, value in progress.items()}
-    with replaced_atomically(path) as partial:
+    with uninterrupted(), replaced_atomically(path) as partial:
         np.savez(partial, **arrays)
 
 

@@ -27,6 +27,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from drydem import compiled_cache
 from drydem.engine.damping import dashpot_force, dashpot_per_area, has_dashpots, local_damping
 from drydem.engine.joints import normal_law, shear_law, stiffer_than_timestep
 from drydem.engine.loop import FASTMATH, block_maxima, cycle_loop, workspace
@@ -283,3 +284,6 @@ def run_cycles(state, blocks, sub, joint, loop, broad_state, neighbours):
     for the call (numba's threads: :mod:`drydem.engine.threads`)."""
     work = workspace(sub.pairs, state.position.shape[0], CONTRIBUTION)
     return cycle_loop(step, state, blocks, sub, joint, loop, broad_state, neighbours, work)
+
+
+compiled_cache.check(__name__)  # last: none of the functions above is loaded from a stale cache

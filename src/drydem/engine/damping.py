@@ -26,6 +26,8 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
+from drydem import compiled_cache
+
 
 class Damping(NamedTuple):
     """The damping a cycle applies (see module docstring).
@@ -94,3 +96,6 @@ def dashpot_force(normal_force: float, opening_speed: float, coefficient: float)
     > 0) and opening speed v_n (m/s): -c v_n, but no more pull than the spring pushes, so the
     sum stays >= 0 (a dashpot does not glue an opening joint)."""
     return max(-coefficient * opening_speed, -max(normal_force, 0.0))
+
+
+compiled_cache.check(__name__)  # last: none of the functions above is loaded from a stale cache

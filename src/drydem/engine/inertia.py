@@ -28,6 +28,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
+from drydem import compiled_cache
 from drydem.engine.contacts import SubContacts
 from drydem.engine.damping import Damping, timestep_factor
 from drydem.engine.joints import (
@@ -305,3 +306,6 @@ def keep_kinetic_energy(state: State, old: BlockConstants, new: BlockConstants) 
     before = np.einsum("ni,nij,nj->n", omega_body, old.inertia_body, omega_body)
     after = np.einsum("ni,nij,nj->n", omega_body, new.inertia_body, omega_body)
     state.angular_velocity[:] *= np.sqrt(np.divide(before, after, out=np.ones_like(after), where=after > 0))[:, None]
+
+
+compiled_cache.check(__name__)  # last: none of the functions above is loaded from a stale cache

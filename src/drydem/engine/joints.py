@@ -27,6 +27,7 @@ import numba
 import numpy as np
 from numba.extending import overload
 
+from drydem import compiled_cache
 from drydem.model.parameters import JointMaterial
 
 
@@ -366,3 +367,6 @@ def _law_energy(sigma, joint):
     log_ratio = np.log(sigma / low)
     growth = log_ratio if e == 2.0 else np.expm1((2.0 - e) * log_ratio) / (2.0 - e)
     return low * low / (2.0 * joint.k_min) + joint.stress_ref ** 2 / joint.kn * s_low ** (2.0 - e) * growth
+
+
+compiled_cache.check(__name__)  # last: none of the functions above is loaded from a stale cache

@@ -11,6 +11,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
+from drydem import compiled_cache
 from drydem.engine.damping import Damping
 
 #: kinetic energy above this many times the work gravity can have done means a blow-up
@@ -289,3 +290,6 @@ def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neig
             if detection_slack(state, broad_state, neighbours, blocks.radius, loop.absolute_limit, slack) <= 0.0:
                 return cycle + 1, REDETECT, ratio, speed
     return max_cycles, RUNNING, ratio, speed
+
+
+compiled_cache.check(__name__)  # last: none of the functions above is loaded from a stale cache

@@ -68,6 +68,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
+from drydem import compiled_cache
 from drydem.engine.contacts import SubContacts
 from drydem.model.geometry import FlatGeometry
 from drydem.model.parameters import ContactDensity
@@ -918,3 +919,6 @@ def narrow_phase(
     Shear forces start at zero (:func:`drydem.engine.refresh.merge` carries them over)."""
     found = find(geometry, candidates, position, rotation, tolerance=tolerance, density=density)
     return SubContacts(*assemble(found, position, rotation)), found.separation
+
+
+compiled_cache.check(__name__)  # last: none of the functions above is loaded from a stale cache

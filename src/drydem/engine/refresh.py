@@ -18,6 +18,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from drydem import compiled_cache
 from drydem.engine.contacts import SubContacts
 from drydem.model.rotation import mat_vec
 
@@ -170,3 +171,6 @@ def _merge(old, keep, fresh, position, rotation):
                 intact[row] = old.intact[nearest]
             row += 1
     return out
+
+
+compiled_cache.check(__name__)  # last: none of the functions above is loaded from a stale cache

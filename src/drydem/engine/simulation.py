@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from drydem.engine import cycle3d, cycle_planar, diagnostics, loop
+from drydem.engine import diagnostics, loop
 from drydem.engine.contacts import NeighbourList, SubContacts, closing_motion
 from drydem.engine.damping import Damping
 from drydem.engine.inertia import BlockConstants, keep_kinetic_energy, timestep_and_blocks
@@ -340,4 +340,10 @@ def _cycle_function(model: Model, engine: str | Callable) -> Callable:
         return engine
     if engine not in ENGINES:
         raise ModelError(f"engine = {engine!r}: must be one of {list(ENGINES)} or a run_cycles function")
-    return cycle_planar.run_cycles if engine == "numba" and model.in_plane else cycle3d.run_cycles
+    if engine == "numba" and model.in_plane:  # imported here: a run loads only the kernels of its own cycle
+        from drydem.engine import cycle_planar
+
+        return cycle_planar.run_cycles
+    from drydem.engine import cycle3d
+
+    return cycle3d.run_cycles

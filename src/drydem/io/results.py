@@ -19,16 +19,19 @@ import shutil
 from collections.abc import Sequence
 from dataclasses import asdict, fields
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from drydem import __version__
 from drydem.errors import DrydemError
 from drydem.files import replaced_atomically, writable_folder
-from drydem.analysis.limit import LimitResult, LimitSettings
-from drydem.analysis.shake import History, ShakeResult, ShakeSettings
-from drydem.analysis.tilt import Record, TiltResult
-from drydem.model.assembly import Model
+
+if TYPE_CHECKING:  # annotations only: importing the limit analysis takes scipy.optimize, a third of a second
+    from drydem.analysis.limit import LimitResult, LimitSettings
+    from drydem.analysis.shake import History, ShakeResult, ShakeSettings
+    from drydem.analysis.tilt import Record, TiltResult
+    from drydem.model.assembly import Model
 
 PUSHOVER_COLUMNS = ("tilt_deg", "load_multiplier", "ux_m", "uz_m", "drift", "cycles")
 #: the columns of history.csv: the first five are the public interface, the others come after

@@ -23,7 +23,6 @@ from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from drydem.engine.contacts import SubContacts, world_points
 from drydem.errors import DrydemError
@@ -39,6 +38,7 @@ OPEN, STUCK, SLIDING = 0, 1, 2
 def write_vtu(model: Model, path: str | Path, state: State | None = None, active: np.ndarray | None = None) -> Path:
     """Write the blocks at ``state`` (default: as in the model file) to ``path`` (.vtu)."""
     import meshio
+    from scipy.spatial.transform import Rotation
 
     state = state or State.at_rest(model.block_centroid)
     active = np.ones(model.n_blocks, dtype=bool) if active is None else active

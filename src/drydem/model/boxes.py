@@ -9,6 +9,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from drydem import compiled_cache
 from drydem.model.geometry import ConvexPolyhedron
 
 
@@ -45,3 +46,6 @@ def _sort_and_sweep(lo, hi, movable, margin):
     for k in range(len(found)):
         pairs[k, 0], pairs[k, 1] = found[k]
     return pairs
+
+
+compiled_cache.check(__name__)  # last: none of the functions above is loaded from a stale cache

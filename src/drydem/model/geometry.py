@@ -20,12 +20,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
-from scipy.spatial import ConvexHull, QhullError
 
 from drydem.errors import GeometryError
+
+if TYPE_CHECKING:
+    from scipy.spatial import ConvexHull
 
 #: Relative tolerance (fraction of the block's size) for "on the hull" and "coplanar".
 RELATIVE_TOLERANCE = 1e-9
@@ -104,6 +106,8 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
         raise GeometryError(f"{name}: vertices contain NaN or infinite coordinates")
     if len(pts) < 4:
         raise GeometryError(f"{name}: a block needs at least 4 vertices, got {len(pts)}")
+    from scipy.spatial import ConvexHull, QhullError  # here: scipy.spatial takes a fifth of a second to import
+
     scale = float(np.linalg.norm(pts.max(0) - pts.min(0)))
     try:
         hull = ConvexHull(pts)

@@ -17,6 +17,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from drydem import compiled_cache
+
 #: rotation angle (rad) below which the update uses the series of cos and sin (module docstring)
 SERIES_ANGLE = 0.01
 
@@ -121,3 +123,6 @@ def turn_angles(q_from: np.ndarray, q_to: np.ndarray) -> np.ndarray:
     2 arccos |q_from . q_to|. Cheap, for comparing turns with a threshold (arccos loses digits
     below ~1e-8 rad; :func:`rotation_vectors` does not)."""
     return 2.0 * np.arccos(np.minimum(np.abs(np.einsum("ni,ni->n", q_from, q_to)), 1.0))
+
+
+compiled_cache.check(__name__)  # last: none of the functions above is loaded from a stale cache

@@ -1,0 +1,98 @@
+"""Start-up times: ``drydem --help``, ``import drydem`` and a one-block tilt end to end.
+
+Issue 19's goals: ``drydem --help`` <= 0.3 s; a one-block tilt (a brick on a fixed base, the
+model file of tests/test_model_file.py, every output written) <= 1 s with the kernels in numba's
+cache. Each time is the median of --runs fresh processes, after one run not counted (it writes
+Python's bytecode and, if the kernels are not cached yet, compiles them: it says so), with
+Python's bytecode cache on as in an installed package (PYTHONDONTWRITEBYTECODE removed); the
+bare interpreter's start (``python -c pass``) is printed for scale, and the tilt on one thread
+too: on a machine whose cores other processes keep busy, numba's parallel loops wait for their
+threads at every cycle, and the default (all cores) can be ten times slower.
+
+Run: python benchmarks/bench_start.py [--runs 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+#: the command line of ``drydem`` in this interpreter
+DRYDEM = [sys.executable, "-c", "from drydem.cli import main; main()"]
+#: a brick on a fixed base (tests/test_model_file.py's GOOD): it slides at atan 0.5 = 26.6 deg
+ONE_BLOCK = """
+[material]
+density = 1800.0
+[joint]
+kn = 3e7
+ks = 3e7
+friction = 0.5
+[contacts]
+points_per_length = 4
+[supports]
+fix_y = true
+[[block]]
+name = "base"
+fixed = true
+box = { min = [-0.05, -0.006, -0.01], max = [0.25, 0.006, 0.0] }
+[[block]]
+name = "brick"
+vertices = [[0, -0.006, 0], [0.025, -0.006, 0], [0.025, 0.006, 0], [0, 0.006, 0],
+            [0, -0.006, 0.0055], [0.025, -0.006, 0.0055], [0.025, 0.006, 0.0055], [0, 0.006, 0.0055]]
+"""
+#: the goals, s (None: printed for scale)
+GOALS_S = {"python -c pass": None, "python -c 'import drydem'": None, "drydem --help": 0.3, "drydem tilt one_block.toml": 1.0,
+           "  the same, --threads 1": 1.0}
+
+
+def seconds(command: list[str], env: dict[str, str]) -> float:
+    """Wall time of ``command`` run to its end, s (it must succeed)."""
+    start = time.perf_counter()
+    subprocess.run(command, check=True, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return time.perf_counter() - start
+
+
+def median_s(command_for_run, runs: int, env: dict[str, str]) -> float:
+    """Median wall time of ``runs`` runs of ``command_for_run(k)``, after a first run not counted."""
+    first = subprocess.run(command_for_run(0), check=True, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    said = [line for line in first.stderr.replace("\r", "\n").splitlines() if line.startswith("compiled in ")]
+    if said:
+        print(f"  (the first, uncounted run compiled the kernels: {said[-1]})", flush=True)
+    return statistics.median(seconds(command_for_run(k), env) for k in range(1, runs + 1))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=5, help="runs timed per command")
+    args = parser.parse_args()
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    folder = Path(tempfile.mkdtemp(prefix="bench_start-"))
+    try:
+        model = folder / "one_block.toml"
+        model.write_text(ONE_BLOCK)
+        commands = {
+            "python -c pass": lambda k: [sys.executable, "-c", "pass"],
+            "python -c 'import drydem'": lambda k: [sys.executable, "-c", "import drydem"],
+            "drydem --help": lambda k: [*DRYDEM, "--help"],
+            "drydem tilt one_block.toml": lambda k: [*DRYDEM, "tilt", str(model), "--out", str(folder / f"run-{k}")],
+            "  the same, --threads 1": lambda k: [*DRYDEM, "tilt", str(model), "--threads", "1", "--out", str(folder / f"one-{k}")],
+        }
+        print(f"{'command':<28} {'median (s)':>10} {'goal (s)':>9} {'/ goal':>7}   ({args.runs} runs, {os.cpu_count()} cores)")
+        for name, command in commands.items():
+            measured = median_s(command, args.runs, env)
+            goal = GOALS_S[name]
+            ratio = "-" if goal is None else f"{measured / goal:.2f}"
+            print(f"{name:<28} {measured:10.3f} {'-' if goal is None else f'{goal:.1f}':>9} {ratio:>7}", flush=True)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()
