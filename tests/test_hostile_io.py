@@ -201,8 +201,12 @@ def test_ctrl_c_while_a_checkpoint_is_written_comes_after_it_is_whole(tmp_path, 
     sim = dd.Simulation(dd.build_model([dd.Block(name="base", shape=dd.box([0, 0, -1], [1, 1, 0]), fixed=True),
                                         dd.Block(name="brick", shape=dd.box([0, 0, 0], [1, 1, 1]))], density=1800.0))
     path = tmp_path / "checkpoint.npz"
-    with pytest.raises(KeyboardInterrupt):
-        checkpoint.save_checkpoint(path, sim.snapshot(), {"theta_deg": 1.5})
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)  # Ctrl-C's own, whatever a test before set
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            checkpoint.save_checkpoint(path, sim.snapshot(), {"theta_deg": 1.5})
+    finally:
+        signal.signal(signal.SIGINT, previous)
     snapshot, progress = checkpoint.load_checkpoint(path)
     assert float(progress["theta_deg"]) == 1.5 and np.array_equal(snapshot.state.position, sim.state.position)
     assert [p.name for p in tmp_path.iterdir()] == ["checkpoint.npz"]

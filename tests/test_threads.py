@@ -13,7 +13,8 @@ import drydem as dd
 from drydem.engine import cycle3d, cycle_planar, loop
 from drydem.engine.damping import Damping
 from drydem.engine.joints import kernel_joint
-from drydem.engine.threads import available, get_threads, set_threads, using_threads
+from drydem.engine import threads as kernel_threads
+from drydem.engine.threads import available, get_threads, set_threads, threads_for, using_threads
 from drydem.errors import DrydemError
 from drydem.masonry.building import SMALL, building_model
 from conftest import layout_blocks, tilted_gravity
@@ -30,6 +31,12 @@ def two_course_building() -> dd.Model:
                                door_height_courses=0)
     model = building_model(spec)
     return model.replace(joint=dd.JointMaterial(kn=3e7, ks=3e7, friction=model.joint.friction))
+
+
+@pytest.fixture
+def every_thread_busy(monkeypatch):
+    """Models this small run on one thread (threads_for): here they take all they are given."""
+    monkeypatch.setattr(kernel_threads, "SUBCONTACTS_PER_THREAD", 1)
 
 
 def motion(model, threads, cycles, gravity, engine="numba"):
@@ -52,7 +59,7 @@ def assert_bit_identical(runs):
 
 
 @pytest.mark.skipif(len(THREAD_COUNTS) < 2, reason="one core: nothing to compare")
-def test_every_thread_count_moves_a_3d_building_the_same_bit_for_bit():
+def test_every_thread_count_moves_a_3d_building_the_same_bit_for_bit(every_thread_busy):
     """10,000 undamped cycles of a two-course building on a table tilted 15 deg, 30 deg out of its
     walls' planes: the blocks rock and slide in all six degrees of freedom (contacts re-detected
     on the way), and 1, 2 and all threads end in the same state, bit for bit."""
@@ -66,7 +73,7 @@ def test_every_thread_count_moves_a_3d_building_the_same_bit_for_bit():
 
 
 @pytest.mark.skipif(len(THREAD_COUNTS) < 2, reason="one core: nothing to compare")
-def test_every_thread_count_moves_an_in_plane_wall_the_same_bit_for_bit():
+def test_every_thread_count_moves_an_in_plane_wall_the_same_bit_for_bit(every_thread_busy):
     """The planar kernel: the built-in wall WD3 on a table tilted to 20 deg (collapsing, so contacts
     open, close and are re-detected), 10,000 cycles on 1, 2 and all threads."""
     from drydem.io.target import load_target
@@ -136,6 +143,15 @@ def test_block_incidence_lists_each_blocks_contacts_in_increasing_order():
     assert empty[0].tolist() == [0, 0, 0, 0] and len(empty[1]) == 0
 
 
+
+def test_a_cycle_takes_a_thread_per_twenty_thousand_sub_contacts_up_to_the_setting():
+    per = kernel_threads.SUBCONTACTS_PER_THREAD
+    with using_threads(available()):
+        assert threads_for(0) == threads_for(per - 1) == threads_for(2 * per - 1) == 1
+        assert threads_for(2 * per) == min(2, available()) and threads_for(10**9) == available()
+    with using_threads(1):
+        assert threads_for(10**9) == 1
+
 def test_set_threads_takes_a_count_from_one_to_all_cores_and_using_threads_restores_it():
     before = get_threads()
     with using_threads(1) as n:
@@ -179,6 +195,6 @@ def test_threads_option_sets_the_kernels_threads_or_says_what_is_allowed():
             assert run.exit_code == 2 and "Traceback" not in run.output and "--threads" in run.output
             if bad != "two":
                 assert f"must be an integer in [1, {available()}]" in run.output
-        assert "Threads for the compiled kernels (default: all cores)." in runner.invoke(command, ["--help"]).output
+        assert "Most threads for the compiled kernels (default: all cores;" in runner.invoke(command, ["--help"]).output
     finally:
         set_threads(before)

@@ -114,7 +114,7 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
     when interrupted (the last equilibrium is kept for --resume)."""
     from tqdm import tqdm
 
-    from drydem.analysis.tilt import NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY, check_loading, monitor_index, tilt_analysis
+    from drydem.analysis.tilt import CHECKPOINT_EVERY_S, NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY, check_loading, monitor_index, tilt_analysis
     from drydem.engine.checkpoint import load_checkpoint
     from drydem.io.results import PushoverWriter
     from drydem.io.vtk import VtkSeries
@@ -162,7 +162,7 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
         except OSError as exc:
             raise click.ClickException(f"{exc.filename or folder}: cannot write results ({exc.strerror or exc})") from None
         except KeyboardInterrupt:
-            saved = f"the last equilibrium is saved in {folder / CHECKPOINT}" if (folder / CHECKPOINT).is_file() else "no equilibrium was reached yet"
+            saved = f"the run is saved in {folder / CHECKPOINT} (up to {CHECKPOINT_EVERY_S:g} s before)" if (folder / CHECKPOINT).is_file() else "no equilibrium was reached yet"
             click.echo(f"\ninterrupted ({received.name}); {saved}. Go on with {go_on}", err=True)
             raise SystemExit(128 + received.number) from None
     _tilt_outputs(found, model, result, folder, series)

@@ -27,6 +27,7 @@ from drydem.engine.contacts import NeighbourList, SubContacts, closing_motion
 from drydem.engine.damping import Damping
 from drydem.engine.inertia import BlockConstants, keep_kinetic_energy, timestep_and_blocks
 from drydem.engine.joints import kernel_joint
+from drydem.engine.threads import threads_for, using_threads
 from drydem.engine.tracker import ContactTracker
 from drydem.errors import DivergenceError, ModelError
 from drydem.model.assembly import Model
@@ -285,7 +286,9 @@ class Simulation:
                 AT_REST if ground is None else ground[done:done + chunk], self.closure_limit, self._first_velocity_dt,
             )
             tracker = self.tracker
-            n, code, ratio, speed = self.run_cycles(self.state, blocks or self.blocks, tracker.contacts, joint, settings, tracker.broad_state, tracker.neighbours)
+            with using_threads(threads_for(tracker.contacts.count)):
+                n, code, ratio, speed = self.run_cycles(self.state, blocks or self.blocks, tracker.contacts, joint, settings,
+                                                        tracker.broad_state, tracker.neighbours)
             stats = StepStats(ratio, speed)
             self._first_velocity_dt = self.timestep
             done += n
@@ -302,7 +305,8 @@ class Simulation:
             if code == loop.CONVERGED:
                 break
             if code == loop.REDETECT:
-                self.tracker.detect(self.state)
+                with using_threads(threads_for(self.tracker.contacts.count)):
+                    self.tracker.detect(self.state)
                 detections += 1
             if code in (loop.REDETECT, loop.STIFFENED):
                 self._update_inertia()

@@ -1,7 +1,7 @@
 """How many threads the compiled kernels run on.
 
 The cycles (:mod:`drydem.engine.cycle3d`) run their loops over blocks and contacts on numba's
-threads, all the cores by default (``numba.config.NUMBA_NUM_THREADS``, itself set by the
+threads, as many as the model's size is worth (:func:`threads_for`) up to all the cores by default (``numba.config.NUMBA_NUM_THREADS``, itself set by the
 environment variable NUMBA_NUM_THREADS). Every thread count gives the same numbers, bit for bit:
 each contact writes its own sums and each block adds its contacts' in contact order, so a
 result does not depend on the machine's cores or on this setting, only its speed does.
@@ -24,6 +24,21 @@ def available() -> int:
     """The most threads the kernels may run on: numba's thread pool (NUMBA_NUM_THREADS, by
     default the machine's cores)."""
     return int(numba.config.NUMBA_NUM_THREADS)
+
+
+#: the sub-contacts each thread of a cycle takes: a model with fewer runs on fewer threads (one
+#: below twice this). Waking a thread costs about what a cycle of a few thousand sub-contacts
+#: does (benchmarks/bench_threads.py: 2 threads ran 1.3e3 sub-contacts at 36 % efficiency, 73 %
+#: from 3.4e4), and a thread waits for a core: with one of the 2 cores busy elsewhere, a
+#: one-block tilt took 54-72 s on 2 threads and 2.3 s on one (2026-11-25)
+SUBCONTACTS_PER_THREAD = 20_000
+
+
+def threads_for(subcontacts: int) -> int:
+    """The threads a cycle of ``subcontacts`` sub-contacts runs on: one per
+    :data:`SUBCONTACTS_PER_THREAD`, at least one and at most :func:`get_threads` (the setting,
+    ``--threads``). Any count gives the same numbers (module docstring): only the speed."""
+    return max(1, min(get_threads(), subcontacts // SUBCONTACTS_PER_THREAD))
 
 
 def thread_rule() -> Range:

@@ -382,25 +382,7 @@ def calibrate_stiffness(search: StiffnessSearch, results: Path, executor: Execut
     found: dict[float, Evaluation] = {}
 
     def evaluate(kn: float) -> Evaluation:
-        specs = search.runs(kn)
-        outcome = sweep(specs, results, executor, in_flight=in_flight)
-        if outcome.elsewhere:
-            raise CalibrationError(f"kn = {kn:.4g}: {outcome.elsewhere} of its runs are being computed by another drydem process "
-                                   f"on {results} (their claims: {Path(results) / 'runs'}/*.lock); run calibrate again when it has finished")
-        records, unreadable = {}, []
-        for design, spec in zip(search.designs, specs):
-            try:
-                records[design] = read_record(record_path(results, spec.id))
-            except RecordError as exc:
-                unreadable.append(str(exc))
-        if unreadable:
-            raise CalibrationError(f"kn = {kn:.4g}: run records that cannot be read:\n  " + "\n  ".join(unreadable))
-        try:
-            angles = calibration_angles(records)
-        except CalibrationError as exc:
-            raise CalibrationError(f"kn = {kn:.4g}: {exc}") from None
-        evaluation = Evaluation(kn, search.ks_ratio * kn, mean_absolute_relative_error(angles, experiment), angles,
-                                {d: spec.id for d, spec in zip(search.designs, specs)})
+        evaluation, outcome = evaluated(search, kn, results, executor, experiment, in_flight=in_flight)
         if on_evaluation is not None:
             on_evaluation(kn, evaluation.error, outcome)
         return evaluation
@@ -420,3 +402,31 @@ def calibrate_stiffness(search: StiffnessSearch, results: Path, executor: Execut
     if out is not None:
         write_calibration(out, calibration_content(search, result.evaluations, result))
     return result
+
+
+def evaluated(search: StiffnessSearch, kn: float, results: Path, executor: Executor, experiment: Mapping[str, float], *,
+              in_flight: int | None = None) -> tuple[Evaluation, SweepOutcome]:
+    """The objective at ``kn``: its walls' runs swept into ``results`` on ``executor`` (those
+    recorded reused), their collapse angles against ``experiment`` (deg); and the sweep's
+    outcome. CalibrationError when runs are being computed by another process, cannot be read
+    or found no angle."""
+    specs = search.runs(kn)
+    outcome = sweep(specs, results, executor, in_flight=in_flight)
+    if outcome.elsewhere:
+        raise CalibrationError(f"kn = {kn:.4g}: {outcome.elsewhere} of its runs are being computed by another drydem process "
+                               f"on {results} (their claims: {Path(results) / 'runs'}/*.lock); run calibrate again when it has finished")
+    records, unreadable = {}, []
+    for design, spec in zip(search.designs, specs):
+        try:
+            records[design] = read_record(record_path(results, spec.id))
+        except RecordError as exc:
+            unreadable.append(str(exc))
+    if unreadable:
+        raise CalibrationError(f"kn = {kn:.4g}: run records that cannot be read:\n  " + "\n  ".join(unreadable))
+    try:
+        angles = calibration_angles(records)
+    except CalibrationError as exc:
+        raise CalibrationError(f"kn = {kn:.4g}: {exc}") from None
+    evaluation = Evaluation(kn, search.ks_ratio * kn, mean_absolute_relative_error(angles, experiment), angles,
+                            {d: spec.id for d, spec in zip(search.designs, specs)})
+    return evaluation, outcome

@@ -7,6 +7,7 @@ and what it does with each equilibrium."""
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -22,6 +23,10 @@ from drydem.model.assembly import Model
 
 #: states past collapse are sampled this many times per chunk_cycles (drydem tilt --vtk)
 FRAME_SAMPLING = 10
+#: s of run between two checkpoints: an equilibrium is saved if the last save is this old (the
+#: first always). Saving every step took a quarter of a one-block tilt's 4 s; a kill now costs
+#: at most this much work again
+CHECKPOINT_EVERY_S = 5.0
 
 
 @dataclass
@@ -31,8 +36,9 @@ class TiltProtocol:
     ``theta``: the tilt of the last equilibrium (deg); ``step``: the step to take next (deg);
     ``records``: the equilibria found. Each equilibrium is handed to ``on_record`` and
     ``on_frame`` as it is found, saved to ``checkpoint`` (with ``fingerprint``,
-    :mod:`~drydem.analysis.tilt.checkpointing`) and, where it may be gone back to (adaptive
-    steps, or frames to replay), kept as ``last_good`` (:meth:`TiltRun.save`)."""
+    :mod:`~drydem.analysis.tilt.checkpointing`) when the last save is ``checkpoint_every_s``
+    old (time.monotonic() of the last: ``saved_at``) and, where it may be gone back to
+    (adaptive steps, or frames to replay), kept as ``last_good`` (:meth:`TiltRun.save`)."""
 
     run: TiltRun
     step: float
@@ -40,6 +46,8 @@ class TiltProtocol:
     on_record: Callable[[Record], None] | None = None
     on_frame: Callable[[Frame], None] | None = None
     checkpoint: Path | None = None
+    checkpoint_every_s: float = CHECKPOINT_EVERY_S
+    saved_at: float = -math.inf
     theta: float = 0.0
     records: list[Record] = field(default_factory=list)
     last_good: Saved | None = None
@@ -55,8 +63,9 @@ class TiltProtocol:
             self.on_record(self.records[-1])
         if self.on_frame is not None:
             self.on_frame(self.run.frame("equilibrium", theta))
-        if self.checkpoint is not None:
+        if self.checkpoint is not None and time.monotonic() - self.saved_at >= self.checkpoint_every_s:
             checkpointing.save(self.checkpoint, self.run, self.records, theta, self.step, self.fingerprint)
+            self.saved_at = time.monotonic()
         self.keep()
 
     def keep(self) -> None:
@@ -151,6 +160,7 @@ def tilt_analysis(
     on_progress: Callable[[float, int, float], None] | None = None,
     on_frame: Callable[[Frame], None] | None = None,
     checkpoint: Path | None = None,
+    checkpoint_every_s: float = CHECKPOINT_EVERY_S,
     resume: bool = False,
 ) -> TiltResult:
     """Run the tilting-table (or multiplier) protocol on ``model`` (see :mod:`drydem.analysis.tilt`).
@@ -161,7 +171,8 @@ def tilt_analysis(
     states past collapse: the last step is replayed from the last equilibrium, sampled every
     ``chunk_cycles / FRAME_SAMPLING`` cycles (the result is that of the analysis itself; the
     replay only shows it, and costs nothing unless ``on_frame`` is given).
-    With ``checkpoint`` (a path), the run is saved there at every equilibrium state; with
+    With ``checkpoint`` (a path), the run is saved there at an equilibrium state at least every
+    ``checkpoint_every_s`` s of run (the first at once; 0: at every one); with
     ``resume`` too, it goes on from that file instead of starting over (ModelError naming the
     settings that differ if it is of another model or protocol), and ``on_record`` is first
     called for the equilibria the checkpoint holds.
@@ -169,7 +180,7 @@ def tilt_analysis(
     start = time.perf_counter()
     run = TiltRun(model, settings, on_progress)
     fingerprint = checkpointing.fingerprint(model, settings)
-    protocol = TiltProtocol(run, settings.first_step(), fingerprint, on_record, on_frame, checkpoint)
+    protocol = TiltProtocol(run, settings.first_step(), fingerprint, on_record, on_frame, checkpoint, checkpoint_every_s)
     if resume:
         protocol.resume()
         stable = True
