@@ -20,6 +20,9 @@ EC8_DRIFT_MEANINGS = {
     0.0075: "ductile non-structural elements",
     0.01: "non-structural elements not interfering, or none (the DLS of Savalle et al. 2022)",
 }
+#: the drift whose angle is the DLS angle (Savalle et al. 2022, Section 5); summary.json's key for
+#: it is ``repr(DLS_DRIFT)``, "0.01"
+DLS_DRIFT = 0.01
 
 
 def drift_limit_angles(angle_deg, drift, limits=EC8_DRIFT_LIMITS) -> dict[float, float | None]:

@@ -43,6 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from drydem import __version__
+from drydem.analysis.drift import DLS_DRIFT
 from drydem.analysis.tilt import TiltSettings, tilt_analysis
 from drydem.errors import DrydemError
 from drydem.io.results import PushoverWriter, tilt_summary, write_summary
@@ -50,9 +51,6 @@ from drydem.masonry.imperfections import Imperfections, imperfect_model
 from drydem.masonry.walls import Wall
 from drydem.parametric.calibrate import wall_angle
 
-#: the drift whose angle is the DLS angle (EN 1998-1 4.4.3.2; Savalle et al. 2022, Section 5),
-#: a key of the tilt summary's ``drift_limit_angles_deg``
-DLS_DRIFT = "0.01"
 #: the percentile reported as ``p05``
 PERCENTILE = 5.0
 SAMPLES_FOLDER = "samples"
@@ -161,7 +159,7 @@ def sample_entry(summary: dict) -> dict:
     if sample["status"] != "ok":
         return entry | {"collapse_angle_deg": None, "dls_angle_deg": None, "ended_by": None, "error": sample["error"],
                         "runtime_s": sample["runtime_s"]}
-    return entry | {"collapse_angle_deg": wall_angle(summary), "dls_angle_deg": summary["drift_limit_angles_deg"][DLS_DRIFT],
+    return entry | {"collapse_angle_deg": wall_angle(summary), "dls_angle_deg": summary["drift_limit_angles_deg"][repr(DLS_DRIFT)],
                     "ended_by": summary["ended_by"], "runtime_s": sample["runtime_s"]}
 
 

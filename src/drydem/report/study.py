@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drydem.analysis.drift import EC8_DRIFT_LIMITS
+from drydem.analysis.drift import DLS_DRIFT, EC8_DRIFT_LIMITS
 from drydem.errors import DrydemError
 from drydem.masonry.published import savalle2022
 from drydem.parametric.records import RecordError, load_records
@@ -57,8 +57,6 @@ YOURS_NOTE = (
     "Collapse angle: the last tilt in equilibrium; '>= X': no equilibrium within max_cycles after X deg, and no collapse "
     "either (a lower bound); 'cannot stand': the model falls under its own weight. DLS: the tilt at which the monitored "
     "drift first reaches 1 % (EN 1998-1 4.4.3.2, the paper's damage limit state); '-': never before the collapse.")
-#: the drift of the damage limit state, the paper's DLS angle (Savalle et al. 2022, Section 5)
-DLS_DRIFT = 0.01
 NOTE = ("drydem's WD1-WD7 are reconstructions that obey the competition brief, not the original drawings "
         "(which drydem does not have): compare trends and rankings, not single numbers.")
 
@@ -88,7 +86,7 @@ def angle_text(summary: dict) -> str:
 
 
 def dls_angle(summary: dict) -> float | None:
-    """A tilting run's DLS angle (deg): the tilt at 1 % drift (:data:`DLS_DRIFT`), None if never reached."""
+    """A tilting run's DLS angle (deg): the tilt at 1 % drift (:data:`drydem.analysis.drift.DLS_DRIFT`), None if never reached."""
     return summary["drift_limit_angles_deg"].get(repr(DLS_DRIFT))
 
 
