@@ -5,9 +5,10 @@ model file of tests/test_model_file.py, every output written) <= 1 s with the ke
 cache. Each time is the median of --runs fresh processes, after one run not counted (it writes
 Python's bytecode and, if the kernels are not cached yet, compiles them: it says so), with
 Python's bytecode cache on as in an installed package (PYTHONDONTWRITEBYTECODE removed); the
-bare interpreter's start (``python -c pass``) is printed for scale, and the tilt on one thread
-too: on a machine whose cores other processes keep busy, numba's parallel loops wait for their
-threads at every cycle, and the default (all cores) can be ten times slower.
+bare interpreter's start (``python -c pass``) is printed for scale, and the tilt with
+``--threads 1`` too: the two must be alike, a one-block model taking one thread whatever the
+setting (drydem.engine.threads.threads_for; before it, with the other core busy, the default
+2 threads took 54-72 s, numba's parallel loops waiting for a core at every cycle).
 
 Run: python benchmarks/bench_start.py [--runs 5]
 """
