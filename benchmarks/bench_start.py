@@ -27,27 +27,8 @@ from pathlib import Path
 
 #: the command line of ``drydem`` in this interpreter
 DRYDEM = [sys.executable, "-c", "from drydem.cli import main; main()"]
-#: a brick on a fixed base (tests/test_model_file.py's GOOD): it slides at atan 0.5 = 26.6 deg
-ONE_BLOCK = """
-[material]
-density = 1800.0
-[joint]
-kn = 3e7
-ks = 3e7
-friction = 0.5
-[contacts]
-points_per_length = 4
-[supports]
-fix_y = true
-[[block]]
-name = "base"
-fixed = true
-box = { min = [-0.05, -0.006, -0.01], max = [0.25, 0.006, 0.0] }
-[[block]]
-name = "brick"
-vertices = [[0, -0.006, 0], [0.025, -0.006, 0], [0.025, 0.006, 0], [0, 0.006, 0],
-            [0, -0.006, 0.0055], [0.025, -0.006, 0.0055], [0.025, 0.006, 0.0055], [0, 0.006, 0.0055]]
-"""
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the model lives with the tests
+from test_model_file import GOOD as ONE_BLOCK  # noqa: E402  a brick on a fixed base: it slides at atan 0.5 = 26.6 deg
 #: the goals, s (None: printed for scale)
 GOALS_S = {"python -c pass": None, "python -c 'import drydem'": None, "drydem --help": 0.3, "drydem tilt one_block.toml": 1.0,
            "  the same, --threads 1": 1.0}

@@ -156,12 +156,18 @@ def test_a_box_stack_written_by_compas_checks_in_drydem(tmp_path):
     assert load_target(str(path)).model.block_name == ("a", "b")
 
 
-def test_limit_analysis_of_a_slender_compas_block_gives_b_over_h(tmp_path):
+def slender_compas_file(tmp_path) -> Path:
+    """A 10 mm wide (x), 40 mm tall block saved by compas, no support marked."""
     compas = pytest.importorskip("compas")
-    # 10 mm wide (x), 40 mm tall, friction 1: rigid toppling at lambda = b / h = 0.25 (tests/test_limit.py)
     (mesh,) = box_meshes([("slender", [0.005, 0.006, 0.02], (0.01, 0.012, 0.04), False)])
     path = tmp_path / "slender.json"
     compas.json_dump(mesh, path)
+    return path
+
+
+def test_limit_analysis_of_a_slender_compas_block_gives_b_over_h(tmp_path):
+    # friction 1: rigid toppling at lambda = b / h = 0.25 (tests/test_limit.py)
+    path = slender_compas_file(tmp_path)
     out = tmp_path / "limit"
     result = CliRunner().invoke(main, ["limit", str(path), "--friction", "1.0", "--out", str(out)])
     assert result.exit_code == 0, result.output
@@ -171,14 +177,11 @@ def test_limit_analysis_of_a_slender_compas_block_gives_b_over_h(tmp_path):
 
 @pytest.mark.slow
 def test_a_slender_compas_block_topples_at_atan_b_over_h(tmp_path):
-    compas = pytest.importorskip("compas")
     # 10 mm wide (x), 40 mm tall: the weight passes the downhill edge at tan(theta) = 1/4, 14.04 deg;
     # friction 1 so it cannot slide first, stiff joints so that the elastic rotation is negligible
     # (tests/test_tilt.py); no support marked: drydem stands it on an added base, which reaches 50 mm
     # beyond it, so that the toppled block lies on it: the collapse is where it has moved 10 mm
-    (mesh,) = box_meshes([("slender", [0.005, 0.006, 0.02], (0.01, 0.012, 0.04), False)])
-    path = tmp_path / "slender.json"
-    compas.json_dump(mesh, path)
+    path = slender_compas_file(tmp_path)
     out = tmp_path / "results"
     result = CliRunner().invoke(main, ["tilt", str(path), "--increment", "0.5", "--kn", "1e10", "--ks", "1e10",
                                        "--friction", "1.0", "--stop-displacement", "0.01", "--out", str(out)])

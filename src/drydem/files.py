@@ -87,17 +87,23 @@ def uninterrupted():
         for number in held:
             signal.raise_signal(number)
 
+def read_text(path: Path, expected: str) -> str:
+    """The UTF-8 text of ``path``; ModelError naming the file if it cannot be read, or if it is not
+    text, then saying what was ``expected`` of it."""
+    try:
+        return path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
+    except UnicodeDecodeError as exc:
+        raise ModelError(f"{path}: not a text file (byte {exc.start} is not UTF-8); {expected}") from None
+
+
 def read_toml(path: Path) -> tuple[dict, str]:
     """A TOML file's tables and its text (for line numbers); ModelError naming the file if it
     cannot be read or parsed."""
     if path.is_dir():
         raise ModelError(f"{path}: is a directory, not a TOML file")
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ModelError(f"{path}: cannot read the file ({exc.strerror})") from None
-    except UnicodeDecodeError as exc:
-        raise ModelError(f"{path}: not a text file (byte {exc.start} is not UTF-8); a model, wall or study file is TOML text") from None
+    text = read_text(path, "a model, wall or study file is TOML text")
     try:
         return tomllib.loads(text), text
     except tomllib.TOMLDecodeError as exc:

@@ -53,6 +53,7 @@ from pathlib import Path
 import numpy as np
 
 from drydem.errors import ModelError
+from drydem.files import read_text
 from drydem.io.mesh import closed_convex_block
 from drydem.model.assembly import Block, Model
 
@@ -86,12 +87,7 @@ def read_compas(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], 
     """The blocks of a compas JSON file (coordinates times ``unit_m``, m) and notes on what was
     assumed (names made unique). See the module docstring for the formats."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ModelError(f"{path}: cannot read: {exc.strerror or exc}") from None
-    except UnicodeDecodeError as exc:
-        raise ModelError(f"{path}: not a text file (byte {exc.start} is not UTF-8); drydem reads {READS}") from None
+    text = read_text(path, f"drydem reads {READS}")
     try:
         data = json.loads(text)
     except json.JSONDecodeError as exc:
