@@ -288,10 +288,10 @@ class StiffnessCalibration:
                 "angles_deg": angles, "largest_deg": angles[wall], "wall": wall, "kn": [e.kn for e in group], "how": NOISE_METHOD}
 
     def to_dataframe(self):
-        """The evaluations and then the probes as a pandas DataFrame (:func:`drydem.analysis.tilt.settings.data_frame`), one
+        """The evaluations and then the probes as a pandas DataFrame (:func:`drydem.analysis.dataframes.data_frame`), one
         row each: ``kn_Pa_m``, ``ks_Pa_m``, ``error`` (the objective, a fraction), ``probe`` (True for a noise
         probe), and each wall's ``angle_WALL_deg``; ``attrs``: ``best_kn_Pa_m``, ``best_error``, ``noise``, ``settings``."""
-        from drydem.analysis.tilt.settings import data_frame
+        from drydem.analysis.dataframes import data_frame
 
         rows = [(e, False) for e in self.evaluations] + [(e, True) for e in self.probes]
         columns = {"kn_Pa_m": [e.kn for e, _ in rows], "ks_Pa_m": [e.ks for e, _ in rows], "error": [e.error for e, _ in rows],

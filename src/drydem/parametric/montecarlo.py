@@ -308,12 +308,12 @@ SAMPLE_COLUMNS = ("index", "seed", "status", "collapse_angle_deg", "dls_angle_de
 def samples_dataframe(summary: dict):
     """A Monte Carlo run's samples, from its top ``summary`` (:func:`run_summary`, as in
     ``OUT/summary.json``), as a pandas DataFrame
-    (:func:`drydem.analysis.tilt.settings.data_frame`), one row per sample in index order:
+    (:func:`drydem.analysis.dataframes.data_frame`), one row per sample in index order:
     ``index``, ``seed``, ``status``, ``collapse_angle_deg`` (0 for a wall that cannot stand,
     NaN without a verdict), ``dls_angle_deg``, ``ended_by``, ``runtime_s``, ``error`` (missing
     unless it failed); ``attrs``: the statistics (``collapse_angle_deg``, ``dls_angle_deg``),
     ``excluded``, ``settings`` and ``target``."""
-    from drydem.analysis.tilt.settings import data_frame
+    from drydem.analysis.dataframes import data_frame
 
     samples = summary["samples"]
     columns = {name: [sample.get(name) for sample in samples] for name in SAMPLE_COLUMNS}

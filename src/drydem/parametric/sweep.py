@@ -238,7 +238,7 @@ def sweep(runs: Iterable[RunSpec], results: Path, executor: Executor, *, retry_f
 
 def records_dataframe(results: Path):
     """The run records of a results folder (:func:`drydem.parametric.records.load_records`) as a
-    pandas DataFrame (:func:`drydem.analysis.tilt.settings.data_frame`), one row per valid
+    pandas DataFrame (:func:`drydem.analysis.dataframes.data_frame`), one row per valid
     record in name order: ``id``, ``status``, ``error``, ``runtime_s``, the run's parameters
     (:class:`~drydem.parametric.study.RunSpec`'s fields, kn and ks as ``kn_Pa_m`` and
     ``ks_Pa_m``), then every number, text or flag of its summary under the summary's own name
@@ -246,7 +246,7 @@ def records_dataframe(results: Path):
     NaN where a run's analysis has no such value) and a tilting run's drift-limit angles as
     ``drift_LIMIT_angle_deg``; ``attrs``: ``corrupt``, the corrupt records' errors, left out.
     DrydemError if ``results`` is not a folder."""
-    from drydem.analysis.tilt.settings import data_frame
+    from drydem.analysis.dataframes import data_frame
 
     if not Path(results).is_dir():
         raise DrydemError(f"{results}: no such results folder (a sweep's --out, which holds runs/ID.json)")

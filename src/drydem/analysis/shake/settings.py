@@ -165,14 +165,14 @@ class ShakeResult:
 
     def to_dataframe(self):
         """The response history as a pandas DataFrame
-        (:func:`~drydem.analysis.tilt.settings.data_frame`), one row per output interval
+        (:func:`~drydem.analysis.dataframes.data_frame`), one row per output interval
         (:class:`History`): ``time_s``, the table's acceleration ``ground_acc_x_m_s2``,
         ``ground_acc_y_m_s2``, ``ground_acc_z_m_s2``, the monitored block's ``ux_m``, ``uy_m``,
         ``uz_m`` and ``rotation_rad``; ``attrs``: the outcome (``overturned``, ``fallen_blocks``
         as (block, time_s, rule), ``max_rotation_rad``, ``max_displacement_m``,
         ``residual_displacement_m``, ``pga_m_s2``, ``ended_by``, ``monitored_block``,
         ``contact_damping_ratio``, ``restitution``, ``duration_s``) and the ``motion``'s name."""
-        from drydem.analysis.tilt.settings import data_frame
+        from drydem.analysis.dataframes import data_frame
 
         h = self.history
         columns = {"time_s": h.time_s} | {f"ground_acc_{axis}_m_s2": h.ground_acceleration_m_s2[:, k] for k, axis in enumerate("xyz")}

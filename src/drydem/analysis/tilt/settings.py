@@ -1,8 +1,7 @@
 """What the tilting analysis is given and gives back: its settings (:class:`TiltSettings`,
 checked against :data:`SETTING_RANGES`), the outcome names, the states it reports
 (:class:`Record`, :class:`Frame`, :class:`TiltResult`), and the block it monitors and the wall
-height its drift is measured against; and :func:`data_frame`, which every result's
-``to_dataframe`` makes its pandas DataFrame with (pandas is optional: imported there only)."""
+height its drift is measured against."""
 
 from __future__ import annotations
 
@@ -11,9 +10,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from drydem.analysis.dataframes import data_frame
 from drydem.analysis.drift import drift_limit_angles
 from drydem.engine.contacts import SubContacts
-from drydem.errors import DrydemError, ModelError
+from drydem.errors import ModelError
 from drydem.model.assembly import Model
 from drydem.model.parameters import FLAG, G, LOAD_DIRECTION, TILT_AXES, OneOf, Range, check_fields
 from drydem.model.state import State
@@ -188,7 +188,7 @@ class TiltResult:
         return drift_limit_angles([r.tilt_deg for r in self.records], [r.drift for r in self.records])
 
     def to_dataframe(self):
-        """The pushover curve as a pandas DataFrame (:func:`data_frame`), one row per equilibrium
+        """The pushover curve as a pandas DataFrame (:func:`drydem.analysis.dataframes.data_frame`), one row per equilibrium
         state (:class:`Record`) in the columns of ``pushover.csv``: ``tilt_deg``,
         ``load_multiplier``, ``ux_m``, ``uz_m`` (the monitored block's displacement along the
         load direction and vertically, m), ``drift``, ``cycles``; ``attrs``: the outcome
@@ -200,19 +200,6 @@ class TiltResult:
         outcome = ("collapse_angle_deg", "load_multiplier", "last_equilibrium_deg", "stable_under_gravity", "ended_by",
                    "drift_limit_angles_deg", "lost_blocks", "monitored_block", "wall_height_m", "cycles", "runtime_s")
         return data_frame(columns, {name: getattr(self, name) for name in outcome})
-
-
-def data_frame(columns: dict[str, list], attrs: dict):
-    """``columns`` (name: one value per row) as a pandas DataFrame whose ``attrs`` are ``attrs``
-    (what the rows do not hold). pandas, an optional dependency (``pip install 'drydem[data]'``),
-    is imported here only; DrydemError saying how to install it when it is missing."""
-    try:
-        import pandas
-    except ImportError:
-        raise DrydemError("a DataFrame needs pandas, which is not installed: pip install pandas (or pip install 'drydem[data]')") from None
-    frame = pandas.DataFrame(columns)
-    frame.attrs.update(attrs)
-    return frame
 
 
 def monitored_block(model: Model, tilt_axis: str = "y") -> int:
