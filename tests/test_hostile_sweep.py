@@ -207,8 +207,8 @@ def test_a_report_leaves_out_corrupt_records_and_names_them(folder):
     assert "1 runs recorded (0 failed)" in text and "1 corrupt records left out" in text and str(broken) in text
 
 
-def test_a_report_of_a_folder_without_runs_says_it_is_not_a_study(tmp_path):
-    refused(invoke("report", tmp_path), f"{tmp_path}: no runs/ folder, so not the results of a study")
+def test_a_report_of_a_folder_without_runs_says_it_has_nothing_to_report(tmp_path):
+    refused(invoke("report", tmp_path), f"{tmp_path}: nothing to report: no runs/ folder")
 
 
 # --- claims: one run, one sweep -------------------------------------------------------------

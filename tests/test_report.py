@@ -211,3 +211,61 @@ def test_a_file_named_after_a_paper_wall_or_a_paper_wall_at_another_friction_is_
     assert "| perforated_wall | kn 1e+10 Pa/m, ks 1e+10 Pa/m | - | - | adaptive | 0.1 | >= 22.9 |" in yours
     assert f"- `{broken.id}`: ModelError: made up" in section(text, "Your targets: runs without published values")
     assert text.count("(figures/yours") == 5  # one pushover figure per target with a curve: the 5 targets
+
+
+def test_the_folders_of_tilt_and_limit_runs_are_reported_as_the_users_runs(tmp_path):
+    """`drydem tilt` and `drydem limit` run one by one into results/NAME: the report reads their
+    folders (summary.json, pushover.csv) beside a sweep's records, and without a run of the
+    paper's walls it leaves the paper's tables and figures out."""
+    model = tmp_path / "pier.toml"
+    model.write_text(PIER)
+    results = tmp_path / "results"
+    tilted = CliRunner().invoke(main, ["tilt", str(model), "--increment", "1.0", "--fixed", "--out", str(results / "pier-tilt")])
+    limited = CliRunner().invoke(main, ["limit", str(model), "--out", str(results / "pier-limit")])
+    assert tilted.exit_code == 0 and limited.exit_code == 0, tilted.output + limited.output
+    reported = CliRunner().invoke(main, ["report", str(results)])
+    assert reported.exit_code == 0, reported.output
+    text = (results / "report" / "report.md").read_text()
+    assert "2 runs recorded (0 failed), 2 of them in the folders of `drydem tilt` and `drydem limit` runs" in text
+    # the same rows as the sweep's runs of the pier (test_a_sweep_over_a_users_model_file_and_a_paper_wall_reports_both)
+    assert "| pier.toml | kn 1e+08 Pa/m, ks 1e+08 Pa/m | 0.5 | 4 | fixed | 1 | 24.0 |" in section(text, "Your targets: tilting runs")
+    assert "| pier.toml | 0.5 | associative | 24.4 | 0.4545 |" in section(text, "Your targets: limit analyses")
+    assert (results / "report" / "figures" / "yours1_pier-toml_pushover.png").stat().st_size > 5_000
+    assert "No run of the paper's walls" in text and "## Table" not in text and "(figures/fig" not in text
+
+
+def test_a_run_folder_of_a_paper_wall_goes_to_the_papers_tables(tmp_path):
+    """A run folder whose summary names a built-in paper wall (as `drydem tilt WD3` records it)
+    at kn = 3e7 fills that wall's row of Table 3; its model file's path would make it the user's."""
+    import json
+
+    from drydem.parametric.records import run_folder_record
+
+    model = tmp_path / "pier.toml"
+    model.write_text(PIER)
+    run = tmp_path / "WD3-run"
+    tilted = CliRunner().invoke(main, ["tilt", str(model), "--kn", "3e7", "--ks", "3e7", "--increment", "1.0", "--out", str(run)])
+    assert tilted.exit_code == 0, tilted.output
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["target"] == str(model.resolve())
+    assert run_folder_record(run)["spec"]["target"] == str(model.resolve())
+    (run / "summary.json").write_text(json.dumps(summary | {"target": "WD3"}))
+    text = build_report(tmp_path).markdown.read_text()
+    angle = summary["collapse_angle_deg"]
+    assert f"| WD3 | 19.8 | 20.1 | {angle:.1f} |" in section(text, "Table 3") and "Your targets" not in text
+
+
+def test_a_broken_run_folder_is_named_and_left_out_and_an_empty_folder_has_nothing_to_report(tmp_path):
+    empty = CliRunner().invoke(main, ["report", str(tmp_path)])
+    assert empty.exit_code == 1 and f"{tmp_path}: nothing to report: no runs/ folder" in empty.output
+    assert "Traceback" not in empty.output
+    (tmp_path / "cut").mkdir()
+    (tmp_path / "cut" / "summary.json").write_text('{"collapse_angle_deg": ')
+    (tmp_path / "shake").mkdir()
+    (tmp_path / "shake" / "summary.json").write_text('{"overturned": false}')  # another analysis: not read
+    write_record(tmp_path, limit_record("WD2", "associative"))
+    reported = CliRunner().invoke(main, ["report", str(tmp_path)])
+    assert reported.exit_code == 0, reported.output
+    assert f"corrupt record left out: {tmp_path / 'cut' / 'summary.json'}: not JSON" in reported.output
+    text = (tmp_path / "report" / "report.md").read_text()
+    assert "1 runs recorded (0 failed)." in text and str(tmp_path / "cut" / "summary.json") in text

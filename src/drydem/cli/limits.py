@@ -63,7 +63,7 @@ def limit(target, non_associative, friction, tilt_axis, out, overwrite, unit) ->
             stop.set()
             ticker.join()
     runtime = time.perf_counter() - start
-    write_summary(out, limit_summary(result, settings, model, runtime))
+    write_summary(out, {"target": found.recorded} | limit_summary(result, settings, model, runtime))
     label = "LA-NA" if non_associative else "LA-A"
     limit_mechanism_figure(model, result, out / "mechanism.png", title=f"{label} mechanism (shape exaggerated)",
                            load_direction=LOAD_DIRECTION[tilt_axis])

@@ -77,10 +77,12 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
 @click.argument("results_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), help="Report folder (default: RESULTS_DIR/report).")
 def report(results_dir: Path, out: Path | None) -> None:
-    """Write the report of a study (Markdown, HTML, PNG figures): the paper's tables and figures
-    with drydem's values beside the published ones, and the runs of your own targets (wall,
-    model and geometry files, other built-in targets) in their own tables and pushover figures;
-    corrupt records are left out and named."""
+    """Write the report of the runs in RESULTS_DIR (Markdown, HTML, PNG figures): a sweep's
+    records (RESULTS_DIR/runs) and the folders of `drydem tilt` and `drydem limit` runs (RESULTS_DIR
+    and its sub-folders, e.g. `drydem report results`); the paper's tables and figures with
+    drydem's values beside the published ones (when a run is of its walls), and the runs of your
+    own targets (wall, model and geometry files, other built-in targets) in their own tables and
+    pushover figures; corrupt records are left out and named."""
     from drydem.report.study import build_report
 
     try:

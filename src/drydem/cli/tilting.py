@@ -176,7 +176,7 @@ def _tilt_outputs(found: Target, model: Model, result, folder: Path, series) -> 
     from drydem.io.results import tilt_summary, write_summary
     from drydem.report.plots import mechanism_figure, pushover_figure
 
-    write_summary(folder, tilt_summary(result, model))
+    write_summary(folder, {"target": found.recorded} | tilt_summary(result, model))
     pushover_figure(result, folder / "pushover.png", title=found.name)
     last = result.last_equilibrium_deg
     lost_by_then = frozenset(name for name, theta in result.lost_blocks if last is not None and theta <= last)

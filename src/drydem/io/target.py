@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from drydem.masonry import designs
@@ -27,6 +27,13 @@ class Target:
     model: Model
     wall: Wall | None = None
     notes: tuple[str, ...] = ()
+    builtin: bool = False
+
+    @property
+    def recorded(self) -> str:
+        """The target as a result's summary records it, as a sweep's run does (RunSpec.target): a
+        built-in's name, a file's absolute path (so that a report tells the user's from the paper's)."""
+        return self.name if self.builtin else str(self.path.resolve())
 
 
 def load_target(target: str, *, unit_m: float = 1.0) -> Target:
@@ -36,15 +43,20 @@ def load_target(target: str, *, unit_m: float = 1.0) -> Target:
     give metres). Imported blocks stand on a fixed base block (drydem.model.assembly.base_under) and
     get the default material and options. ModelError says what was tried."""
     path = Path(target)
-    if not path.is_file():
-        if target in BUILDINGS:
-            return Target(target, Path(target), builtin_building(target))
-        builtin = designs.find(target)
-        if builtin is None:
-            what = "a folder, not a file" if path.is_dir() else "no such file"
-            raise ModelError(f"{target}: {what}, and not a built-in wall ({', '.join(designs.names())}) "
-                             f"or building ({', '.join(BUILDINGS)})")
-        path = builtin
+    if path.is_file():
+        return _file_target(path, unit_m)
+    if target in BUILDINGS:
+        return Target(target, Path(target), builtin_building(target), builtin=True)
+    builtin = designs.find(target)
+    if builtin is None:
+        what = "a folder, not a file" if path.is_dir() else "no such file"
+        raise ModelError(f"{target}: {what}, and not a built-in wall ({', '.join(designs.names())}) "
+                         f"or building ({', '.join(BUILDINGS)})")
+    return replace(_file_target(builtin, unit_m), builtin=True)
+
+
+def _file_target(path: Path, unit_m: float) -> Target:
+    """The target in the file ``path`` (:func:`load_target`)."""
     suffix = path.suffix.lower()
     if suffix in MESH_SUFFIXES:
         model, notes = imported_model(path, unit_m=unit_m)

@@ -3,17 +3,22 @@ finishes, holds the parameters, the status ("ok" or "failed" with the error), th
 the pushover curve (empty for limit and shake runs). A record is checked when it is read: one
 that is not JSON, lacks a key, or whose parameters do not give its id is corrupt
 (:class:`RecordError`), and a sweep runs it again.
+
+The folder of a ``drydem tilt`` or ``drydem limit`` run (``--out``, by default
+``results/TARGET-TIME``) reads as a record too (:func:`run_folder_record`): so that a report
+holds the runs made one by one beside a sweep's.
 """
 
 from __future__ import annotations
 
+import csv
 import json
 import os
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from drydem.errors import DrydemError
-from drydem.parametric.study import ANALYSES, RunSpec
+from drydem.parametric.study import ANALYSES, RunSpec, joint_law_text
 
 
 class RecordError(DrydemError):
@@ -92,7 +97,11 @@ def _record_problem(record, run_id: str) -> str | None:
         return f"spec analysis = {spec.analysis!r}: must be one of {list(ANALYSES)}"
     if status == "failed":
         return None if isinstance(record["error"], str) else "error must be the run's error message"
-    summary, curve = record["summary"], record["pushover"]
+    return _result_problem(spec, record["summary"], record["pushover"])
+
+
+def _result_problem(spec: RunSpec, summary, curve) -> str | None:
+    """What is wrong with the ``summary`` and pushover ``curve`` of a finished run of ``spec``, or None."""
     if not isinstance(summary, dict) or not SUMMARY_KEYS[spec.analysis] <= set(summary):
         return f"summary must hold {sorted(SUMMARY_KEYS[spec.analysis])}"
     if spec.analysis == "shake":
@@ -146,4 +155,90 @@ def load_records(results: Path) -> Records:
             valid.append(read_record(path))
         except RecordError as exc:
             corrupt.append(exc)
+    return Records(valid, corrupt)
+
+
+#: a run folder's files: the summary (written when the run ends) and a tilt's pushover curve
+#: (:data:`drydem.io.results.PUSHOVER_COLUMNS`: tilt_deg, load_multiplier, ux_m, uz_m, drift, cycles)
+SUMMARY_FILE, PUSHOVER_FILE = "summary.json", "pushover.csv"
+#: the pushover.csv columns a record's curve keeps (:data:`CURVE_COLUMNS`: tilt, ux, uz, drift, cycles)
+CURVE_FROM_CSV = (0, 2, 3, 4, 5)
+#: the keys of a summary's joint table that are not a joint law's (:attr:`RunSpec.joint_law`)
+NOT_LAW_KEYS = {"kn", "ks", "friction", "cohesion", "tension"}
+
+
+def run_folder_record(folder: Path) -> dict | None:
+    """The folder of a ``drydem tilt`` or ``drydem limit`` run as an ok record: id the folder's
+    name; spec its target (the summary's, else its model's source), protocol, and the joint and
+    contact settings its model records (kn, ks, friction, points, joint law); its summary; a
+    tilt's curve from pushover.csv. None for a folder without summary.json (no run, or one not
+    finished) or of another analysis (a shake or Monte Carlo run's). RecordError naming the file
+    that cannot be read or is not what the run writes."""
+    path = Path(folder) / SUMMARY_FILE
+    if not path.is_file():
+        return None
+    summary = _json_file(path)
+    analysis = next((a for a in ("tilt", "limit") if isinstance(summary, dict) and SUMMARY_KEYS[a] | {"analysis", "model"} <= set(summary)), None)
+    if analysis is None:
+        return None
+    settings, model = summary["analysis"], summary["model"]
+    joint, contacts = (model.get(table) if isinstance(model, dict) else None for table in ("joint", "contacts"))
+    target = summary.get("target") or (model.get("source") if isinstance(model, dict) else None)
+    if not (isinstance(settings, dict) and isinstance(joint, dict) and isinstance(contacts, dict) and isinstance(target, str)):
+        raise RecordError(f"{path}: not a drydem {analysis} summary: it needs its target and its analysis, model joint and contacts tables")
+    if not all(_numeric(joint.get(key)) for key in ("kn", "ks", "friction")):
+        raise RecordError(f"{path}: model joint kn, ks and friction must be numbers (Pa/m, Pa/m, -), not "
+                          f"{joint.get('kn')!r}, {joint.get('ks')!r}, {joint.get('friction')!r}")
+    law = {k: v for k, v in joint.items() if k not in NOT_LAW_KEYS and v is not None}
+    spec = RunSpec(analysis=analysis, target=target, protocol=_protocol(analysis, summary), kn=joint.get("kn"), ks=joint.get("ks"),
+                   friction=joint.get("friction"), points=contacts.get("points_per_length"),
+                   increment_deg=settings.get("increment_deg") if analysis == "tilt" else None,
+                   joint_law=joint_law_text(law) if law.get("model", "constant") != "constant" else None)
+    curve = _pushover_csv(Path(folder) / PUSHOVER_FILE) if analysis == "tilt" else []
+    problem = _result_problem(spec, summary, curve)
+    if problem is not None:
+        raise RecordError(f"{path}: {problem}")
+    return {"id": Path(folder).resolve().name, "spec": asdict(spec), "status": "ok", "error": None, "summary": summary, "pushover": curve}
+
+
+def _protocol(analysis: str, summary: dict) -> str:
+    """A run folder's protocol (:data:`~drydem.parametric.study.ANALYSES`): a tilt's adaptive or fixed, a limit analysis' method."""
+    return ("adaptive" if summary["analysis"].get("adaptive") else "fixed") if analysis == "tilt" else str(summary["method"])
+
+
+def _json_file(path: Path):
+    """The JSON in ``path``; RecordError naming it if it cannot be read or is not JSON."""
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise RecordError(f"{path}: cannot read it ({exc.strerror})") from None
+    except ValueError as exc:
+        raise RecordError(f"{path}: not JSON, empty or cut short? ({exc})") from None
+
+
+def _pushover_csv(path: Path) -> list[list[float]]:
+    """A tilt's pushover.csv as a record's curve (:data:`CURVE_FROM_CSV`); RecordError naming the file."""
+    try:
+        with path.open(newline="", encoding="utf-8") as file:
+            rows = list(csv.reader(file))[1:]
+        return [[float(row[k]) for k in CURVE_FROM_CSV] for row in rows]
+    except OSError as exc:
+        raise RecordError(f"{path}: cannot read the run's pushover curve ({exc.strerror})") from None
+    except (ValueError, IndexError):
+        raise RecordError(f"{path}: not a pushover curve (rows of tilt_deg, load_multiplier, ux_m, uz_m, drift, cycles numbers)") from None
+
+
+def load_run_folders(results: Path) -> Records:
+    """The records of the ``drydem tilt`` and ``drydem limit`` run folders among ``results`` and
+    its sub-folders (:func:`run_folder_record`, in name order)."""
+    results = Path(results)
+    valid, corrupt = [], []
+    for folder in [results, *sorted(p for p in results.iterdir() if p.is_dir())]:
+        try:
+            record = run_folder_record(folder)
+        except RecordError as exc:
+            corrupt.append(exc)
+            continue
+        if record is not None:
+            valid.append(record)
     return Records(valid, corrupt)

@@ -1,6 +1,7 @@
 """The report of a parametric study (``drydem report RESULTS_DIR``), in the style of the seed
-paper: its figures (3, 6, 9-13) and tables (2-4) from the study's run records, drydem's values
-beside the paper's (drydem.masonry.published), in Markdown and HTML with PNG figures; and when
+paper: its figures (3, 6, 9-13) and tables (2-4) from the study's run records (a sweep's, and
+the folders of ``drydem tilt`` and ``drydem limit`` runs read as records:
+:func:`drydem.parametric.records.run_folder_record`), drydem's values beside the paper's (drydem.masonry.published), in Markdown and HTML with PNG figures; and when
 the study has shake runs, their incremental dynamic analysis (:mod:`drydem.report.ida`); when
 it has runs with a stress-dependent joint law, the calibrated law against the experiments
 (:mod:`drydem.report.joints`); when it has Monte Carlo runs (``RESULTS/montecarlo/NAME/``, each
@@ -12,6 +13,7 @@ them (:func:`paper_wall`: a built-in WD1-WD7 at the paper's friction); every oth
 limit run (a wall or model file of the user's, even one named WD3.toml, drydem's other built-in
 targets, a paper wall at another friction) is the user's: its own section (:func:`_yours`), with
 its collapse and DLS angles and its pushover curves, and no published values beside them.
+Without a run of the paper's walls, its tables and figures are left out.
 
 A figure or table whose runs are missing says so instead of failing: a report can be built
 from a study still running. A corrupt record is left out, and the report names its file.
@@ -29,7 +31,7 @@ import numpy as np
 from drydem.analysis.drift import DLS_DRIFT, EC8_DRIFT_LIMITS
 from drydem.errors import DrydemError
 from drydem.masonry.published import savalle2022
-from drydem.parametric.records import RecordError, load_records
+from drydem.parametric.records import SUMMARY_FILE, RecordError, Records, load_records, load_run_folders
 from drydem.files import replaced_atomically
 from drydem.report.joints import joint_law, law_words, relative_error_percent
 from drydem.report.plots import new_figure
@@ -57,6 +59,7 @@ YOURS_NOTE = (
     "Collapse angle: the last tilt in equilibrium; '>= X': no equilibrium within max_cycles after X deg, and no collapse "
     "either (a lower bound); 'cannot stand': the model falls under its own weight. DLS: the tilt at which the monitored "
     "drift first reaches 1 % (EN 1998-1 4.4.3.2, the paper's damage limit state); '-': never before the collapse.")
+NO_PAPER_RUNS = ("No run of the paper's walls (the built-in WD1-WD7 at its friction): its tables and figures are left out.")
 NOTE = ("drydem's WD1-WD7 are reconstructions that obey the competition brief, not the original drawings "
         "(which drydem does not have): compare trends and rankings, not single numbers.")
 
@@ -161,34 +164,36 @@ class Report:
 
 
 def build_report(results: Path, out: Path | None = None) -> Report:
-    """Write ``report.md``, ``report.html`` and ``figures/*.png`` for the study in ``results``;
-    ReportError if ``results`` holds no ``runs`` folder (not a study's results)."""
+    """Write ``report.md``, ``report.html`` and ``figures/*.png`` for the runs in ``results``: a
+    sweep's records (``runs/``), the folders of ``drydem tilt`` and ``drydem limit`` runs (itself
+    and its sub-folders: :func:`~drydem.parametric.records.load_run_folders`) and Monte Carlo
+    runs (``montecarlo/``); ReportError if it holds none of them. The paper's tables and figures
+    only when a run is of one of its walls (:func:`paper_wall`)."""
     import markdown
 
     results = Path(results)
-    if not (results / "runs").is_dir():
-        raise ReportError(f"{results}: no runs/ folder, so not the results of a study (`drydem sweep STUDY --out {results}` writes them)")
-    records = load_records(results)
+    swept, folders = load_records(results), load_run_folders(results)
+    if not ((results / "runs").is_dir() or folders.valid or folders.corrupt or (results / MONTECARLO_FOLDER).is_dir()):
+        raise ReportError(f"{results}: nothing to report: no runs/ folder (`drydem sweep STUDY --out {results}` writes one), no folder "
+                          f"of a `drydem tilt` or `drydem limit` run (its {SUMMARY_FILE}) and no {MONTECARLO_FOLDER}/ folder")
+    records = Records(swept.valid + folders.valid, swept.corrupt + folders.corrupt)
     runs = Runs(records.valid)
     out = Path(out or results / "report")
     figures = out / "figures"
     figures.mkdir(parents=True, exist_ok=True)
     paper = savalle2022()
+    of_paper = any(paper_wall(r) is not None for r in records.valid if r["spec"]["analysis"] in ("tilt", "limit"))
+    counted = f"{len(runs.ok)} runs recorded ({len(runs.failed)} failed)" + (
+        f", {len(folders.valid)} of them in the folders of `drydem tilt` and `drydem limit` runs" if folders.valid else "")
+    about = f"{NOTE} Published values: {paper['source'].split(' - ')[0]}." if of_paper else NO_PAPER_RUNS
     sections = [
         f"# Report of the study in `{results}`",
-        f"{len(runs.ok)} runs recorded ({len(runs.failed)} failed). {NOTE} Published values: {paper['source'].split(' - ')[0]}.",
+        f"{counted}. {about}",
         *([_corrupt(records.corrupt)] if records.corrupt else []),
         *_yours(records.valid, figures, paper),
-        _table2(runs, paper), _table3(runs, paper), _table4(runs, paper),
+        *(_paper_tables(runs, paper) if of_paper else []),
         *_laws(records.valid, runs),
-        _figure(figures, "fig03_contact_points", "Fig. 3: collapse angle of WD3 against contact points per length, kn = 3e7",
-                lambda ax: _contact_points(ax, runs)),
-        _figure(figures, "fig06_stiffness", "Fig. 6: collapse angle over the experimental one against kn = ks; grey: the experiments' mean CoV",
-                lambda ax: _stiffness(ax, runs, paper)),
-        *(_figure(figures, name, f"Figs 9-11: pushover curves of {', '.join(designs)} (fixed protocol), EC8 drift limits dashed",
-                  lambda axes, designs=designs: _pushover(axes, runs, designs), panels=len(designs)) for name, designs in PUSHOVER_FIGURES.items()),
-        _figure(figures, "fig12_dls", "Fig. 12: tilt angle at 1 % drift (damage limit state) against kn = ks", lambda ax: _dls(ax, runs)),
-        _figure(figures, "fig13_ks", "Fig. 13: WD6, influence of ks on the pushover curve (panels: kn)", lambda axes: _ks(axes, runs), panels=4),
+        *(_paper_figures(figures, runs, paper) if of_paper else []),
         *(_ida(figures, runs) if any(r["spec"]["analysis"] == "shake" for r in records.valid) else []),
         *_montecarlo(results, figures, paper),
     ]
@@ -199,6 +204,25 @@ def build_report(results: Path, out: Path | None = None) -> Report:
                              f"<style>table{{border-collapse:collapse}}td,th{{border:1px solid #999;padding:2px 6px}}</style>"
                              f"</head><body>\n{body}\n</body></html>\n")
     return Report(out / "report.md", out / "report.html", records.corrupt)
+
+
+def _paper_tables(runs: Runs, paper: dict) -> list[str]:
+    """The paper's Tables 2-4, drydem's values beside the published ones."""
+    return [_table2(runs, paper), _table3(runs, paper), _table4(runs, paper)]
+
+
+def _paper_figures(figures: Path, runs: Runs, paper: dict) -> list[str]:
+    """The paper's Figs 3, 6, 9-13 drawn from the runs (each says so where it has none)."""
+    return [
+        _figure(figures, "fig03_contact_points", "Fig. 3: collapse angle of WD3 against contact points per length, kn = 3e7",
+                lambda ax: _contact_points(ax, runs)),
+        _figure(figures, "fig06_stiffness", "Fig. 6: collapse angle over the experimental one against kn = ks; grey: the experiments' mean CoV",
+                lambda ax: _stiffness(ax, runs, paper)),
+        *(_figure(figures, name, f"Figs 9-11: pushover curves of {', '.join(designs)} (fixed protocol), EC8 drift limits dashed",
+                  lambda axes, designs=designs: _pushover(axes, runs, designs), panels=len(designs)) for name, designs in PUSHOVER_FIGURES.items()),
+        _figure(figures, "fig12_dls", "Fig. 12: tilt angle at 1 % drift (damage limit state) against kn = ks", lambda ax: _dls(ax, runs)),
+        _figure(figures, "fig13_ks", "Fig. 13: WD6, influence of ks on the pushover curve (panels: kn)", lambda axes: _ks(axes, runs), panels=4),
+    ]
 
 
 def _write(path: Path, text: str) -> None:
