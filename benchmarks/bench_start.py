@@ -10,6 +10,15 @@ bare interpreter's start (``python -c pass``) is printed for scale, and the tilt
 setting (drydem.engine.threads.threads_for; before it, with the other core busy, the default
 2 threads took 54-72 s, numba's parallel loops waiting for a core at every cycle).
 
+The floor under the tilt, printed too: ``import numba``, then the first call of any cached
+kernel, a one-block box sweep (numba builds its target context then: it imports
+numba.np.arraymath, whose BLAS check imports scipy.linalg, whatever the kernel), and the import
+of matplotlib's Figure and Agg canvas (the figures). Measured 2026-11-25 (2 cores, idle):
+python + numpy ~0.1 s, import numba 0.30 s, numba's first call 0.36-0.40 s (0.25 s of it
+scipy.linalg), matplotlib 0.34-0.44 s, drawing and writing the two figures 0.45 s: the first
+two alone are ~0.8 s of the 1 s goal before drydem reads its model, which is why the one-block
+tilt stays at ~2 s.
+
 Run: python benchmarks/bench_start.py [--runs 5]
 """
 
@@ -31,7 +40,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the mo
 from test_model_file import GOOD as ONE_BLOCK  # noqa: E402  a brick on a fixed base: it slides at atan 0.5 = 26.6 deg
 #: the goals, s (None: printed for scale)
 GOALS_S = {"python -c pass": None, "python -c 'import drydem'": None, "drydem --help": 0.3, "drydem tilt one_block.toml": 1.0,
-           "  the same, --threads 1": 1.0}
+           "  the same, --threads 1": 1.0, "floor: import numba": None, "  + first cached call": None, "  matplotlib Figure, Agg": None}
+#: the first call of a cached kernel (drydem.model.boxes' sort and sweep of one box): numba's target context built
+FIRST_CALL = ("import numpy as np; from drydem.model.boxes import overlapping_pairs; "
+              "overlapping_pairs(np.zeros((1, 3)), np.ones((1, 3)), np.ones(1, bool), 0.0)")
 
 
 def seconds(command: list[str], env: dict[str, str]) -> float:
@@ -65,6 +77,9 @@ def main() -> None:
             "drydem --help": lambda k: [*DRYDEM, "--help"],
             "drydem tilt one_block.toml": lambda k: [*DRYDEM, "tilt", str(model), "--out", str(folder / f"run-{k}")],
             "  the same, --threads 1": lambda k: [*DRYDEM, "tilt", str(model), "--threads", "1", "--out", str(folder / f"one-{k}")],
+            "floor: import numba": lambda k: [sys.executable, "-c", "import numba"],
+            "  + first cached call": lambda k: [sys.executable, "-c", FIRST_CALL],
+            "  matplotlib Figure, Agg": lambda k: [sys.executable, "-c", "import matplotlib.figure, matplotlib.backends.backend_agg"],
         }
         print(f"{'command':<28} {'median (s)':>10} {'goal (s)':>9} {'/ goal':>7}   ({args.runs} runs, {os.cpu_count()} cores)")
         for name, command in commands.items():

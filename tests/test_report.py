@@ -266,6 +266,6 @@ def test_a_broken_run_folder_is_named_and_left_out_and_an_empty_folder_has_nothi
     write_record(tmp_path, limit_record("WD2", "associative"))
     reported = CliRunner().invoke(main, ["report", str(tmp_path)])
     assert reported.exit_code == 0, reported.output
-    assert f"corrupt record left out: {tmp_path / 'cut' / 'summary.json'}: not JSON" in reported.output
+    assert f"corrupt record left out: {tmp_path / 'cut' / 'summary.json'}: not a JSON summary" in reported.output
     text = (tmp_path / "report" / "report.md").read_text()
     assert "1 runs recorded (0 failed)." in text and str(tmp_path / "cut" / "summary.json") in text

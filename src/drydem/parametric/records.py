@@ -62,16 +62,22 @@ def read_record(path: str | Path) -> dict:
     the file and what is wrong otherwise (a sweep killed while writing one without the atomic
     write, a disk full, a hand edit)."""
     path = Path(path)
-    try:
-        record = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise RecordError(f"{path}: cannot read the record ({exc.strerror})") from None
-    except ValueError as exc:  # not JSON, or not UTF-8
-        raise RecordError(f"{path}: not a JSON record, empty or cut short? ({exc})") from None
+    record = _read_json(path, "record")
     problem = _record_problem(record, path.name.removesuffix(".json"))
     if problem is not None:
         raise RecordError(f"{path}: {problem}")
     return record
+
+
+def _read_json(path: Path, what: str):
+    """The JSON in ``path``, a run's ``what`` (record, summary); RecordError naming the file if it
+    cannot be read or is not JSON (a run killed while writing it without the atomic write, a hand edit)."""
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise RecordError(f"{path}: cannot read the {what} ({exc.strerror})") from None
+    except ValueError as exc:  # not JSON, or not UTF-8
+        raise RecordError(f"{path}: not a JSON {what}, empty or cut short? ({exc})") from None
 
 
 def _record_problem(record, run_id: str) -> str | None:
@@ -177,7 +183,7 @@ def run_folder_record(folder: Path) -> dict | None:
     path = Path(folder) / SUMMARY_FILE
     if not path.is_file():
         return None
-    summary = _json_file(path)
+    summary = _read_json(path, "summary")
     analysis = next((a for a in ("tilt", "limit") if isinstance(summary, dict) and SUMMARY_KEYS[a] | {"analysis", "model"} <= set(summary)), None)
     if analysis is None:
         return None
@@ -206,14 +212,6 @@ def _protocol(analysis: str, summary: dict) -> str:
     return ("adaptive" if summary["analysis"].get("adaptive") else "fixed") if analysis == "tilt" else str(summary["method"])
 
 
-def _json_file(path: Path):
-    """The JSON in ``path``; RecordError naming it if it cannot be read or is not JSON."""
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise RecordError(f"{path}: cannot read it ({exc.strerror})") from None
-    except ValueError as exc:
-        raise RecordError(f"{path}: not JSON, empty or cut short? ({exc})") from None
 
 
 def _pushover_csv(path: Path) -> list[list[float]]:
