@@ -288,12 +288,11 @@ def test_a_prism_resting_edge_on_edge_on_a_crossed_one_carries_its_weight_with_t
     """The upper prism, apex edge down across the lower one's apex edge at 90 deg, balanced: one
     crossed-edge contact (normal z), carrying the weight W at rest with the closure
     W / (kn A), A the nominal point area h^2 / 4 (h = L / 3, L = 2 R / sqrt(3), R the prisms'
-    circumradius). Built 1 m up (the model's overlap check tests face normals only) and lowered
-    onto the edge for the start."""
+    circumradius). Built touching (the model's overlap check finds the crossed edges' depth 0:
+    tests/test_geometry.py)."""
     kn = 1e9
-    model = dd.build_model(prisms(lift=1.0), density=2400.0, joint=dd.JointMaterial(kn=kn, ks=kn, friction=0.8))
+    model = dd.build_model(prisms(lift=0.0), density=2400.0, joint=dd.JointMaterial(kn=kn, ks=kn, friction=0.8))
     start = State.at_rest(model.block_centroid)
-    start.position[1, 2] -= 1.0
     sim = dd.Simulation(model, state=start)
     assert sim.contacts.count == 1
     np.testing.assert_allclose(np.abs(sim.contacts.normal_body[0]), [0, 0, 1], atol=1e-12)

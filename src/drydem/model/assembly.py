@@ -17,7 +17,7 @@ import numpy as np
 
 from drydem.errors import ModelError
 from drydem.model.boxes import bounds, overlapping_pairs
-from drydem.model.geometry import ConvexPolyhedron, FlatGeometry, box
+from drydem.model.geometry import PARALLEL_SINE, ConvexPolyhedron, FlatGeometry, box
 from drydem.model.parameters import DENSITY, ContactDensity, ContactSettings, JointMaterial, SolverSettings, Supports
 from drydem.model.rotation import matrices
 
@@ -282,43 +282,52 @@ def _check_overlaps(model: Model) -> None:
         )
 
 
-#: pairs of :func:`penetration_depths` are taken this many (pair, vertex, face) entries at a time
+#: pairs of :func:`penetration_depths` are taken this many (pair, vertex, face or edge axis) entries at a time
 DEPTH_CHUNK = 1 << 21
 
 
 def penetration_depths(shapes: list[ConvexPolyhedron], pairs: np.ndarray) -> np.ndarray:
     """(P,) :func:`~drydem.model.geometry.penetration_depth` of each pair (i, j) of ``pairs``
-    (P, 2) of ``shapes``, m, vectorised: each block's vertices and face planes padded to the
-    most any block has (repeating one of its own, which changes no minimum or maximum), then
-    the separations of both blocks' faces, in chunks; the reference face chosen with the same
-    tie rule (:func:`~drydem.model.geometry.best_separation`)."""
+    (P, 2) of ``shapes``, m, vectorised: each block's vertices, face planes and edge directions
+    padded to the most any block has (repeating one of its own, which changes no minimum or
+    maximum), then the separations along both blocks' faces and their edges' cross products, in
+    chunks; the reference face chosen with the same tie rule (:func:`~drydem.model.geometry.best_separation`)."""
     pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
     if not len(pairs):
         return np.zeros(0)
     used = np.unique(pairs)
     at = np.full(len(shapes), -1, dtype=np.int64)
     at[used] = np.arange(len(used))
-    nv = max(len(shapes[b].vertices) for b in used)
-    nf = max(len(shapes[b].face_normals) for b in used)
-    vertices = np.empty((len(used), nv, 3))
-    normals = np.empty((len(used), nf, 3))
-    offsets = np.empty((len(used), nf))
-    size = np.empty(len(used))
-    for k, b in enumerate(used):
-        s = shapes[b]
-        v, n = s.vertices, s.face_normals
-        vertices[k, :len(v)], vertices[k, len(v):] = v, v[0]
-        normals[k, :len(n)], normals[k, len(n):] = n, n[-1]
-        offsets[k, :len(n)] = np.einsum("fi,fi->f", n, v[[f[0] for f in s.faces]])
-        offsets[k, len(n):] = offsets[k, len(n) - 1]
-        size[k] = s.size
+    vertices = _padded([shapes[b].vertices for b in used])
+    normals = _padded([shapes[b].face_normals for b in used])
+    edges = _padded([shapes[b].edge_directions for b in used])
+    offsets = _padded([np.einsum("fi,fi->f", shapes[b].face_normals, shapes[b].vertices[[f[0] for f in shapes[b].faces]]) for b in used])
+    size = np.array([shapes[b].size for b in used])
     depth = np.empty(len(pairs))
-    step = max(1, DEPTH_CHUNK // (nv * nf))
+    step = max(1, DEPTH_CHUNK // (vertices.shape[1] * max(normals.shape[1], edges.shape[1] ** 2)))
     for start in range(0, len(pairs), step):
         a, b = at[pairs[start:start + step, 0]], at[pairs[start:start + step, 1]]
         sa = (vertices[b] @ normals[a].transpose(0, 2, 1)).min(axis=1) - offsets[a]
         sb = (vertices[a] @ normals[b].transpose(0, 2, 1)).min(axis=1) - offsets[b]
         fa, fb = sa.max(axis=1), sb.max(axis=1)
         tie = 1e-9 * np.minimum(size[a], size[b])
-        depth[start:start + step] = -np.where(fa >= fb - tie, fa, fb)
+        faces = np.where(fa >= fb - tie, fa, fb)
+        depth[start:start + step] = -np.maximum(faces, _edge_separations(vertices[a], vertices[b], edges[a], edges[b]))
     return depth
+
+
+def _padded(rows: list[np.ndarray]) -> np.ndarray:
+    """(n, most, ...) the arrays ``rows`` stacked, each padded to the longest by repeating its last row."""
+    most = max(len(r) for r in rows)
+    return np.stack([np.concatenate([r, np.repeat(r[-1:], most - len(r), axis=0)]) for r in rows])
+
+
+def _edge_separations(va: np.ndarray, vb: np.ndarray, ea: np.ndarray, eb: np.ndarray) -> np.ndarray:
+    """(P,) :func:`~drydem.model.geometry.edge_separation` of P pairs: vertices (P, nv, 3), edge directions (P, ne, 3)."""
+    axes = np.cross(ea[:, :, None], eb[:, None]).reshape(len(ea), -1, 3)
+    length = np.linalg.norm(axes, axis=2)
+    parallel = length <= PARALLEL_SINE
+    axes = axes / np.where(parallel, 1.0, length)[..., None]
+    pa, pb = va @ axes.transpose(0, 2, 1), vb @ axes.transpose(0, 2, 1)
+    gaps = np.maximum(pb.min(axis=1) - pa.max(axis=1), pa.min(axis=1) - pb.max(axis=1))
+    return np.where(parallel, -np.inf, gaps).max(axis=1)
