@@ -173,3 +173,14 @@ def test_no_law_nor_montecarlo_section_without_their_runs(tmp_path):
     text = build_report(results).markdown.read_text()
     assert "Stress-dependent" not in text and "Monte Carlo" not in text
     assert not (results / "report" / "figures" / "montecarlo_cov.png").exists()
+
+
+def test_a_montecarlo_runs_own_out_folder_is_reported_too(tmp_path):
+    """`drydem montecarlo WD3 --out results/mc-WD3` (the README's) keeps its run in a folder of
+    its own: `drydem report results` finds it by its samples/ folder, beside a study's montecarlo/."""
+    results = folder(tmp_path, [])
+    made = montecarlo_summary(results, "mc-WD3", "WD3", [19.0, 20.0, 21.0], Imperfections(height_sd_mm=0.1))
+    (results / "montecarlo" / "mc-WD3").rename(results / "mc-WD3")
+    (results / "mc-WD3" / "samples").mkdir()
+    table = section(build_report(results).markdown.read_text(), "Monte Carlo scatter of the collapse angle")
+    assert f"| WD3 | mc-WD3 | 3 | {made['mean']:.2f} |" in table

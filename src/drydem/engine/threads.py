@@ -27,11 +27,13 @@ def available() -> int:
 
 
 #: the sub-contacts each thread of a cycle takes: a model with fewer runs on fewer threads (one
-#: below twice this). Waking a thread costs about what a cycle of a few thousand sub-contacts
-#: does (benchmarks/bench_threads.py: 2 threads ran 1.3e3 sub-contacts at 36 % efficiency, 73 %
-#: from 3.4e4), and a thread waits for a core: with one of the 2 cores busy elsewhere, a
-#: one-block tilt took 54-72 s on 2 threads and 2.3 s on one (2026-11-25)
-SUBCONTACTS_PER_THREAD = 20_000
+#: below twice this). Waking a thread costs about what a cycle of a thousand sub-contacts does
+#: (benchmarks/bench_threads.py, 2 idle cores: 2 threads ran 1.3e3 sub-contacts at 75 %
+#: efficiency, 3.9e3 to 7.4e4 at 69-100 %; the 60 x 60 wall's 3.6e4 at 86 %, 306 against 528 us
+#: a cycle), and a thread waits for a core: with one of the 2 cores busy elsewhere, a one-block
+#: tilt took 54-72 s on 2 threads and 2.3 s on one (2026-11-25). So the paper's walls (~1e3)
+#: keep one thread, and from 1e4 a model takes two (the 60 x 60 wall had one at 20,000 a thread)
+SUBCONTACTS_PER_THREAD = 5_000
 
 
 def threads_for(subcontacts: int) -> int:

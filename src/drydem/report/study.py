@@ -4,8 +4,8 @@ the folders of ``drydem tilt`` and ``drydem limit`` runs read as records:
 :func:`drydem.parametric.records.run_folder_record`), drydem's values beside the paper's (drydem.masonry.published), in Markdown and HTML with PNG figures; and when
 the study has shake runs, their incremental dynamic analysis (:mod:`drydem.report.ida`); when
 it has runs with a stress-dependent joint law, the calibrated law against the experiments
-(:mod:`drydem.report.joints`); when it has Monte Carlo runs (``RESULTS/montecarlo/NAME/``, each
-``drydem montecarlo``'s folder), the scatter of their collapse angles against the experiments'.
+(:mod:`drydem.report.joints`); when it has Monte Carlo runs (``RESULTS/montecarlo/NAME/`` or
+``RESULTS/NAME/``, each ``drydem montecarlo``'s folder), the scatter of their collapse angles against the experiments'.
 
 The paper's tables and figures are of constant joints: a run with a joint law is never taken
 for the constant-kn run at its kn. They take the runs of the paper's walls as the paper ran
@@ -46,7 +46,7 @@ MONTECARLO_TITLE = "Monte Carlo scatter of the collapse angle"
 #: the statistics of a Monte Carlo summary's collapse angle the report shows (count aside)
 MONTECARLO_STATISTICS = ("mean", "std", "cov", "p05")
 MONTECARLO_NOTE = (
-    "Each row a `drydem montecarlo` run in montecarlo/NAME: the statistics of its collapse angles over the samples with a verdict, "
+    "Each row a `drydem montecarlo` run (its folder, NAME, in montecarlo/ or in the results folder): the statistics of its collapse angles over the samples with a verdict, "
     "a sample that cannot stand under its own weight counting as 0 deg (samples: how many; std with ddof = 1; p05 the 5th "
     "percentile), with the imperfections drawn; experiment: the mean and CoV "
     "of the wall's tests (Savalle et al. 2022, Table 1; '-': not one of its walls).")
@@ -167,15 +167,15 @@ def build_report(results: Path, out: Path | None = None) -> Report:
     """Write ``report.md``, ``report.html`` and ``figures/*.png`` for the runs in ``results``: a
     sweep's records (``runs/``), the folders of ``drydem tilt`` and ``drydem limit`` runs (itself
     and its sub-folders: :func:`~drydem.parametric.records.load_run_folders`) and Monte Carlo
-    runs (``montecarlo/``); ReportError if it holds none of them. The paper's tables and figures
-    only when a run is of one of its walls (:func:`paper_wall`)."""
+    runs (:func:`montecarlo_summaries`); ReportError if it holds none of them. The paper's
+    tables and figures only when a run is of one of its walls (:func:`paper_wall`)."""
     import markdown
 
     results = Path(results)
     swept, folders = load_records(results), load_run_folders(results)
-    if not ((results / "runs").is_dir() or folders.valid or folders.corrupt or (results / MONTECARLO_FOLDER).is_dir()):
-        raise ReportError(f"{results}: nothing to report: no runs/ folder (`drydem sweep STUDY --out {results}` writes one), no folder "
-                          f"of a `drydem tilt` or `drydem limit` run (its {SUMMARY_FILE}) and no {MONTECARLO_FOLDER}/ folder")
+    if not ((results / "runs").is_dir() or folders.valid or folders.corrupt or montecarlo_summaries(results)):
+        raise ReportError(f"{results}: nothing to report: no runs/ folder (`drydem sweep STUDY --out {results}` writes one) and no "
+                          f"folder of a `drydem tilt`, `drydem limit` or `drydem montecarlo` run (its {SUMMARY_FILE})")
     records = Records(swept.valid + folders.valid, swept.corrupt + folders.corrupt)
     runs = Runs(records.valid)
     out = Path(out or results / "report")
@@ -391,11 +391,22 @@ def read_montecarlo(path: Path) -> MonteCarloRun:
     return MonteCarloRun(Path(path).parent.name, str(summary["target"]["name"]), collapse, str(imperfections))
 
 
+def montecarlo_summaries(results: Path) -> list[Path]:
+    """The top summaries of the Monte Carlo runs in ``results``: a study's (``montecarlo/*/``)
+    and the folders of ``drydem montecarlo --out`` runs among ``results`` and its sub-folders
+    (a summary.json beside a samples/ folder)."""
+    results = Path(results)
+    kept = sorted((results / MONTECARLO_FOLDER).glob(f"*/{SUMMARY_FILE}"))
+    made = [folder / SUMMARY_FILE for folder in [results, *sorted(p for p in results.iterdir() if p.is_dir())]
+            if (folder / "samples").is_dir() and (folder / SUMMARY_FILE).is_file()]
+    return kept + made
+
+
 def montecarlo_runs(results: Path) -> tuple[list[MonteCarloRun], list[str]]:
-    """The study's Monte Carlo runs (``RESULTS/montecarlo/*/summary.json``), by wall then folder,
-    and the summaries that cannot be read, each named with its fault."""
+    """The Monte Carlo runs of :func:`montecarlo_summaries`, by wall then folder, and the
+    summaries that cannot be read, each named with its fault."""
     found, unreadable = [], []
-    for path in sorted((Path(results) / MONTECARLO_FOLDER).glob("*/summary.json")):
+    for path in montecarlo_summaries(results):
         try:
             found.append(read_montecarlo(path))
         except (OSError, ValueError, KeyError, TypeError, DrydemError) as exc:
