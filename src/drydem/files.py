@@ -87,15 +87,15 @@ def uninterrupted():
         for number in held:
             signal.raise_signal(number)
 
-def read_text(path: Path, expected: str) -> str:
-    """The UTF-8 text of ``path``; ModelError naming the file if it cannot be read, or if it is not
-    text, then saying what was ``expected`` of it."""
+def read_text(path: Path, expected: str, *, encoding: str = "utf-8") -> str:
+    """The text of ``path`` (UTF-8 unless ``encoding`` says otherwise); ModelError naming the file
+    if it cannot be read, or if it is not text, then saying what was ``expected`` of it."""
     try:
-        return path.read_text(encoding="utf-8")
+        return path.read_text(encoding=encoding)
     except OSError as exc:
         raise ModelError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
     except UnicodeDecodeError as exc:
-        raise ModelError(f"{path}: not a text file (byte {exc.start} is not UTF-8); {expected}") from None
+        raise ModelError(f"{path}: not a text file (byte {exc.start} is not {exc.encoding.upper()}); {expected}") from None
 
 
 def read_toml(path: Path) -> tuple[dict, str]:

@@ -23,6 +23,7 @@ import numpy as np
 from scipy.integrate import cumulative_trapezoid, trapezoid
 
 from drydem.errors import ModelError
+from drydem.files import read_text
 from drydem.model.parameters import G, OneOf, Range, Rule, check_fields
 
 #: the analytic pulses of :func:`pulse`
@@ -202,14 +203,9 @@ def _check_file(path: Path, kind: str) -> None:
 
 
 def _read_text(path: Path, kind: str, encoding: str) -> str:
-    """The text of ``path``; a ModelError naming it if it is missing, a folder or unreadable."""
+    """The text of ``path``; a ModelError naming it if it is missing, a folder or unreadable (:func:`~drydem.files.read_text`)."""
     _check_file(path, kind)
-    try:
-        return path.read_text(encoding=encoding)
-    except OSError as exc:
-        raise ModelError(f"{path}: cannot read the file ({exc.strerror})") from None
-    except UnicodeDecodeError as exc:
-        raise ModelError(f"{path}: not a text file (byte {exc.start} is not UTF-8); a {kind} file is text") from None
+    return read_text(path, f"a {kind} file is text", encoding=encoding)
 
 
 def _number(text: str, where: str) -> float:
