@@ -149,3 +149,36 @@ def test_drydem_tilt_about_x_writes_its_axis_mechanism_and_vtk(tiny, tmp_path):
 def test_an_in_plane_wall_is_not_tilted_about_x_by_the_cli():
     result = CliRunner().invoke(main, ["tilt", "perforated_wall", "--tilt-axis", "x"])
     assert result.exit_code == 1 and "out of its plane, but it is an in-plane model" in result.output
+
+
+def test_the_video_of_a_building_is_drawn_in_3d(tilted, tmp_path, monkeypatch):
+    """A building's collapse video (drydem tilt --video, drydem animate) shows it in 3D, as its
+    mechanism.png does, not by its projection on the x-z plane (where its walls hide each other);
+    a wall's stays in its plane (tests/test_vtk_series.py)."""
+    import shutil
+
+    import imageio.v2 as imageio
+
+    from drydem.report import animation
+
+    _, series, _ = tilted
+    short = tmp_path / "three"  # the first three frames of the series
+    short.mkdir()
+    for k in range(3):
+        shutil.copy(series.folder / f"blocks_{k:04d}.vtu", short)
+    (short / "frames.csv").write_text("\n".join((series.folder / "frames.csv").read_text().splitlines()[:4]) + "\n")
+    drawn = {"3d": 0, "flat": 0}
+
+    def counted(kind, draw):
+        def spy(*args, **kwargs):
+            drawn[kind] += 1
+            return draw(*args, **kwargs)
+        return spy
+
+    monkeypatch.setattr(animation, "draw_faces_3d", counted("3d", animation.draw_faces_3d))
+    monkeypatch.setattr(animation, "draw_displacements", counted("flat", animation.draw_displacements))
+    written = animation.render_video(short, tmp_path / "collapse.gif", fps=4)
+    frames = imageio.mimread(written)
+    assert drawn == {"3d": 3, "flat": 0} and len(frames) == 3 and frames[0].shape[:2] == (720, 1280)
+    blocks = animation.series_frames(short)[0].blocks
+    assert len(blocks) == 185 and all(len(faces) == 6 for faces in blocks)  # every brick, by its 6 faces

@@ -1,11 +1,12 @@
 """Videos of a tilting analysis from its VTK series (drydem.io.vtk.VtkSeries), as the paper's
-supplementary videos: the wall in its plane coloured by displacement magnitude, the tilt angle
+supplementary videos: the blocks coloured by displacement magnitude (a wall in its plane, a deep
+3D model such as a building in 3D: drydem.report.plots.one_deep), the tilt angle
 and the monitored displacement on every frame, the states past collapse at the end; and of a
 shaking-table analysis from its series (drydem.io.vtk.ShakeSeries): the model time and the
 monitored displacement on every frame. The captions follow the columns of ``frames.csv``.
 
-Frames are drawn by the renderer of ``mechanism.png`` (drydem.report.plots.draw_displacements),
-so pictures and videos agree. MP4 through imageio-ffmpeg (the ffmpeg binary ships in that
+Frames are drawn by the renderers of ``mechanism.png`` (drydem.report.plots.draw_displacements,
+draw_faces_3d), so pictures and videos agree. MP4 through imageio-ffmpeg (the ffmpeg binary ships in that
 package); GIF (Pillow) when MP4 cannot be written or is not asked for. The video file is
 checked before any frame is drawn, and written whole or not at all (drydem.files).
 """
@@ -20,7 +21,7 @@ import numpy as np
 
 from drydem.errors import DrydemError
 from drydem.files import replaced_atomically, writable
-from drydem.report.plots import draw_displacements, new_figure, xz_outline
+from drydem.report.plots import draw_displacements, draw_faces_3d, frame_3d, new_figure, one_deep, xz_outline
 
 #: frame size: 1280 x 720 pixels (a multiple of 16, as H.264 wants)
 FIGURE_IN, DPI = (8.0, 4.5), 160
@@ -30,12 +31,13 @@ VIDEO_SUFFIXES = (".mp4", ".gif")
 
 @dataclass(frozen=True)
 class VideoFrame:
-    """One frame: the outlines of the blocks still in the analysis (x-z, m), their displacement
-    magnitudes (mm) and the caption."""
+    """One frame: the blocks still in the analysis (each the world vertices of its faces, m),
+    their displacement magnitudes (mm), the caption, and which of the blocks may move (not fixed)."""
 
-    outlines: list[np.ndarray]
+    blocks: list[list[np.ndarray]]
     magnitude_mm: np.ndarray
     caption: str
+    moving: np.ndarray
 
 
 def series_frames(folder: Path) -> list[VideoFrame]:
@@ -61,11 +63,12 @@ def series_frames(folder: Path) -> list[VideoFrame]:
             mesh = meshio.read(file)
             active = np.concatenate(mesh.cell_data["active"]).astype(bool)
             magnitude = np.concatenate(mesh.cell_data["displacement_magnitude"]) * 1e3
+            fixed = np.concatenate(mesh.cell_data["fixed"]).astype(bool)
         except Exception as exc:  # meshio raises many types (ReadError, ...); a foreign file lacks the fields (KeyError)
             raise DrydemError(f"{file}: cannot read the frame: {exc!r}") from None
         cells = [cell for block in mesh.cells for cell in block.data]
-        outlines = [xz_outline(mesh.points[np.unique(np.concatenate(faces))]) for faces, on in zip(cells, active) if on]
-        frames.append(VideoFrame(outlines, magnitude[active], caption))
+        blocks = [[mesh.points[face] for face in faces] for faces, on in zip(cells, active) if on]
+        frames.append(VideoFrame(blocks, magnitude[active], caption, ~fixed[active]))
     return frames
 
 
@@ -91,10 +94,11 @@ def render_video(folder: Path, path: Path, *, fps: float = 8.0) -> Path:
     frames = series_frames(folder)
     largest = max(float(f.magnitude_mm.max(initial=0.0)) for f in frames) or 1.0
     norm = LogNorm(largest * 1e-3, largest)  # equilibria (mm) and collapse (dm) on one scale
-    points = np.vstack([np.vstack(f.outlines) for f in frames if f.outlines])
+    points = np.vstack([face for frame in frames for block in frame.blocks for face in block])
     low, high = points.min(axis=0), points.max(axis=0)
     margin = 0.05 * (high - low).max()
-    images = [_image(frame, norm, low - margin, high + margin) for frame in frames]
+    flat = one_deep([np.vstack(block) for block, moving in zip(frames[0].blocks, frames[0].moving) if moving])
+    images = [_image(frame, norm, low - margin, high + margin, flat=flat) for frame in frames]
     if path.suffix.lower() == ".mp4":
         try:
             with replaced_atomically(path) as partial, imageio.get_writer(partial, fps=fps, codec="libx264", macro_block_size=16) as writer:
@@ -108,10 +112,18 @@ def render_video(folder: Path, path: Path, *, fps: float = 8.0) -> Path:
     return path
 
 
-def _image(frame: VideoFrame, norm, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+def _image(frame: VideoFrame, norm, low: np.ndarray, high: np.ndarray, *, flat: bool) -> np.ndarray:
+    """The frame's pixels (RGB): the blocks ``flat`` in the x-z plane or in 3D, in the box ``low``-``high`` (m) of the whole video."""
     fig = new_figure(figsize=FIGURE_IN, dpi=DPI, layout="constrained")
-    ax = fig.subplots()
-    draw_displacements(fig, ax, frame.outlines, np.clip(frame.magnitude_mm, norm.vmin, None), title=frame.caption, norm=norm)
-    ax.set(xlim=(low[0], high[0]), ylim=(low[1], high[1]))
+    values = np.clip(frame.magnitude_mm, norm.vmin, None)
+    if flat:
+        ax = fig.subplots()
+        draw_displacements(fig, ax, [xz_outline(np.vstack(block)) for block in frame.blocks], values, title=frame.caption, norm=norm)
+        ax.set(xlim=(low[0], high[0]), ylim=(low[2], high[2]))
+    else:
+        ax = fig.subplots(subplot_kw={"projection": "3d"})
+        owner = np.repeat(np.arange(len(frame.blocks)), [len(block) for block in frame.blocks])
+        draw_faces_3d(fig, ax, [face for block in frame.blocks for face in block], owner, values, title=frame.caption, norm=norm)
+        frame_3d(ax, low, high, title=frame.caption)
     fig.canvas.draw()
     return np.asarray(fig.canvas.buffer_rgba())[:, :, :3].copy()

@@ -214,10 +214,16 @@ def is_wall_like(model: Model) -> bool:
     another). A building or any other deep 3D model is drawn in 3D instead
     (:func:`draw_blocks_3d`)."""
     movable = np.flatnonzero(model.block_movable)
-    if not movable.size:
+    return one_deep([model.block_shape[b].vertices for b in movable])
+
+
+def one_deep(blocks: list[np.ndarray]) -> bool:
+    """Whether ``blocks`` (each its vertices, m) span in y no more than the deepest of them: a
+    wall, drawn by its projection on the x-z plane (:func:`is_wall_like`; none: True)."""
+    if not blocks:
         return True
-    lo = np.array([model.block_shape[b].vertices[:, 1].min() for b in movable])
-    hi = np.array([model.block_shape[b].vertices[:, 1].max() for b in movable])
+    lo = np.array([b[:, 1].min() for b in blocks])
+    hi = np.array([b[:, 1].max() for b in blocks])
     return bool(hi.max() - lo.min() <= (hi - lo).max() * (1 + 1e-6) + 1e-12)
 
 
@@ -246,10 +252,23 @@ def draw_blocks_3d(fig, ax, model: Model, state: State, blocks: np.ndarray, valu
     (:data:`LOST_STYLE`), an optional ``marker`` (x-y-z point, label: for the caller's legend),
     true proportions, seen from the side the load (``load_direction`` 0: x, 1: y) pushes
     towards. Returns the collection of ``blocks``' faces."""
+    faces, owner = block_faces(model, state, blocks)
+    polys = draw_faces_3d(fig, ax, faces, owner, values, title=title, norm=norm, colours=colours, load_direction=load_direction,
+                          label=label, lost=block_faces(model, state, lost)[0], colorbar=colorbar)
+    if marker is not None:
+        ax.plot(*[[c] for c in marker[0]], "r+", markersize=12, markeredgewidth=2, label=marker[1], zorder=10)
+    return polys
+
+
+def draw_faces_3d(fig, ax, faces: list[np.ndarray], owner: np.ndarray, values, *, title: str, norm=None, colours=None,
+                  load_direction: int = 0, label: str = "displacement (mm)", lost: list[np.ndarray] = (), colorbar: bool = True):
+    """The renderer of 3D mechanisms and videos (:func:`draw_blocks_3d`): ``faces`` (each its
+    world vertices, m) of blocks numbered ``owner`` (one per face), coloured by their block's
+    value or colour, the ``lost`` faces faded; true proportions over what is drawn, seen from
+    the side the load pushes towards. Returns the collection of ``faces``."""
     from matplotlib.colors import Normalize
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-    faces, owner = block_faces(model, state, blocks)
     polys = Poly3DCollection(faces, edgecolors="k", linewidths=0.15)
     if colours is None:
         norm = norm or Normalize(0.0, float(np.max(values, initial=0.0)) or 1.0)
@@ -261,17 +280,20 @@ def draw_blocks_3d(fig, ax, model: Model, state: State, blocks: np.ndarray, valu
     else:
         polys.set_facecolor([colours[k] for k in owner])
     ax.add_collection3d(polys)
-    gone = block_faces(model, state, lost)[0]
-    if gone:
-        ax.add_collection3d(Poly3DCollection(gone, **LOST_STYLE))
-    points = np.concatenate(faces + gone) if faces + gone else np.zeros((1, 3))
-    lo, hi = points.min(0), points.max(0)
+    lost = list(lost)
+    if lost:
+        ax.add_collection3d(Poly3DCollection(lost, **LOST_STYLE))
+    points = np.concatenate(list(faces) + lost) if len(faces) + len(lost) else np.zeros((1, 3))
+    frame_3d(ax, points.min(0), points.max(0), title=title, load_direction=load_direction)
+    return polys
+
+
+def frame_3d(ax, lo: np.ndarray, hi: np.ndarray, *, title: str, load_direction: int = 0) -> None:
+    """A 3D axes showing the box ``lo``-``hi`` (m) in true proportions, seen from the side the
+    load (``load_direction`` 0: x, 1: y) pushes towards (:data:`VIEW_AZIMUTH`)."""
     ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]), xlabel="x (m)", ylabel="y (m)", zlabel="z (m)", title=title)
     ax.set_box_aspect(np.maximum(hi - lo, 1e-3 * (hi - lo).max()))
     ax.view_init(elev=22.0, azim=VIEW_AZIMUTH.get(load_direction, -60.0))
-    if marker is not None:
-        ax.plot(*[[c] for c in marker[0]], "r+", markersize=12, markeredgewidth=2, label=marker[1], zorder=10)
-    return polys
 
 
 def mechanism_figure(model: Model, states: list[tuple[str, State, frozenset[str]]], path: Path, *, monitored: str | None = None,
