@@ -301,7 +301,7 @@ def penetration_depths(shapes: list[ConvexPolyhedron], pairs: np.ndarray) -> np.
     vertices = _padded([shapes[b].vertices for b in used])
     normals = _padded([shapes[b].face_normals for b in used])
     edges = _padded([shapes[b].edge_directions for b in used])
-    offsets = _padded([np.einsum("fi,fi->f", shapes[b].face_normals, shapes[b].vertices[[f[0] for f in shapes[b].faces]]) for b in used])
+    offsets = _padded([np.einsum("fi,fi->f", s.face_normals, s.vertices[[f[0] for f in s.faces]]) for s in (shapes[b] for b in used)])
     size = np.array([shapes[b].size for b in used])
     depth = np.empty(len(pairs))
     step = max(1, DEPTH_CHUNK // (vertices.shape[1] * max(normals.shape[1], edges.shape[1] ** 2)))

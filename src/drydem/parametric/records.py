@@ -184,27 +184,30 @@ def run_folder_record(folder: Path) -> dict | None:
     if not path.is_file():
         return None
     summary = _read_json(path, "summary")
-    analysis = next((a for a in ("tilt", "limit") if isinstance(summary, dict) and SUMMARY_KEYS[a] | {"analysis", "model"} <= set(summary)), None)
+    keys = set(summary) if isinstance(summary, dict) else set()
+    analysis = next((a for a in ("tilt", "limit") if SUMMARY_KEYS[a] | {"analysis", "model"} <= keys), None)
     if analysis is None:
         return None
     settings, model = summary["analysis"], summary["model"]
     joint, contacts = (model.get(table) if isinstance(model, dict) else None for table in ("joint", "contacts"))
     target = summary.get("target") or (model.get("source") if isinstance(model, dict) else None)
     if not (isinstance(settings, dict) and isinstance(joint, dict) and isinstance(contacts, dict) and isinstance(target, str)):
-        raise RecordError(f"{path}: not a drydem {analysis} summary: it needs its target and its analysis, model joint and contacts tables")
+        raise RecordError(f"{path}: not a drydem {analysis} summary: it needs its target and its analysis, "
+                          "model joint and contacts tables")
     if not all(_numeric(joint.get(key)) for key in ("kn", "ks", "friction")):
         raise RecordError(f"{path}: model joint kn, ks and friction must be numbers (Pa/m, Pa/m, -), not "
                           f"{joint.get('kn')!r}, {joint.get('ks')!r}, {joint.get('friction')!r}")
     law = {k: v for k, v in joint.items() if k not in NOT_LAW_KEYS and v is not None}
-    spec = RunSpec(analysis=analysis, target=target, protocol=_protocol(analysis, summary), kn=joint.get("kn"), ks=joint.get("ks"),
-                   friction=joint.get("friction"), points=contacts.get("points_per_length"),
+    spec = RunSpec(analysis=analysis, target=target, protocol=_protocol(analysis, summary), kn=joint["kn"], ks=joint["ks"],
+                   friction=joint["friction"], points=contacts.get("points_per_length"),
                    increment_deg=settings.get("increment_deg") if analysis == "tilt" else None,
                    joint_law=joint_law_text(law) if law.get("model", "constant") != "constant" else None)
     curve = _pushover_csv(Path(folder) / PUSHOVER_FILE) if analysis == "tilt" else []
     problem = _result_problem(spec, summary, curve)
     if problem is not None:
         raise RecordError(f"{path}: {problem}")
-    return {"id": Path(folder).resolve().name, "spec": asdict(spec), "status": "ok", "error": None, "summary": summary, "pushover": curve}
+    return {"id": Path(folder).resolve().name, "spec": asdict(spec), "status": "ok", "error": None, "summary": summary,
+            "pushover": curve}
 
 
 def _protocol(analysis: str, summary: dict) -> str:
@@ -223,7 +226,8 @@ def _pushover_csv(path: Path) -> list[list[float]]:
     except OSError as exc:
         raise RecordError(f"{path}: cannot read the run's pushover curve ({exc.strerror})") from None
     except (ValueError, IndexError):
-        raise RecordError(f"{path}: not a pushover curve (rows of tilt_deg, load_multiplier, ux_m, uz_m, drift, cycles numbers)") from None
+        raise RecordError(f"{path}: not a pushover curve (rows of numbers: tilt_deg, load_multiplier, ux_m, uz_m, drift, "
+                          "cycles)") from None
 
 
 def load_run_folders(results: Path) -> Records:

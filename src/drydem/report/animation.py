@@ -6,8 +6,8 @@ shaking-table analysis from its series (drydem.io.vtk.ShakeSeries): the model ti
 monitored displacement on every frame. The captions follow the columns of ``frames.csv``.
 
 Frames are drawn by the renderers of ``mechanism.png`` (drydem.report.plots.draw_displacements,
-draw_faces_3d), so pictures and videos agree. MP4 through imageio-ffmpeg (the ffmpeg binary ships in that
-package); GIF (Pillow) when MP4 cannot be written or is not asked for. The video file is
+draw_faces_3d), so pictures and videos agree. MP4 through imageio-ffmpeg (the ffmpeg binary
+ships in that package); GIF (Pillow) when MP4 cannot be written or is not asked for. The video file is
 checked before any frame is drawn, and written whole or not at all (drydem.files).
 """
 
@@ -113,7 +113,8 @@ def render_video(folder: Path, path: Path, *, fps: float = 8.0) -> Path:
 
 
 def _image(frame: VideoFrame, norm, low: np.ndarray, high: np.ndarray, *, flat: bool) -> np.ndarray:
-    """The frame's pixels (RGB): the blocks ``flat`` in the x-z plane or in 3D, in the box ``low``-``high`` (m) of the whole video."""
+    """The frame's pixels (RGB): the blocks ``flat`` in the x-z plane or in 3D, in the box
+    ``low``-``high`` (m) of the whole video."""
     fig = new_figure(figsize=FIGURE_IN, dpi=DPI, layout="constrained")
     values = np.clip(frame.magnitude_mm, norm.vmin, None)
     if flat:

@@ -1,11 +1,13 @@
 """The report of a parametric study (``drydem report RESULTS_DIR``), in the style of the seed
 paper: its figures (3, 6, 9-13) and tables (2-4) from the study's run records (a sweep's, and
 the folders of ``drydem tilt`` and ``drydem limit`` runs read as records:
-:func:`drydem.parametric.records.run_folder_record`), drydem's values beside the paper's (drydem.masonry.published), in Markdown and HTML with PNG figures; and when
-the study has shake runs, their incremental dynamic analysis (:mod:`drydem.report.ida`); when
-it has runs with a stress-dependent joint law, the calibrated law against the experiments
+:func:`drydem.parametric.records.run_folder_record`), drydem's values beside the paper's
+(drydem.masonry.published), in Markdown and HTML with PNG figures; and when the study has
+shake runs, their incremental dynamic analysis (:mod:`drydem.report.ida`); when it has runs
+with a stress-dependent joint law, the calibrated law against the experiments
 (:mod:`drydem.report.joints`); when it has Monte Carlo runs (``RESULTS/montecarlo/NAME/`` or
-``RESULTS/NAME/``, each ``drydem montecarlo``'s folder), the scatter of their collapse angles against the experiments'.
+``RESULTS/NAME/``, each ``drydem montecarlo``'s folder), the scatter of their collapse angles
+against the experiments'.
 
 The paper's tables and figures are of constant joints: a run with a joint law is never taken
 for the constant-kn run at its kn. They take the runs of the paper's walls as the paper ran
@@ -46,7 +48,8 @@ MONTECARLO_TITLE = "Monte Carlo scatter of the collapse angle"
 #: the statistics of a Monte Carlo summary's collapse angle the report shows (count aside)
 MONTECARLO_STATISTICS = ("mean", "std", "cov", "p05")
 MONTECARLO_NOTE = (
-    "Each row a `drydem montecarlo` run (its folder, NAME, in montecarlo/ or in the results folder): the statistics of its collapse angles over the samples with a verdict, "
+    "Each row a `drydem montecarlo` run (its folder, NAME, in montecarlo/ or in the results folder): the statistics of its "
+    "collapse angles over the samples with a verdict, "
     "a sample that cannot stand under its own weight counting as 0 deg (samples: how many; std with ddof = 1; p05 the 5th "
     "percentile), with the imperfections drawn; experiment: the mean and CoV "
     "of the wall's tests (Savalle et al. 2022, Table 1; '-': not one of its walls).")
