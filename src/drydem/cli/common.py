@@ -57,7 +57,7 @@ def _threads(ctx, param, value):
 #: the compiled kernels' threads (drydem.engine.threads): set by the option itself, so a command
 #: takes no argument for it; the results are the same for every count, only the speed changes
 threads_option = click.option("--threads", type=int, callback=_threads, expose_value=False,
-                              help="Most threads for the compiled kernels (default: all cores; a model takes one per 20,000 sub-contacts).")
+                              help="Most threads for the compiled kernels (default: all cores; a small model takes fewer).")
 
 #: the options of a joint law: option name -> ([joint] key, the option)
 JOINT_LAW_OPTIONS = {

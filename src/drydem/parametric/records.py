@@ -230,12 +230,17 @@ def _pushover_csv(path: Path) -> list[list[float]]:
                           "cycles)") from None
 
 
+def run_folders(results: Path) -> list[Path]:
+    """The folders where a command's run may be: ``results`` and its sub-folders, in name order."""
+    results = Path(results)
+    return [results, *sorted(p for p in results.iterdir() if p.is_dir())]
+
+
 def load_run_folders(results: Path) -> Records:
     """The records of the ``drydem tilt`` and ``drydem limit`` run folders among ``results`` and
-    its sub-folders (:func:`run_folder_record`, in name order)."""
-    results = Path(results)
+    its sub-folders (:func:`run_folders`, :func:`run_folder_record`)."""
     valid, corrupt = [], []
-    for folder in [results, *sorted(p for p in results.iterdir() if p.is_dir())]:
+    for folder in run_folders(results):
         try:
             record = run_folder_record(folder)
         except RecordError as exc:

@@ -33,7 +33,7 @@ import numpy as np
 from drydem.analysis.drift import DLS_DRIFT, EC8_DRIFT_LIMITS
 from drydem.errors import DrydemError
 from drydem.masonry.published import savalle2022
-from drydem.parametric.records import SUMMARY_FILE, RecordError, Records, load_records, load_run_folders
+from drydem.parametric.records import SUMMARY_FILE, RecordError, Records, load_records, load_run_folders, run_folders
 from drydem.files import replaced_atomically
 from drydem.report.joints import joint_law, law_words, relative_error_percent
 from drydem.report.plots import new_figure
@@ -400,8 +400,7 @@ def montecarlo_summaries(results: Path) -> list[Path]:
     (a summary.json beside a samples/ folder)."""
     results = Path(results)
     kept = sorted((results / MONTECARLO_FOLDER).glob(f"*/{SUMMARY_FILE}"))
-    made = [folder / SUMMARY_FILE for folder in [results, *sorted(p for p in results.iterdir() if p.is_dir())]
-            if (folder / "samples").is_dir() and (folder / SUMMARY_FILE).is_file()]
+    made = [folder / SUMMARY_FILE for folder in run_folders(results) if (folder / "samples").is_dir() and (folder / SUMMARY_FILE).is_file()]
     return kept + made
 
 
