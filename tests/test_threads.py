@@ -143,14 +143,14 @@ def test_block_incidence_lists_each_blocks_contacts_in_increasing_order():
     assert empty[0].tolist() == [0, 0, 0, 0] and len(empty[1]) == 0
 
 
-
-def test_a_cycle_takes_a_thread_per_twenty_thousand_sub_contacts_up_to_the_setting():
+def test_a_cycle_takes_a_thread_per_subcontacts_per_thread_up_to_the_setting():
     per = kernel_threads.SUBCONTACTS_PER_THREAD
     with using_threads(available()):
         assert threads_for(0) == threads_for(per - 1) == threads_for(2 * per - 1) == 1
         assert threads_for(2 * per) == min(2, available()) and threads_for(10**9) == available()
     with using_threads(1):
         assert threads_for(10**9) == 1
+
 
 def test_set_threads_takes_a_count_from_one_to_all_cores_and_using_threads_restores_it():
     before = get_threads()

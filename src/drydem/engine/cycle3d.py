@@ -48,6 +48,23 @@ def _world_tensor_apply(r, tensor, v0, v1, v2):
 CONTRIBUTION = 9
 
 
+#: below this x, :func:`magnitude_kept` takes 1 + x / 2 + 3 x^2 / 8 (the next term, 5 x^3 / 16,
+#: is below 1e-18): a contact turning 1e-3 rad in one cycle
+OUT_OF_PLANE_SERIES = 1e-6
+
+
+@numba.njit(cache=True, inline="always")
+def magnitude_kept(out_sq):
+    """The factor 1 / sqrt(1 - x) that gives the shear force its magnitude back once its part
+    along the new normal is taken out, |F_s| / |F_s - (F_s . n) n|, with x = (F_s . n)^2 / |F_s|^2
+    the squared sine of its angle out of the new tangent plane; 0 for x >= 1 (F_s along n).
+    By its series below OUT_OF_PLANE_SERIES, to round-off: a division and no square root in the
+    common case, where F_s turns by a cycle's rotation (the exact form cost 12 % of the 3D cycle)."""
+    if out_sq < OUT_OF_PLANE_SERIES:
+        return 1.0 + out_sq * (0.5 + 0.375 * out_sq)
+    return 1.0 / np.sqrt(1.0 - out_sq) if out_sq < 1.0 else 0.0
+
+
 @numba.njit(cache=True, fastmath=FASTMATH, parallel=True)
 def contact_forces(state, rot, inv_mass, sub, joint, closure_limit, damping, dt, contribution, stiffer):
     """Step 3: update every sub-contact's forces and write each contact's sums into
@@ -107,9 +124,7 @@ def contact_forces(state, rot, inv_mass, sub, joint, closure_limit, damping, dt,
             sx, sy, sz = fs[0], fs[1], fs[2]
             fsn = sx * nx + sy * ny + sz * nz
             if fsn != 0.0:
-                old_sq = sx * sx + sy * sy + sz * sz
-                new_sq = old_sq - fsn * fsn  # |F_s - (F_s . n) n|^2
-                scale = np.sqrt(old_sq / new_sq) if new_sq > 0.0 else 0.0
+                scale = magnitude_kept(fsn * fsn / (sx * sx + sy * sy + sz * sz))
                 sx, sy, sz = (sx - fsn * nx) * scale, (sy - fsn * ny) * scale, (sz - fsn * nz) * scale
             sx, sy, sz, intact = shear_law(fn, dux, duy, duz, sx, sy, sz, area[s], intact_now[s], joint)
             normal[s] = fn
