@@ -19,7 +19,7 @@ from drydem.masonry.building import (
     BUILDING_JOINT, BUILDINGS, FULL_SCALE_JOINT, LARGE, SMALL, BuildingSpec, buckling_joint_stiffness, building_model,
 )
 from drydem.model.parameters import JointMaterial
-from drydem.report.plots import is_wall_like, mechanism_figure
+from drydem.report.plots import frame_3d, is_wall_like, mechanism_figure
 
 #: a one-storey building of 185 blocks: 0.8 m x 0.5 m in plan, 0.4 m tall (8 courses of 100 x 50 x
 #: 50 mm bricks, walls 50 mm thick), a window a wall
@@ -42,9 +42,10 @@ def tiny():
 
 @pytest.fixture(scope="module")
 def tilted(tiny, tmp_path_factory):
-    """The tiny building tilted about x, its frames written as a VTK series."""
+    """The tiny building tilted about x, its frames written as a VTK series (which records that
+    the load acts along y, as drydem tilt's does)."""
     folder = tmp_path_factory.mktemp("tilted")
-    series = VtkSeries(folder / "vtk", tiny)
+    series = VtkSeries(folder / "vtk", tiny, load_direction=SETTINGS.load_direction)
     return tilt_analysis(tiny, SETTINGS, on_frame=series), series, folder
 
 
@@ -153,8 +154,9 @@ def test_an_in_plane_wall_is_not_tilted_about_x_by_the_cli():
 
 def test_the_video_of_a_building_is_drawn_in_3d(tilted, tmp_path, monkeypatch):
     """A building's collapse video (drydem tilt --video, drydem animate) shows it in 3D, as its
-    mechanism.png does, not by its projection on the x-z plane (where its walls hide each other);
-    a wall's stays in its plane (tests/test_vtk_series.py)."""
+    mechanism.png does, not by its projection on the x-z plane (where its walls hide each other),
+    seen from the side the load pushes towards (here y: tilted about x) with the displacement
+    along it in the caption; a wall's stays in its plane (tests/test_vtk_series.py)."""
     import shutil
 
     import imageio.v2 as imageio
@@ -177,8 +179,13 @@ def test_the_video_of_a_building_is_drawn_in_3d(tilted, tmp_path, monkeypatch):
 
     monkeypatch.setattr(animation, "draw_faces_3d", counted("3d", animation.draw_faces_3d))
     monkeypatch.setattr(animation, "draw_displacements", counted("flat", animation.draw_displacements))
+    views = []
+    monkeypatch.setattr(animation, "frame_3d", lambda ax, *args, **kwargs: views.append(kwargs["load_direction"]) or frame_3d(ax, *args, **kwargs))
     written = animation.render_video(short, tmp_path / "collapse.gif", fps=4)
     frames = imageio.mimread(written)
     assert drawn == {"3d": 3, "flat": 0} and len(frames) == 3 and frames[0].shape[:2] == (720, 1280)
-    blocks = animation.series_frames(short)[0].blocks
-    assert len(blocks) == 185 and all(len(faces) == 6 for faces in blocks)  # every brick, by its 6 faces
+    assert views == [1, 1, 1]  # each frame's box framed from the y side (plots.VIEW_AZIMUTH)
+    first = animation.series_frames(short)[0]
+    assert len(first.blocks) == 185 and all(len(faces) == 6 for faces in first.blocks)  # every brick, by its 6 faces
+    assert first.load_direction == 1 and ", monitored uy " in first.caption
+    assert all(row.endswith(",y") for row in (short / "frames.csv").read_text().splitlines()[1:])

@@ -150,6 +150,16 @@ def test_an_at2_record_drives_the_direction_asked_for(tmp_path, direction, axis)
     assert np.count_nonzero(read.acceleration_m_s2) == np.count_nonzero(AT2_VALUES_G)
 
 
+def test_the_main_direction_is_the_horizontal_axis_with_the_larger_peak():
+    """What a video of the shaking is seen from (drydem.io.vtk.ShakeSeries): x on a tie or with
+    no horizontal motion."""
+    def motion(x, y, z):
+        return GroundMotion(np.array([0.0, 0.1]), np.array([[0.0, 0.0, 0.0], [x, y, z]]), "m")
+
+    assert [motion(*peaks).main_direction for peaks in [(1.0, 0.5, 9.0), (-0.5, -1.0, 0.0), (1.0, -1.0, 0.0), (0.0, 0.0, 3.0)]] == [0, 1, 0, 0]
+    assert pulse("one-sine", amplitude_m_s2=2.0, frequency_hz=2.0, direction="y").main_direction == 1
+
+
 @pytest.mark.parametrize("text, message", [
     (AT2_NEW.replace(" -.2000000E-01  .5000000E+00\n", ""), "line 4 gives NPTS = 7, but the file holds 5 values (truncated?)"),
     (AT2_NEW + "  .1000000E-01\n", "line 4 gives NPTS = 7, but the file holds 8 values"),

@@ -120,7 +120,8 @@ def test_the_vtk_series_is_in_model_time(pulse_run):
     with (out / "vtk" / "frames.csv").open() as f:
         frames = list(csv.DictReader(f))
     _, rows = history(out)
-    assert list(frames[0]) == ["frame", "time_s", "ux_m"] and len(frames) == len(rows)  # the first at rest, t = 0
+    assert list(frames[0]) == ["frame", "time_s", "ux_m", "load_direction"] and len(frames) == len(rows)  # the first at rest, t = 0
+    assert {f["load_direction"] for f in frames} == {"x"}  # the pulse shakes along x
     np.testing.assert_allclose([float(f["time_s"]) for f in frames], rows[:, 0], rtol=1e-8)
     np.testing.assert_allclose([float(f["ux_m"]) for f in frames], rows[:, 2], rtol=1e-6, atol=1e-12)
     for series in ("blocks", "contacts"):

@@ -144,6 +144,28 @@ def test_without_ffmpeg_the_video_falls_back_to_a_gif(run, tmp_path, monkeypatch
     assert written == tmp_path / "collapse.gif" and len(imageio.mimread(written)) == 3
 
 
+def test_a_series_says_which_way_its_load_acts_and_one_written_before_that_is_read_as_x(run, tmp_path):
+    """frames.csv's load_direction column (x for this in-plane wall) sets the side a 3D model is
+    seen from; a series without it (written by an older drydem) is read as loaded along x, and
+    a direction that is neither x nor y is named with its file and line."""
+    from drydem.errors import DrydemError
+    from drydem.report.animation import series_frames
+
+    _, folder = run
+    assert {row["load_direction"] for row in frames(folder)} == {"x"}
+    lines = (folder / "frames.csv").read_text().splitlines()
+    older = tmp_path / "older"
+    older.mkdir()
+    (older / "blocks_0000.vtu").write_bytes((folder / "blocks_0000.vtu").read_bytes())
+    (older / "frames.csv").write_text("\n".join(line.rpartition(",")[0] for line in lines[:2]) + "\n")
+    (frame,) = series_frames(older)
+    assert frame.load_direction == 0 and frame.caption == "equilibrium: tilt 0.00 deg, monitored ux 0.00 mm"
+    (older / "frames.csv").write_text(f"{lines[0]}\n{lines[1].rpartition(',')[0]},z\n")
+    with pytest.raises(DrydemError, match=r"frames.csv: line 2: not a frame of drydem tilt or shake --vtk \(ValueError\(\"load_direction 'z': "
+                                          r"must be one of x, y"):
+        series_frames(older)
+
+
 def test_a_resumed_run_keeps_the_frames_already_written_and_goes_on_after_them(wall, run, tmp_path):
     # interrupted at the third equilibrium, before its frame and checkpoint were written (as a
     # kill could be), then resumed: the series is the uninterrupted run's, frame for frame

@@ -124,7 +124,8 @@ def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequenc
                f"mu {model.joint.friction:g}, {model.contacts.points_per_length} points per length; {ground.name}, "
                f"PGA {ground.pga_m_s2:.4g} m/s2, {settings.analysed_s:g} s -> {folder}")
     try:
-        live = _LiveHistory(HistoryWriter(folder), ShakeSeries(folder / "vtk", model, every=save_every) if vtk or video else None)
+        series = ShakeSeries(folder / "vtk", model, every=save_every, load_direction=ground.main_direction) if vtk or video else None
+        live = _LiveHistory(HistoryWriter(folder), series)
     except OSError as exc:
         raise click.ClickException(f"{exc.filename or folder}: cannot write results ({exc.strerror or exc})") from None
     total = settings.analysed_s

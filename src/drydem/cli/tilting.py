@@ -152,7 +152,8 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
             bar.set_postfix_str(f"{theta:.2f} deg, u{'xy'[settings.load_direction]} {ux * 1e3:.2f} mm")
 
         try:
-            series = VtkSeries(folder / "vtk", model, every=save_every, resume=resume) if vtk or video else None
+            series = (VtkSeries(folder / "vtk", model, every=save_every, resume=resume, load_direction=settings.load_direction)
+                      if vtk or video else None)
             result = tilt_analysis(
                 model, settings, on_record=PushoverWriter(folder), on_progress=progress, on_frame=series,
                 checkpoint=folder / CHECKPOINT, resume=resume,

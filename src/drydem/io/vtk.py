@@ -85,6 +85,8 @@ def write_contacts_vtu(model: Model, path: str | Path, state: State, sub: SubCon
     return Path(path)
 
 
+#: the load's directions in a series' ``frames.csv``, by index (0: x, 1: y)
+LOAD_AXES = ("x", "y")
 #: keep every N-th equilibrium frame (``drydem tilt --save-every``)
 SAVE_EVERY = Range(1, None, integer=True)
 
@@ -93,16 +95,18 @@ class VtkSeries:
     """Frames of a tilting analysis (drydem.analysis.tilt.Frame) as two VTK time series in
     ``folder``: ``blocks_NNNN.vtu`` and ``contacts_NNNN.vtu``, indexed by ``blocks.pvd`` and
     ``contacts.pvd`` (time = frame number), and ``frames.csv`` (frame, kind, tilt, monitored
-    displacement). Each frame is written as it comes, and the indexes rewritten atomically, so a
-    crash keeps what was written. Equilibrium frames are kept every ``every``-th; the states
-    past collapse all. Use an instance as ``tilt_analysis(..., on_frame=series)``. With
-    ``resume``, the equilibrium frames already in ``folder`` (its ``frames.csv``) are kept and
-    the series goes on after them, as the analysis goes on from its checkpoint (an equilibrium
-    given again replaces the frames from its tilt on)."""
+    displacement along the load, the load's direction ``load_direction``: 0, "x", or 1, "y",
+    which a video is seen from). Each frame is written as it comes, and the indexes rewritten
+    atomically, so a crash keeps what was written. Equilibrium frames are kept every
+    ``every``-th; the states past collapse all. Use an instance as
+    ``tilt_analysis(..., on_frame=series)``. With ``resume``, the equilibrium frames already in
+    ``folder`` (its ``frames.csv``) are kept and the series goes on after them, as the analysis
+    goes on from its checkpoint (an equilibrium given again replaces the frames from its tilt
+    on)."""
 
-    def __init__(self, folder: Path, model: Model, *, every: int = 1, resume: bool = False):
+    def __init__(self, folder: Path, model: Model, *, every: int = 1, resume: bool = False, load_direction: int = 0):
         SAVE_EVERY.check(every, "VtkSeries every")
-        self.folder, self.model, self.every = Path(folder), model, every
+        self.folder, self.model, self.every, self.load_axis = Path(folder), model, every, LOAD_AXES[load_direction]
         self.folder.mkdir(parents=True, exist_ok=True)
         self.rows: list[tuple[int, str, float, float]] = _equilibrium_rows(self.folder / "frames.csv") if resume else []
         self.equilibria = (len(self.rows) - 1) * every + 1 if self.rows else 0
@@ -118,8 +122,8 @@ class VtkSeries:
         k = len(self.rows)
         _write_frame(self.model, self.folder, k, frame)
         self.rows.append((k, frame.kind, frame.tilt_deg, frame.ux_m))
-        _write_indexes(self.folder, len(self.rows), ("frame", "kind", "tilt_deg", "ux_m"),
-                       [(i, kind, f"{tilt:.6f}", f"{ux:.8g}") for i, kind, tilt, ux in self.rows])
+        _write_indexes(self.folder, len(self.rows), ("frame", "kind", "tilt_deg", "ux_m", "load_direction"),
+                       [(i, kind, f"{tilt:.6f}", f"{ux:.8g}", self.load_axis) for i, kind, tilt, ux in self.rows])
 
 
 class ShakeSeries:
@@ -127,13 +131,14 @@ class ShakeSeries:
     VTK time series as :class:`VtkSeries` in ``folder`` (``blocks_NNNN.vtu`` and
     ``contacts_NNNN.vtu``, indexed by ``blocks.pvd`` and ``contacts.pvd``, here with the model
     time in seconds as each DataSet's time, so that ParaView plays them in time), and
-    ``frames.csv`` (frame, time_s, monitored ux_m). Every ``every``-th frame is kept, each
-    written as it comes, the indexes rewritten atomically. Use an instance as
+    ``frames.csv`` (frame, time_s, monitored ux_m, and the table's main horizontal direction
+    ``load_direction``, 0: "x" or 1: "y", which a video is seen from). Every ``every``-th frame
+    is kept, each written as it comes, the indexes rewritten atomically. Use an instance as
     ``shake_analysis(..., on_frame=series)``."""
 
-    def __init__(self, folder: Path, model: Model, *, every: int = 1):
+    def __init__(self, folder: Path, model: Model, *, every: int = 1, load_direction: int = 0):
         SAVE_EVERY.check(every, "ShakeSeries every")
-        self.folder, self.model, self.every = Path(folder), model, every
+        self.folder, self.model, self.every, self.load_axis = Path(folder), model, every, LOAD_AXES[load_direction]
         self.folder.mkdir(parents=True, exist_ok=True)
         self.rows: list[tuple[int, float, float]] = []
         self.frames = 0
@@ -145,8 +150,8 @@ class ShakeSeries:
         k = len(self.rows)
         _write_frame(self.model, self.folder, k, frame)
         self.rows.append((k, frame.time_s, frame.ux_m))
-        _write_indexes(self.folder, len(self.rows), ("frame", "time_s", "ux_m"),
-                       [(i, f"{t:.9g}", f"{ux:.8g}") for i, t, ux in self.rows], times=[t for _, t, _ in self.rows])
+        _write_indexes(self.folder, len(self.rows), ("frame", "time_s", "ux_m", "load_direction"),
+                       [(i, f"{t:.9g}", f"{ux:.8g}", self.load_axis) for i, t, ux in self.rows], times=[t for _, t, _ in self.rows])
 
 
 def _write_frame(model: Model, folder: Path, k: int, frame) -> None:

@@ -3,7 +3,9 @@ supplementary videos: the blocks coloured by displacement magnitude (a wall in i
 3D model such as a building in 3D: drydem.report.plots.one_deep), the tilt angle
 and the monitored displacement on every frame, the states past collapse at the end; and of a
 shaking-table analysis from its series (drydem.io.vtk.ShakeSeries): the model time and the
-monitored displacement on every frame. The captions follow the columns of ``frames.csv``.
+monitored displacement on every frame. The captions follow the columns of ``frames.csv``; a 3D
+model is seen from the side its load pushes towards (the series' ``load_direction``, x in a
+series written before it was recorded), as in ``mechanism.png``.
 
 Frames are drawn by the renderers of ``mechanism.png`` (drydem.report.plots.draw_displacements,
 draw_faces_3d), so pictures and videos agree. MP4 through imageio-ffmpeg (the ffmpeg binary
@@ -21,6 +23,7 @@ import numpy as np
 
 from drydem.errors import DrydemError
 from drydem.files import replaced_atomically, writable
+from drydem.io.vtk import LOAD_AXES
 from drydem.report.plots import draw_displacements, draw_faces_3d, frame_3d, new_figure, one_deep, xz_outline
 
 #: frame size: 1280 x 720 pixels (a multiple of 16, as H.264 wants)
@@ -32,12 +35,14 @@ VIDEO_SUFFIXES = (".mp4", ".gif")
 @dataclass(frozen=True)
 class VideoFrame:
     """One frame: the blocks still in the analysis (each the world vertices of its faces, m),
-    their displacement magnitudes (mm), the caption, and which of the blocks may move (not fixed)."""
+    their displacement magnitudes (mm), the caption, which of the blocks may move (not fixed),
+    and the load's direction (0: x, 1: y)."""
 
     blocks: list[list[np.ndarray]]
     magnitude_mm: np.ndarray
     caption: str
     moving: np.ndarray
+    load_direction: int = 0
 
 
 def series_frames(folder: Path) -> list[VideoFrame]:
@@ -56,7 +61,8 @@ def series_frames(folder: Path) -> list[VideoFrame]:
     for line, row in enumerate(rows, start=2):
         try:
             file = folder / f"blocks_{int(row['frame']):04d}.vtu"
-            caption = _caption(row)
+            load_direction = _load_direction(row)
+            caption = _caption(row, load_direction)
         except (KeyError, TypeError, ValueError) as exc:
             raise DrydemError(f"{index}: line {line}: not a frame of drydem tilt or shake --vtk ({exc!r})") from None
         try:
@@ -68,17 +74,27 @@ def series_frames(folder: Path) -> list[VideoFrame]:
             raise DrydemError(f"{file}: cannot read the frame: {exc!r}") from None
         cells = [cell for block in mesh.cells for cell in block.data]
         blocks = [[mesh.points[face] for face in faces] for faces, on in zip(cells, active) if on]
-        frames.append(VideoFrame(blocks, magnitude[active], caption, ~fixed[active]))
+        frames.append(VideoFrame(blocks, magnitude[active], caption, ~fixed[active], load_direction))
     return frames
 
 
-def _caption(row: dict) -> str:
+def _load_direction(row: dict) -> int:
+    """The load's direction in a row of ``frames.csv``: 0 (x) or 1 (y); x where the series
+    does not say (written before it was recorded); a ValueError for anything else."""
+    axis = row.get("load_direction") or "x"
+    if axis not in LOAD_AXES:
+        raise ValueError(f"load_direction {axis!r}: must be one of {', '.join(LOAD_AXES)}")
+    return LOAD_AXES.index(axis)
+
+
+def _caption(row: dict, load_direction: int) -> str:
     """A frame's caption from its row of ``frames.csv``: a shaking-table frame (a ``time_s``
-    column) gives the model time, a tilting one its kind and tilt; both the monitored ux."""
-    ux = f"monitored ux {float(row['ux_m']) * 1e3:.2f} mm"
+    column) gives the model time and the monitored ux, a tilting one its kind, tilt and the
+    monitored displacement along the load (``ux_m``: along y when tilting about x)."""
     if row.get("time_s") is not None:
-        return f"t = {float(row['time_s']):.3f} s, {ux}"
-    return f"{row['kind']}: tilt {float(row['tilt_deg']):.2f} deg, {ux}"
+        return f"t = {float(row['time_s']):.3f} s, monitored ux {float(row['ux_m']) * 1e3:.2f} mm"
+    along = f"monitored u{LOAD_AXES[load_direction]} {float(row['ux_m']) * 1e3:.2f} mm"
+    return f"{row['kind']}: tilt {float(row['tilt_deg']):.2f} deg, {along}"
 
 
 def render_video(folder: Path, path: Path, *, fps: float = 8.0) -> Path:
@@ -124,7 +140,8 @@ def _image(frame: VideoFrame, norm, low: np.ndarray, high: np.ndarray, *, flat: 
     else:
         ax = fig.subplots(subplot_kw={"projection": "3d"})
         owner = np.repeat(np.arange(len(frame.blocks)), [len(block) for block in frame.blocks])
-        draw_faces_3d(fig, ax, [face for block in frame.blocks for face in block], owner, values, title=frame.caption, norm=norm)
-        frame_3d(ax, low, high, title=frame.caption)
+        draw_faces_3d(fig, ax, [face for block in frame.blocks for face in block], owner, values, title=frame.caption, norm=norm,
+                      load_direction=frame.load_direction)
+        frame_3d(ax, low, high, title=frame.caption, load_direction=frame.load_direction)
     fig.canvas.draw()
     return np.asarray(fig.canvas.buffer_rgba())[:, :, :3].copy()

@@ -104,6 +104,12 @@ class GroundMotion:
         return tuple(float(peak) for peak in np.abs(self.acceleration_m_s2).max(axis=0))
 
     @property
+    def main_direction(self) -> int:
+        """The horizontal axis with the larger peak acceleration: 0 (x; also on a tie) or 1 (y)."""
+        peak_x, peak_y, _ = self.peaks_m_s2
+        return int(peak_y > peak_x)
+
+    @property
     def pga_m_s2(self) -> float:
         """Peak horizontal acceleration, m/s2: max over the samples of sqrt(a_x^2 + a_y^2)."""
         return float(np.hypot(self.acceleration_m_s2[:, 0], self.acceleration_m_s2[:, 1]).max())
