@@ -144,10 +144,10 @@ def test_without_ffmpeg_the_video_falls_back_to_a_gif(run, tmp_path, monkeypatch
     assert written == tmp_path / "collapse.gif" and len(imageio.mimread(written)) == 3
 
 
-def test_a_series_says_which_way_its_load_acts_and_one_written_before_that_is_read_as_x(run, tmp_path):
+def test_a_series_says_which_way_its_load_acts_and_one_written_before_that_is_read_as_x(wall, run, tmp_path):
     """frames.csv's load_direction column (x for this in-plane wall) sets the side a 3D model is
     seen from; a series without it (written by an older drydem) is read as loaded along x, and
-    a direction that is neither x nor y is named with its file and line."""
+    a direction that is neither x nor y is named with its file and line; a series is given 0 or 1."""
     from drydem.errors import DrydemError
     from drydem.report.animation import series_frames
 
@@ -164,6 +164,9 @@ def test_a_series_says_which_way_its_load_acts_and_one_written_before_that_is_re
     with pytest.raises(DrydemError, match=r"frames.csv: line 2: not a frame of drydem tilt or shake --vtk \(ValueError\(\"load_direction 'z': "
                                           r"must be one of x, y"):
         series_frames(older)
+    for bad in (-1, 2, True, 1.0):
+        with pytest.raises(DrydemError, match=r"VtkSeries load_direction = .+: must be an integer in \[0, 1\]"):
+            VtkSeries(tmp_path / "refused", wall, load_direction=bad)
 
 
 def test_a_resumed_run_keeps_the_frames_already_written_and_goes_on_after_them(wall, run, tmp_path):

@@ -87,6 +87,7 @@ def write_contacts_vtu(model: Model, path: str | Path, state: State, sub: SubCon
 
 #: the load's directions in a series' ``frames.csv``, by index (0: x, 1: y)
 LOAD_AXES = ("x", "y")
+LOAD_DIRECTION = Range(0, len(LOAD_AXES) - 1, integer=True)
 #: keep every N-th equilibrium frame (``drydem tilt --save-every``)
 SAVE_EVERY = Range(1, None, integer=True)
 
@@ -106,6 +107,7 @@ class VtkSeries:
 
     def __init__(self, folder: Path, model: Model, *, every: int = 1, resume: bool = False, load_direction: int = 0):
         SAVE_EVERY.check(every, "VtkSeries every")
+        LOAD_DIRECTION.check(load_direction, "VtkSeries load_direction")
         self.folder, self.model, self.every, self.load_axis = Path(folder), model, every, LOAD_AXES[load_direction]
         self.folder.mkdir(parents=True, exist_ok=True)
         self.rows: list[tuple[int, str, float, float]] = _equilibrium_rows(self.folder / "frames.csv") if resume else []
@@ -138,6 +140,7 @@ class ShakeSeries:
 
     def __init__(self, folder: Path, model: Model, *, every: int = 1, load_direction: int = 0):
         SAVE_EVERY.check(every, "ShakeSeries every")
+        LOAD_DIRECTION.check(load_direction, "ShakeSeries load_direction")
         self.folder, self.model, self.every, self.load_axis = Path(folder), model, every, LOAD_AXES[load_direction]
         self.folder.mkdir(parents=True, exist_ok=True)
         self.rows: list[tuple[int, float, float]] = []
