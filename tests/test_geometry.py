@@ -110,6 +110,20 @@ def test_the_penetration_depth_is_the_minkowski_differences_on_random_turned_blo
                                rtol=1e-12, atol=1e-15)
 
 
+def test_the_overlap_check_takes_many_sided_blocks_a_few_edges_at_a_time(monkeypatch):
+    """penetration_depths holds about DEPTH_CHUNK projections at once however many edges the
+    blocks have (a 2,000-sided prism padded against a brick once asked for 30 GiB): with the
+    chunk shrunk to a few edges, the same depths as in one piece, for prisms of 3 to 120 sides."""
+    from drydem.model import assembly
+
+    rng = np.random.default_rng(5)
+    shapes = [dd.convex_hull(random_block(rng, sides)) for sides in (3, 4, 7, 40, 120, 5)]
+    every = np.array([(i, j) for i in range(len(shapes)) for j in range(i + 1, len(shapes))])
+    whole = assembly.penetration_depths(shapes, every)
+    monkeypatch.setattr(assembly, "DEPTH_CHUNK", 500)
+    np.testing.assert_array_equal(assembly.penetration_depths(shapes, every), whole)
+
+
 def test_crossed_prisms_touching_edge_on_edge_are_built_and_pressed_into_each_other_are_refused():
     """Two triangular prisms crossed at 90 deg, apex edge on apex edge: along z they touch (depth
     0), while every face normal of either says they overlap by ~0.07 m (a check on the face

@@ -323,11 +323,18 @@ def _padded(rows: list[np.ndarray]) -> np.ndarray:
 
 
 def _edge_separations(va: np.ndarray, vb: np.ndarray, ea: np.ndarray, eb: np.ndarray) -> np.ndarray:
-    """(P,) :func:`~drydem.model.geometry.edge_separation` of P pairs: vertices (P, nv, 3), edge directions (P, ne, 3)."""
-    axes = np.cross(ea[:, :, None], eb[:, None]).reshape(len(ea), -1, 3)
-    length = np.linalg.norm(axes, axis=2)
-    parallel = length <= PARALLEL_SINE
-    axes = axes / np.where(parallel, 1.0, length)[..., None]
-    pa, pb = va @ axes.transpose(0, 2, 1), vb @ axes.transpose(0, 2, 1)
-    gaps = np.maximum(pb.min(axis=1) - pa.max(axis=1), pa.min(axis=1) - pb.max(axis=1))
-    return np.where(parallel, -np.inf, gaps).max(axis=1)
+    """(P,) :func:`~drydem.model.geometry.edge_separation` of P pairs: vertices (P, nv, 3), edge
+    directions (P, ne, 3); a's edges taken a few at a time, so that at most about DEPTH_CHUNK
+    projections are held at once however many edges the blocks have."""
+    per_edge = va.shape[0] * va.shape[1] * eb.shape[1]
+    step = max(1, DEPTH_CHUNK // per_edge)
+    best = np.full(len(va), -np.inf)
+    for start in range(0, ea.shape[1], step):
+        axes = np.cross(ea[:, start:start + step, None], eb[:, None]).reshape(len(ea), -1, 3)
+        length = np.linalg.norm(axes, axis=2)
+        parallel = length <= PARALLEL_SINE
+        axes = axes / np.where(parallel, 1.0, length)[..., None]
+        pa, pb = va @ axes.transpose(0, 2, 1), vb @ axes.transpose(0, 2, 1)
+        gaps = np.maximum(pb.min(axis=1) - pa.max(axis=1), pa.min(axis=1) - pb.max(axis=1))
+        best = np.maximum(best, np.where(parallel, -np.inf, gaps).max(axis=1))
+    return best
