@@ -85,6 +85,15 @@ def test_a_compas_dem_block_model_reads_with_its_supports_transformations_tree_a
     assert model.n_blocks == 5 and model.block_mass[3] == pytest.approx(2100 * 0.2 * 0.2 * 0.3)
 
 
+def test_a_block_model_without_its_inheritance_list_reads_by_its_dtype(tmp_path):
+    data = json.loads(COMPAS_DEM_BLOCKS.read_text())
+    assert data["dtype"] == "compas_dem.models/BlockModel"
+    data.pop("inheritance", None)
+    path = tmp_path / "hand_written.json"
+    path.write_text(json.dumps(data))
+    assert [b.name for b in read_compas(path)[0]] == [b.name for b in read_compas(COMPAS_DEM_BLOCKS)[0]]
+
+
 def test_a_block_model_compas_dem_writes_now_reads_as_compas_dem_places_it(tmp_path):
     compas = pytest.importorskip("compas")
     pytest.importorskip("compas_dem")
@@ -121,6 +130,17 @@ def untransformable(data):
     return f"element {element_guid(data, 'turned')}: transformation: matrix: true is not a finite number"
 
 
+def ragged(data):
+    data["data"]["elements"][element_guid(data, "turned")]["data"]["transformation"]["data"]["matrix"][1].append(0.0)
+    return f"element {element_guid(data, 'turned')}: transformation: the matrix must be 4 x 4, not rows of 4, 5, 4, 4"
+
+
+def projected(data):
+    data["data"]["elements"][element_guid(data, "turned")]["data"]["transformation"]["data"]["matrix"][3] = [0, 0, 0, 0]
+    return (f"element {element_guid(data, 'turned')}: transformation: the matrix's last row is \\[0.0, 0.0, 0.0, 0.0\\], "
+            r"not \[0, 0, 0, 1\]: a block is placed by an affine transformation")
+
+
 def modified(data):
     data["data"]["graph"]["edge"]["0"] = {"1": {"modifiers": [{"dtype": "compas_model.modifiers/BooleanModifier"}]}}
     return r"graph edge 0-1 has modifiers \(cuts of one element by another\)"
@@ -131,7 +151,7 @@ def lost_element(data):
     return r"the tree names the element '[0-9a-f-]+', which is not in the model's elements"
 
 
-@pytest.mark.parametrize("spoil", [untransformable, modified, lost_element])
+@pytest.mark.parametrize("spoil", [untransformable, ragged, projected, modified, lost_element])
 def test_a_bad_compas_dem_model_is_refused_naming_the_file_and_the_element(tmp_path, spoil):
     data = json.loads(COMPAS_DEM_BLOCKS.read_text())
     message = spoil(data)
@@ -248,6 +268,8 @@ ELL_FACES = [[5, 4, 3, 2, 1, 0], [6, 7, 8, 9, 10, 11]] + [[i, (i + 1) % 6, (i + 
     ([mesh_json("ell", ELL_POINTS, ELL_FACES)],
      r"mesh 0 'ell': the surface is not convex: it encloses 3 m3, its convex hull 3.5 m3"),
     ([mesh_json("lid off", CUBE, CUBE_FACES[1:])], r"mesh 0 'lid off': the surface is not closed"),
+    ([mesh_json("flipped", CUBE, [CUBE_FACES[0][::-1], *CUBE_FACES[1:]])],
+     r"mesh 0 'flipped': the faces do not wind consistently: the edge \[.+\] - \[.+\] runs the same way in both its faces \(4 such edges"),
     ([mesh_json("cube", [[True, 0, 0], *CUBE[1:]], CUBE_FACES)], r"mesh 0 'cube': vertex 0: x: true is not a finite number"),
     ([mesh_json("cube", CUBE, [*CUBE_FACES[:-1], [3, 0, 4, 8]])],
      r"mesh 0 'cube': face 5 refers to vertex 8, which the mesh does not have"),

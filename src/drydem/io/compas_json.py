@@ -24,8 +24,8 @@ compas, and reads:
   ``data["tree"]`` nests the elements: an element's geometry goes to the model by its own
   transformation, then its parents', then the model's ``data["transformation"]``
   (compas_model/elements/element.py, ``Element.compute_modeltransformation``; a 4 x 4 matrix
-  acts on homogeneous points, as compas.geometry.transform_points). ``data["graph"]["node"]``
-  gives each element its graph node, the block index of compas_dem's ``BlockModel.add_support``;
+  acts on homogeneous points, as compas.geometry.transform_points, and must be affine, its last
+  row 0 0 0 1). ``data["graph"]["node"]`` gives each element its graph node, the block index of compas_dem's ``BlockModel.add_support``;
   the blocks are read in that order. The contacts on the graph's edges are not read (drydem
   finds its own); modifiers (cuts of one element by another) are refused; features are not
   read, as compas_dem's ``Block.compute_elementgeometry`` does not apply them.
@@ -59,6 +59,8 @@ from drydem.model.assembly import Block, Model
 
 MESH_DTYPE = "compas.datastructures/Mesh"
 MODEL_DTYPE = "compas_model.models/Model"
+#: compas_dem's block model, read as a model even where its "inheritance" is left out
+BLOCK_MODEL_DTYPE = "compas_dem.models/BlockModel"
 #: compas's transformations (compas/geometry/transformations), each ``{"matrix": 4 x 4}``
 TRANSFORMATION_DTYPES = tuple(f"compas.geometry/{kind}" for kind in
                               ("Transformation", "Translation", "Rotation", "Scale", "Reflection", "Projection", "Shear"))
@@ -134,7 +136,7 @@ def _parts(data, source: str) -> list[_Part]:
         raise ModelError(f"{source}: the file holds a JSON {type(data).__name__}; drydem reads {READS}")
     if "dtype" not in data:
         return [_mesh_part(item, key, k, f"{source}: mesh") for k, (key, item) in enumerate(data.items())]
-    if _is(data, MODEL_DTYPE):
+    if _is(data, MODEL_DTYPE) or data.get("dtype") == BLOCK_MODEL_DTYPE:
         return _model_parts(data, source)
     if not _is(data, MESH_DTYPE):
         raise ModelError(f"{source}: the file holds a {data['dtype']!r}, not a {MESH_DTYPE!r} or a {MODEL_DTYPE!r}; "
@@ -253,23 +255,26 @@ def _block(part: _Part, name: str, unit_m: float) -> Block:
         if missing:
             raise ModelError(f"{where}: face {key} refers to vertex {missing[0]!r}, which the mesh does not have")
         faces.append([index[str(v)] for v in face])
-    homogeneous = np.hstack([points, np.ones((len(points), 1))]) @ part.matrix.T
-    placed = homogeneous[:, :3] / homogeneous[:, 3:]
+    placed = points @ part.matrix[:3, :3].T + part.matrix[:3, 3]
     block = closed_convex_block(placed * unit_m, faces, name=name, where=where)
     return replace(block, fixed=part.fixed, density=part.density)
 
 
 def _matrix(value, where: str) -> np.ndarray:
-    """The 4 x 4 matrix of a compas Transformation (identity for null)."""
+    """The 4 x 4 matrix of a compas Transformation (identity for null): four rows of four finite
+    numbers, the last 0 0 0 1 (an affine map, as a block's placement is; a projection's is not)."""
     if value is None:
         return np.eye(4)
     value = _object(value, where)
     if value.get("dtype") not in TRANSFORMATION_DTYPES:
         raise ModelError(f"{where}: a {value.get('dtype')!r}, not a compas transformation ({', '.join(TRANSFORMATION_DTYPES)})")
-    rows = _list(_object(value.get("data"), f"{where}: data").get("matrix"), f"{where}: matrix")
-    matrix = np.array([[_number(x, f"{where}: matrix") for x in _list(row, f"{where}: matrix")] for row in rows], dtype=float)
-    if matrix.shape != (4, 4):
-        raise ModelError(f"{where}: the matrix must be 4 x 4, not {' x '.join(map(str, matrix.shape))}")
+    rows = [_list(row, f"{where}: matrix") for row in _list(_object(value.get("data"), f"{where}: data").get("matrix"), f"{where}: matrix")]
+    if len(rows) != 4 or any(len(row) != 4 for row in rows):
+        raise ModelError(f"{where}: the matrix must be 4 x 4, not rows of {', '.join(str(len(row)) for row in rows) or 'nothing'}")
+    matrix = np.array([[_number(x, f"{where}: matrix") for x in row] for row in rows], dtype=float)
+    if not np.array_equal(matrix[3], [0.0, 0.0, 0.0, 1.0]):
+        raise ModelError(f"{where}: the matrix's last row is {matrix[3].tolist()}, not [0, 0, 0, 1]: a block is placed by an "
+                         "affine transformation (a projection is not one)")
     return matrix
 
 

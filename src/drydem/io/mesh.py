@@ -117,17 +117,27 @@ def write_mesh(model: Model, path: str | Path) -> None:
 
 def closed_convex_block(points: np.ndarray, faces: list[list[int]], *, name: str, where: str) -> Block:
     """The block bounded by ``faces`` (vertex indices into ``points``, m): the surface must be
-    closed (each edge in two faces) and its vertices in convex position. Errors say ``where``."""
-    edges: dict[tuple[int, int], int] = {}
+    closed (each edge in two faces), its faces wound consistently (all counter-clockwise or all
+    clockwise seen from outside: each edge run one way by one face and the other way by the
+    other, without which its enclosed volume means nothing) and its vertices in convex position.
+    Errors say ``where``."""
+    runs: dict[tuple[int, int], int] = {}
     for face in faces:
         for a, b in zip(face, face[1:] + face[:1]):
-            key = (min(a, b), max(a, b))
-            edges[key] = edges.get(key, 0) + 1
+            runs[(a, b)] = runs.get((a, b), 0) + 1
+    edges: dict[tuple[int, int], int] = {}
+    for (a, b), n in runs.items():
+        edges[(min(a, b), max(a, b))] = edges.get((min(a, b), max(a, b)), 0) + n
     bad = [(edge, n) for edge, n in edges.items() if n != 2]
     if bad:
         (a, b), n = bad[0]
         raise ModelError(f"{where}: the surface is not closed: the edge {points[a].tolist()} - {points[b].tolist()} "
                          f"belongs to {n} face(s), not 2 ({len(bad)} such edges)")
+    same_way = [edge for edge, n in runs.items() if n > 1]
+    if same_way:
+        a, b = same_way[0]
+        raise ModelError(f"{where}: the faces do not wind consistently: the edge {points[a].tolist()} - {points[b].tolist()} "
+                         f"runs the same way in both its faces ({len(same_way)} such edges; turn the faces that wind the other way)")
     return Block(name=name, shape=_convex_shape(points, faces, where=where))
 
 
