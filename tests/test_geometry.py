@@ -69,6 +69,20 @@ def test_degenerate_blocks_are_rejected(points, reason):
         dd.convex_hull(points, name="flat")
 
 
+@pytest.mark.parametrize("corner, size, message", [
+    (2e6, 1.0, r"'far': a vertex is 2e\+06 m from the origin: coordinates must be within 1e\+06 m \(a model in another unit"),
+    (1e300, 1e300, r"'far': a vertex is 2e\+300 m from the origin"),  # its volume would overflow
+    (0.0, 5e-7, r"'far': 8.66e-07 m across: a block must be at least 1e-06 m across \(a model in another unit"),
+])
+def test_a_block_in_another_unit_than_metres_is_named(corner, size, message):
+    """Coordinates beyond 1,000 km or a block under a micrometre across: drydem.model.geometry's
+    MAX_COORDINATE_M and MIN_BLOCK_SIZE_M (a millimetre model read as metres stays inside both)."""
+    with pytest.raises(dd.GeometryError, match=message):
+        dd.box([corner] * 3, [corner + size] * 3, name="'far'")
+    assert dd.box([999e3] * 3, [999e3 + 1.0] * 3).volume == pytest.approx(1.0, rel=1e-9)
+    assert dd.box([0.0] * 3, [1e-6] * 3).volume == pytest.approx(1e-18, rel=1e-9)
+
+
 def test_inverted_box_is_rejected():
     with pytest.raises(dd.GeometryError, match="max .* must exceed min"):
         dd.box([0, 0, 0], [1, -1, 1], name="upside")

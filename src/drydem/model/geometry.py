@@ -31,6 +31,12 @@ if TYPE_CHECKING:
 
 #: Relative tolerance (fraction of the block's size) for "on the hull" and "coplanar".
 RELATIVE_TOLERANCE = 1e-9
+#: the largest coordinate of a vertex, m: 1,000 km; beyond it a model is in another unit (its
+#: squares and cubes, areas and volumes, would also leave floating point's range near 1e100)
+MAX_COORDINATE_M = 1e6
+#: the smallest block, m across (its bounding box's diagonal): a micrometre, a thousandth of the
+#: paper's smallest brick dimension; below it a model is in another unit
+MIN_BLOCK_SIZE_M = 1e-6
 
 
 @dataclass(frozen=True, eq=False)
@@ -120,9 +126,16 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
         raise GeometryError(f"{name}: vertices contain NaN or infinite coordinates")
     if len(pts) < 4:
         raise GeometryError(f"{name}: a block needs at least 4 vertices, got {len(pts)}")
+    far = float(np.abs(pts).max())
+    if far > MAX_COORDINATE_M:
+        raise GeometryError(f"{name}: a vertex is {far:.3g} m from the origin: coordinates must be within "
+                            f"{MAX_COORDINATE_M:g} m (a model in another unit than metres? drydem's --unit scales it)")
+    scale = float(np.linalg.norm(pts.max(0) - pts.min(0)))
+    if scale < MIN_BLOCK_SIZE_M:
+        raise GeometryError(f"{name}: {scale:.3g} m across: a block must be at least {MIN_BLOCK_SIZE_M:g} m across "
+                            "(a model in another unit than metres? drydem's --unit scales it)")
     from scipy.spatial import ConvexHull, QhullError  # here: scipy.spatial takes a fifth of a second to import
 
-    scale = float(np.linalg.norm(pts.max(0) - pts.min(0)))
     try:
         hull = ConvexHull(pts)
     except QhullError as exc:
