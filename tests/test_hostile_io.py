@@ -111,6 +111,35 @@ def test_export_to_an_unwritable_path_names_it_and_writes_nothing(tmp_path, outp
     assert sorted(tmp_path.rglob("*")) == before
 
 
+def test_export_keeps_whatever_is_there_and_overwrites_only_a_regular_file(tmp_path):
+    """An existing OUTPUT of any kind (a pipe, a broken link) is kept without --overwrite; with
+    it, only a regular file is replaced (os.replace would put a file in a pipe's or link's
+    place, not write through it); a name the system refuses is named."""
+    import os
+
+    os.mkfifo(tmp_path / "pipe.json")
+    (tmp_path / "broken.json").symlink_to(tmp_path / "nowhere" / "x.json")
+    for name in ("pipe.json", "broken.json"):
+        fails(["export", "WD3", tmp_path / name], f"{name}: exists; pass --overwrite to replace it, or another OUTPUT")
+        fails(["export", "WD3", tmp_path / name, "--overwrite"],
+              f"{name}: exists and is not a regular file (a link, a pipe or a device): --overwrite replaces files only")
+    assert (tmp_path / "broken.json").is_symlink() and not (tmp_path / "pipe.json").is_file() and not (tmp_path / "nowhere").exists()
+    fails(["export", "WD3", tmp_path / ("a" * 300 + ".json")], "a.json: File name too long")
+
+
+@pytest.mark.parametrize("target, message", [
+    ("", "'': an empty TARGET; give a built-in wall (WD1"),
+    ("pipe.toml", "pipe.toml: not a regular file, and not a built-in wall (WD1"),
+    ("a" * 300 + ".toml", "a.toml: File name too long, and not a built-in wall"),
+])
+def test_a_target_that_is_no_file_is_named(tmp_path, monkeypatch, target, message):
+    import os
+
+    monkeypatch.chdir(tmp_path)
+    os.mkfifo("pipe.toml")
+    fails(["check", target], message)
+
+
 def test_a_failed_export_keeps_the_old_file_whole(tmp_path, monkeypatch):
     # the disk fills up half-way through writing: the old file stays, no partial file is left
     import errno

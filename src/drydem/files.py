@@ -16,18 +16,38 @@ from drydem.errors import DrydemError, ModelError
 
 def writable(path: str | Path) -> Path:
     """``path`` if a file can be created there; else a DrydemError naming it and the reason (its
-    folder is missing or not a folder or not writable, or the path is a folder). Commands call it
-    before their work, so that a long analysis does not end on a path it cannot write."""
+    folder is missing or not a folder or not writable, the path is a folder, or the system
+    refuses the name, e.g. too long). Commands call it before their work, so that a long
+    analysis does not end on a path it cannot write."""
     path = Path(path)
     folder = path.parent
-    if path.is_dir():
-        raise DrydemError(f"{path}: is a folder; give a file name")
-    if not folder.exists():
-        raise DrydemError(f"{path}: the folder {folder} does not exist")
-    if not folder.is_dir():
-        raise DrydemError(f"{path}: {folder} is not a folder")
+    try:
+        if path.is_dir():
+            raise DrydemError(f"{path}: is a folder; give a file name")
+        if not folder.exists():
+            raise DrydemError(f"{path}: the folder {folder} does not exist")
+        if not folder.is_dir():
+            raise DrydemError(f"{path}: {folder} is not a folder")
+    except OSError as exc:
+        raise DrydemError(f"{path}: {exc.strerror or exc}") from None
     if not os.access(folder, os.W_OK | os.X_OK):
         raise DrydemError(f"{path}: no permission to write in {folder}")
+    return path
+
+
+def replaceable(path: str | Path, overwrite: bool, *, option: str = "--overwrite", other: str = "another file name") -> Path:
+    """``path`` once :func:`writable`, if nothing is there, or a regular file and ``overwrite``:
+    drydem replaces no result unless asked. Else a DrydemError: "exists; pass OPTION to replace
+    it, or OTHER" for anything there (a file, a link, even a broken one, a pipe), and under
+    ``overwrite`` "is not a regular file" for a link, pipe or device (os.replace would put a
+    file in its place, not write through it)."""
+    path = writable(path)
+    if not os.path.lexists(path):
+        return path
+    if not overwrite:
+        raise DrydemError(f"{path}: exists; pass {option} to replace it, or {other}")
+    if path.is_symlink() or not path.is_file():
+        raise DrydemError(f"{path}: exists and is not a regular file (a link, a pipe or a device): {option} replaces files only")
     return path
 
 

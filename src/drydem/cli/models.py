@@ -189,7 +189,7 @@ def export(target: str, output: Path, overwrite: bool, unit: str) -> None:
     from drydem.io.itasca import write_3dec
     from drydem.io.mesh import write_mesh
     from drydem.io.model_file import save_model
-    from drydem.files import replaced_atomically, writable
+    from drydem.files import replaceable, replaced_atomically
     from drydem.io.vtk import write_vtu
 
     writers = {".toml": save_model, ".vtu": write_vtu, ".obj": write_mesh, ".stl": write_mesh, ".json": write_compas,
@@ -197,10 +197,8 @@ def export(target: str, output: Path, overwrite: bool, unit: str) -> None:
     writer = writers.get(output.suffix.lower())
     if writer is None:
         raise click.ClickException(f"{output}: unknown output type {output.suffix!r}; drydem writes {', '.join(writers)}")
-    if output.is_file() and not overwrite:
-        raise click.ClickException(f"{output}: exists; pass --overwrite to replace it, or another OUTPUT")
     try:
-        writable(output)
+        replaceable(output, overwrite, other="another OUTPUT")
         found = resolve_target(target, unit)
         with replaced_atomically(output) as partial:
             writer(found.model, partial)

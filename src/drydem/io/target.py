@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -42,15 +43,21 @@ def load_target(target: str, *, unit_m: float = 1.0) -> Target:
     model file (.toml), or geometry to import (.wrl, .obj, .stl, compas .json; coordinates times ``unit_m``
     give metres). Imported blocks stand on a fixed base block (drydem.model.assembly.base_under) and
     get the default material and options. ModelError says what was tried."""
+    if not target.strip():
+        raise ModelError(f"{target!r}: an empty TARGET; give a built-in wall ({', '.join(designs.names())}), "
+                         f"building ({', '.join(BUILDINGS)}) or a file")
     path = Path(target)
-    if path.is_file():
-        return _file_target(path, unit_m)
+    try:
+        if path.is_file():
+            return _file_target(path, unit_m)
+        found = "a folder, not a file" if path.is_dir() else "not a regular file" if os.path.lexists(path) else "no such file"
+    except OSError as exc:  # a name the system refuses (too long, ...)
+        found = exc.strerror or str(exc)
     if target in BUILDINGS:
         return Target(target, Path(target), builtin_building(target), builtin=True)
     builtin = designs.find(target)
     if builtin is None:
-        what = "a folder, not a file" if path.is_dir() else "no such file"
-        raise ModelError(f"{target}: {what}, and not a built-in wall ({', '.join(designs.names())}) "
+        raise ModelError(f"{target}: {found}, and not a built-in wall ({', '.join(designs.names())}) "
                          f"or building ({', '.join(BUILDINGS)})")
     return replace(_file_target(builtin, unit_m), builtin=True)
 
