@@ -121,27 +121,145 @@ def test_animate_names_a_folder_without_a_series(tmp_path):
     assert result.exit_code == 1 and "no frames.csv: not a VTK series" in result.output
 
 
-def test_without_ffmpeg_the_video_falls_back_to_a_gif(run, tmp_path, monkeypatch):
+def first_frames(run, folder, count=3):
+    """``folder`` holding the first ``count`` frames of the run's series (a short video)."""
+    import shutil
+
+    folder.mkdir()
+    for k in range(count):
+        shutil.copy(run[1] / f"blocks_{k:04d}.vtu", folder)
+    lines = (run[1] / "frames.csv").read_text().splitlines()[:count + 1]
+    (folder / "frames.csv").write_text("\n".join(lines) + "\n")
+    return folder
+
+
+def no_ffmpeg(monkeypatch):
+    """imageio cannot write an MP4 (as without the ffmpeg binary)."""
     import imageio.v2 as imageio
+
+    def refused(*args, **kwargs):
+        raise RuntimeError("no ffmpeg here")
+
+    monkeypatch.setattr(imageio, "get_writer", refused)
+
+
+def test_without_ffmpeg_the_video_falls_back_to_a_gif_at_the_frame_rate_asked(run, tmp_path, monkeypatch):
+    import imageio.v2 as imageio
+    from PIL import Image
 
     from drydem.report.animation import render_video
 
-    import shutil
-
-    _, folder = run
-    short = tmp_path / "three"  # the first three frames of the series
-    short.mkdir()
-    for k in range(3):
-        shutil.copy(folder / f"blocks_{k:04d}.vtu", short)
-    lines = (folder / "frames.csv").read_text().splitlines()[:4]
-    (short / "frames.csv").write_text("\n".join(lines) + "\n")
-
-    def no_ffmpeg(*args, **kwargs):
-        raise RuntimeError("no ffmpeg here")
-
-    monkeypatch.setattr(imageio, "get_writer", no_ffmpeg)
+    short = first_frames(run, tmp_path / "three")
+    no_ffmpeg(monkeypatch)
     written = render_video(short, tmp_path / "collapse.mp4", fps=4)
     assert written == tmp_path / "collapse.gif" and len(imageio.mimread(written)) == 3
+    with Image.open(written) as gif:
+        assert gif.info["duration"] == 250  # ms a frame: 4 frames per second
+
+
+def test_the_gif_an_mp4_falls_back_to_is_not_overwritten_either(run, tmp_path, monkeypatch):
+    from drydem.errors import DrydemError
+    from drydem.report.animation import render_video
+
+    short = first_frames(run, tmp_path / "three")
+    no_ffmpeg(monkeypatch)
+    (tmp_path / "collapse.gif").write_bytes(b"an earlier video")
+    with pytest.raises(DrydemError, match=r"collapse.gif: exists; pass --overwrite to replace it, or another --out"):
+        render_video(short, tmp_path / "collapse.mp4", fps=4)
+    assert (tmp_path / "collapse.gif").read_bytes() == b"an earlier video"
+
+
+def test_animate_keeps_an_existing_video_unless_told_to_overwrite_it(run, tmp_path, monkeypatch):
+    import imageio.v2 as imageio
+
+    from drydem.report import animation
+
+    short = first_frames(run, tmp_path / "three")
+    video = tmp_path / "collapse.gif"
+    video.write_bytes(b"an earlier video")
+    drawn, draw = [], animation._image
+
+    def counted(*args, **kwargs):
+        drawn.append(1)
+        return draw(*args, **kwargs)
+
+    monkeypatch.setattr(animation, "_image", counted)
+    result = CliRunner().invoke(main, ["animate", str(short), "-o", str(video)])
+    assert result.exit_code == 1 and f"{video}: exists; pass --overwrite to replace it, or another --out" in result.output
+    assert video.read_bytes() == b"an earlier video" and not drawn  # refused before any frame is drawn
+    result = CliRunner().invoke(main, ["animate", str(short), "-o", str(video), "--overwrite"])
+    assert result.exit_code == 0, result.output
+    assert len(imageio.mimread(video)) == len(drawn) == 3
+
+
+def test_overwrite_replaces_a_video_file_not_a_link_there(run, tmp_path):
+    link = tmp_path / "collapse.gif"
+    link.symlink_to(tmp_path / "elsewhere.gif")
+    result = CliRunner().invoke(main, ["animate", str(run[1]), "-o", str(link), "--overwrite"])
+    assert result.exit_code == 1
+    assert f"{link}: exists and is not a regular file (a link, a pipe or a device): --overwrite replaces files only" in result.output
+    assert link.is_symlink()
+
+
+@pytest.mark.parametrize("fps", ["nan", "inf", "-inf", "0", "0.05", "101"])
+def test_animate_refuses_a_frame_rate_that_is_not_finite_or_out_of_range(run, tmp_path, fps):
+    result = CliRunner().invoke(main, ["animate", str(run[1]), "-o", str(tmp_path / "collapse.gif"), "--fps", fps])
+    assert result.exit_code == 2
+    assert f"Invalid value for '--fps': {float(fps)!r} frames per second: must be a finite number from 0.1 to 100" in result.output
+    assert not (tmp_path / "collapse.gif").exists()
+
+
+def test_the_fps_help_states_the_range_render_video_enforces():
+    from drydem.report.animation import FPS_RANGE
+
+    result = CliRunner().invoke(main, ["animate", "--help"])
+    assert result.exit_code == 0 and "{:g} to {:g}".format(*FPS_RANGE) in " ".join(result.output.split())
+
+
+def test_animate_names_a_frames_csv_that_is_not_text(tmp_path):
+    (tmp_path / "frames.csv").write_bytes(b"frame\xf9\x00\xff,kind\n")
+    result = CliRunner().invoke(main, ["animate", str(tmp_path), "-o", str(tmp_path / "collapse.gif")])
+    assert result.exit_code == 1
+    assert f"{tmp_path / 'frames.csv'}: not a text file (byte 5 is not UTF-8); frames.csv of drydem tilt or shake --vtk is CSV text" in result.output
+
+
+def test_animate_names_the_line_of_a_frame_whose_tilt_is_not_finite(run, tmp_path):
+    short = first_frames(run, tmp_path / "three")
+    lines = (short / "frames.csv").read_text().splitlines()
+    lines[2] = lines[2].replace(lines[2].split(",")[2], "nan", 1)
+    (short / "frames.csv").write_text("\n".join(lines) + "\n")
+    result = CliRunner().invoke(main, ["animate", str(short), "-o", str(tmp_path / "collapse.gif")])
+    assert result.exit_code == 1
+    assert "frames.csv: line 3: not a frame of drydem tilt or shake --vtk (ValueError(\"tilt_deg 'nan': must be a finite number" in result.output
+
+
+def spoiled(run, tmp_path, spoil):
+    """A one-frame series whose blocks_0000.vtu ``spoil`` (a function of the meshio mesh) changed."""
+    import meshio
+
+    short = first_frames(run, tmp_path / "spoiled", count=1)
+    mesh = meshio.read(short / "blocks_0000.vtu")
+    spoil(mesh)
+    meshio.write(short / "blocks_0000.vtu", mesh, file_format="vtu")
+    return short
+
+
+def _set(mesh, field, value):
+    for values in mesh.cell_data[field]:
+        values[:] = value
+
+
+@pytest.mark.parametrize("spoil, message", [
+    (lambda mesh: _set(mesh, "active", 0), "no block in the analysis (active = 0 for every block): nothing to draw"),
+    (lambda mesh: _set(mesh, "displacement_magnitude", np.nan), "displacement_magnitude: not all finite numbers >= 0: not a frame drydem writes"),
+    (lambda mesh: _set(mesh, "displacement_magnitude", -1.0), "displacement_magnitude: not all finite numbers >= 0: not a frame drydem writes"),
+    (lambda mesh: mesh.points.__setitem__((0, 2), np.inf), "points: not all finite numbers (NaN or inf): not a frame drydem writes"),
+], ids=["no-active-block", "nan-magnitude", "negative-magnitude", "inf-point"])
+def test_animate_names_a_frame_it_cannot_draw_and_the_rule(run, tmp_path, spoil, message):
+    short = spoiled(run, tmp_path, spoil)
+    result = CliRunner().invoke(main, ["animate", str(short), "-o", str(tmp_path / "collapse.gif")])
+    assert result.exit_code == 1 and f"Error: {short / 'blocks_0000.vtu'}: {message}" in result.output
+    assert not (tmp_path / "collapse.gif").exists()
 
 
 def test_a_series_says_which_way_its_load_acts_and_one_written_before_that_is_read_as_x(wall, run, tmp_path):

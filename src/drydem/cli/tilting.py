@@ -220,21 +220,39 @@ def _tilt_verdict(result, model: Model) -> list[str]:
                 "(raise max_cycles to decide)"]
     return [f"collapse angle  {result.collapse_angle_deg:.2f} deg (load multiplier {result.load_multiplier:.4f}; ended by {result.ended_by})"]
 
+
+def _fps(ctx, param, value):
+    """--fps: a frame rate within drydem.report.animation.FPS_RANGE, or a usage error naming it."""
+    from drydem.report.animation import check_fps
+
+    try:
+        return check_fps(value)
+    except DrydemError as exc:
+        raise click.BadParameter(str(exc)) from None
+
+
 @main.command()
 @click.argument("result_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
 @click.option("--out", "-o", type=click.Path(dir_okay=False, path_type=Path), help="Video file, .mp4 or .gif (default: RESULT_DIR/collapse.mp4).")
-@click.option("--fps", type=click.FloatRange(min=0.1), default=8.0, show_default=True, help="Frames per second.")
-def animate(result_dir: Path, out: Path | None, fps: float) -> None:
-    """Render the VTK series of a `drydem tilt --vtk` run (RESULT_DIR or RESULT_DIR/vtk) to a video."""
+@click.option("--fps", type=float, default=8.0, show_default=True, callback=_fps,
+              help="Frames per second, 0.1 to 100 (10 s a frame to the fastest a GIF can show: it counts in hundredths of a second).")
+@click.option("--overwrite", is_flag=True, help="Replace the video if it exists (else an existing file is kept and the command fails).")
+def animate(result_dir: Path, out: Path | None, fps: float, overwrite: bool) -> None:
+    """Render the VTK series of a `drydem tilt --vtk` run (RESULT_DIR or RESULT_DIR/vtk) to a video.
+    An existing video is replaced only with --overwrite (checked before any frame is drawn)."""
     folder = result_dir / "vtk" if (result_dir / "vtk").is_dir() else result_dir
-    _render(folder, out or result_dir / "collapse.mp4", fps=fps)
+    _render(folder, out or result_dir / "collapse.mp4", fps=fps, overwrite=overwrite)
 
 
-def _render(folder: Path, path: Path, *, fps: float) -> None:
+def _render(folder: Path, path: Path, *, fps: float, overwrite: bool = True) -> None:
+    """Render the series in ``folder`` to ``path`` (drydem.report.animation.render_video) and say
+    where; exit with the message of a DrydemError. ``overwrite`` by default: tilt --video and shake
+    --video render into the results folder they own (new, resumed, or emptied by --overwrite);
+    animate passes its --overwrite."""
     from drydem.report.animation import render_video
 
     try:
-        written = render_video(folder, path, fps=fps)
+        written = render_video(folder, path, fps=fps, overwrite=overwrite)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     click.echo(f"video           {written}")

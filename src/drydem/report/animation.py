@@ -10,19 +10,23 @@ series written before it was recorded), as in ``mechanism.png``.
 Frames are drawn by the renderers of ``mechanism.png`` (drydem.report.plots.draw_displacements,
 draw_faces_3d), so pictures and videos agree. MP4 through imageio-ffmpeg (the ffmpeg binary
 ships in that package); GIF (Pillow) when MP4 cannot be written or is not asked for. The video file is
-checked before any frame is drawn, and written whole or not at all (drydem.files).
+checked before any frame is drawn (an existing one is kept unless it is to be replaced), and written
+whole or not at all (drydem.files). A series is read whole before any drawing: a file that is not one
+drydem writes (not text, a non-finite number, no block left in the analysis) is named, with its line.
 """
 
 from __future__ import annotations
 
 import csv
+import io
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from drydem.errors import DrydemError
-from drydem.files import replaced_atomically, writable
+from drydem.files import read_text, replaceable, replaced_atomically
 from drydem.io.vtk import LOAD_AXES
 from drydem.report.plots import draw_displacements, draw_faces_3d, frame_3d, new_figure, one_deep, xz_outline
 
@@ -30,6 +34,11 @@ from drydem.report.plots import draw_displacements, draw_faces_3d, frame_3d, new
 FIGURE_IN, DPI = (8.0, 4.5), 160
 #: the video formats written, by suffix
 VIDEO_SUFFIXES = (".mp4", ".gif")
+#: the frame rates a video may have, frames per second: from 10 s a frame to the fastest a GIF can
+#: show (it counts a frame's delay in hundredths of a second)
+FPS_RANGE = (0.1, 100.0)
+#: the fields of a frame's blocks_NNNN.vtu that a video reads (cell data)
+FRAME_FIELDS = ("active", "displacement_magnitude", "fixed")
 
 
 @dataclass(frozen=True)
@@ -46,15 +55,13 @@ class VideoFrame:
 
 
 def series_frames(folder: Path) -> list[VideoFrame]:
-    """The frames of the VTK series in ``folder`` (``frames.csv`` and ``blocks_NNNN.vtu``)."""
-    import meshio
-
+    """The frames of the VTK series in ``folder`` (``frames.csv`` and ``blocks_NNNN.vtu``); a
+    DrydemError naming the file (and the line of ``frames.csv``) that is not one drydem writes."""
     folder = Path(folder)
     index = folder / "frames.csv"
     if not index.is_file():
         raise DrydemError(f"{folder}: no frames.csv: not a VTK series of drydem tilt or shake --vtk")
-    with index.open() as f:
-        rows = list(csv.DictReader(f))
+    rows = _index_rows(index)
     if not rows:
         raise DrydemError(f"{index}: no frames")
     frames = []
@@ -65,17 +72,45 @@ def series_frames(folder: Path) -> list[VideoFrame]:
             caption = _caption(row, load_direction)
         except (KeyError, TypeError, ValueError) as exc:
             raise DrydemError(f"{index}: line {line}: not a frame of drydem tilt or shake --vtk ({exc!r})") from None
-        try:
-            mesh = meshio.read(file)
-            active = np.concatenate(mesh.cell_data["active"]).astype(bool)
-            magnitude = np.concatenate(mesh.cell_data["displacement_magnitude"]) * 1e3
-            fixed = np.concatenate(mesh.cell_data["fixed"]).astype(bool)
-        except Exception as exc:  # meshio raises many types (ReadError, ...); a foreign file lacks the fields (KeyError)
-            raise DrydemError(f"{file}: cannot read the frame: {exc!r}") from None
-        cells = [cell for block in mesh.cells for cell in block.data]
-        blocks = [[mesh.points[face] for face in faces] for faces, on in zip(cells, active) if on]
-        frames.append(VideoFrame(blocks, magnitude[active], caption, ~fixed[active], load_direction))
+        frames.append(_read_frame(file, caption, load_direction))
     return frames
+
+
+def _index_rows(index: Path) -> list[dict]:
+    """The rows of ``frames.csv``; a DrydemError naming it if it is not CSV text (with the line)."""
+    reader = csv.DictReader(io.StringIO(read_text(index, "frames.csv of drydem tilt or shake --vtk is CSV text"), newline=""))
+    try:
+        return list(reader)
+    except csv.Error as exc:
+        raise DrydemError(f"{index}: line {reader.line_num}: not CSV ({exc})") from None
+
+
+def _read_frame(file: Path, caption: str, load_direction: int) -> VideoFrame:
+    """The frame in ``file`` (a ``blocks_NNNN.vtu``): its blocks still in the analysis (``active``).
+    A DrydemError naming the file if it cannot be read or lacks a field of :data:`FRAME_FIELDS`,
+    if a point or a displacement magnitude is not a finite number (a magnitude also >= 0), or if no
+    block is left in the analysis (nothing to draw)."""
+    import meshio
+
+    try:
+        mesh = meshio.read(file)
+        fields = {name: np.concatenate(mesh.cell_data[name]) for name in FRAME_FIELDS}
+    except Exception as exc:  # meshio raises many types (ReadError, ...); a foreign file lacks the fields (KeyError)
+        raise DrydemError(f"{file}: cannot read the frame: {exc!r}") from None
+    if not np.isfinite(mesh.points).all():
+        raise DrydemError(f"{file}: points: not all finite numbers (NaN or inf): not a frame drydem writes")
+    magnitude = fields["displacement_magnitude"] * 1e3
+    if not (np.isfinite(magnitude) & (magnitude >= 0.0)).all():
+        raise DrydemError(f"{file}: displacement_magnitude: not all finite numbers >= 0: not a frame drydem writes")
+    active, fixed = fields["active"].astype(bool), fields["fixed"].astype(bool)
+    if not active.any():
+        raise DrydemError(f"{file}: no block in the analysis (active = 0 for every block): nothing to draw")
+    try:
+        cells = [cell for block in mesh.cells for cell in block.data]
+        blocks = [[mesh.points[face] for face in faces] for faces, on in zip(cells, active, strict=True) if on]
+    except (IndexError, ValueError) as exc:  # a face naming a point the file lacks; fields and cells of other lengths
+        raise DrydemError(f"{file}: cannot read the frame: {exc!r}") from None
+    return VideoFrame(blocks, magnitude[active], caption, ~fixed[active], load_direction)
 
 
 def _load_direction(row: dict) -> int:
@@ -92,21 +127,50 @@ def _caption(row: dict, load_direction: int) -> str:
     column) gives the model time and the monitored ux, a tilting one its kind, tilt and the
     monitored displacement along the load (``ux_m``: along y when tilting about x)."""
     if row.get("time_s") is not None:
-        return f"t = {float(row['time_s']):.3f} s, monitored ux {float(row['ux_m']) * 1e3:.2f} mm"
-    along = f"monitored u{LOAD_AXES[load_direction]} {float(row['ux_m']) * 1e3:.2f} mm"
-    return f"{row['kind']}: tilt {float(row['tilt_deg']):.2f} deg, {along}"
+        return f"t = {_finite(row, 'time_s'):.3f} s, monitored ux {_finite(row, 'ux_m') * 1e3:.2f} mm"
+    along = f"monitored u{LOAD_AXES[load_direction]} {_finite(row, 'ux_m') * 1e3:.2f} mm"
+    return f"{row['kind']}: tilt {_finite(row, 'tilt_deg'):.2f} deg, {along}"
 
 
-def render_video(folder: Path, path: Path, *, fps: float = 8.0) -> Path:
-    """Render the VTK series in ``folder`` to ``path`` (.mp4 or .gif); an .mp4 that ffmpeg
-    cannot write falls back to a .gif beside it. Returns the file written."""
-    import imageio.v2 as imageio
-    from matplotlib.colors import LogNorm
+def _finite(row: dict, column: str) -> float:
+    """The number in ``column`` of a row of ``frames.csv``; a ValueError naming the column if it
+    is not a finite number (NaN, inf)."""
+    value = float(row[column])
+    if not math.isfinite(value):
+        raise ValueError(f"{column} {row[column]!r}: must be a finite number")
+    return value
 
-    path = writable(path)
+
+def check_fps(fps: float) -> float:
+    """``fps`` if it is a finite frame rate within :data:`FPS_RANGE`; else a DrydemError saying
+    the range (NaN fails every comparison, so it is refused too)."""
+    low, high = FPS_RANGE
+    if not (math.isfinite(fps) and low <= fps <= high):
+        raise DrydemError(f"{fps!r} frames per second: must be a finite number from {low:g} to {high:g}")
+    return fps
+
+
+def video_path(path: Path, *, overwrite: bool = False) -> Path:
+    """``path`` if a video can be written there: a suffix of :data:`VIDEO_SUFFIXES`, and nothing
+    there yet, or a regular file and ``overwrite`` (drydem.files.replaceable); else a DrydemError
+    naming it and the rule."""
+    path = Path(path)
     if path.suffix.lower() not in VIDEO_SUFFIXES:
         raise DrydemError(f"{path}: cannot write {path.suffix or 'a file without suffix'!r} videos; "
                           f"the suffix must be {' or '.join(VIDEO_SUFFIXES)}")
+    return replaceable(path, overwrite, other="another --out")
+
+
+def render_video(folder: Path, path: Path, *, fps: float = 8.0, overwrite: bool = False) -> Path:
+    """Render the VTK series in ``folder`` to ``path`` (.mp4 or .gif) at ``fps`` frames per second
+    (:func:`check_fps`); an .mp4 that ffmpeg cannot write falls back to a .gif beside it. An
+    existing video (the .gif of the fall-back too) is replaced only if ``overwrite``, else refused
+    (:func:`video_path`; ``path`` before any frame is drawn). Returns the file written."""
+    import imageio.v2 as imageio
+    from matplotlib.colors import LogNorm
+
+    check_fps(fps)
+    path = video_path(path, overwrite=overwrite)
     frames = series_frames(folder)
     largest = max(float(f.magnitude_mm.max(initial=0.0)) for f in frames) or 1.0
     norm = LogNorm(largest * 1e-3, largest)  # equilibria (mm) and collapse (dm) on one scale
@@ -122,9 +186,9 @@ def render_video(folder: Path, path: Path, *, fps: float = 8.0) -> Path:
                     writer.append_data(image)
             return path
         except (ImportError, RuntimeError, DrydemError):  # no ffmpeg, or it failed (an OSError): fall back to a GIF
-            path = path.with_suffix(".gif")
+            path = video_path(path.with_suffix(".gif"), overwrite=overwrite)
     with replaced_atomically(path) as partial:
-        imageio.mimsave(partial, images, duration=1.0 / fps, loop=0)
+        imageio.mimsave(partial, images, duration=1000.0 / fps, loop=0)  # Pillow's duration: ms a frame
     return path
 
 
