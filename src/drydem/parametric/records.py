@@ -1,8 +1,9 @@
 """A run's record on disk: ``RESULTS/runs/ID.json``, written atomically as soon as the run
 finishes, holds the parameters, the status ("ok" or "failed" with the error), the summary and
 the pushover curve (empty for limit and shake runs). A record is checked when it is read: one
-that is not JSON, lacks a key, or whose parameters do not give its id is corrupt
-(:class:`RecordError`), and a sweep runs it again.
+that is not JSON, lacks a key, whose parameters do not give its id, or whose fields that the
+report reads break their rules (types, finiteness, physical ranges: :data:`SUMMARY_RULES`,
+:data:`SPEC_RULES`) is corrupt (:class:`RecordError`), and a sweep runs it again.
 
 The folder of a ``drydem tilt`` or ``drydem limit`` run (``--out``, by default
 ``results/TARGET-TIME``) reads as a record too (:func:`run_folder_record`): so that a report
@@ -14,10 +15,15 @@ from __future__ import annotations
 import csv
 import json
 import os
+import sys
+from collections.abc import Collection, Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from types import SimpleNamespace
 
+from drydem.analysis.tilt.settings import SETTING_RANGES
 from drydem.errors import DrydemError
+from drydem.model.parameters import FLAG, FRICTION, JOINT_RULES, JOINT_STIFFNESS, POINTS, OneOf, Range, Rule, field_problems
 from drydem.parametric.study import ANALYSES, RunSpec, joint_law_text
 
 
@@ -54,6 +60,30 @@ SUMMARY_KEYS = {"tilt": {"collapse_angle_deg", "drift_limit_angles_deg", "wall_h
 SHAKE_NUMBERS = ("max_rotation_rad", "max_displacement_m", "residual_displacement_m", "pga_m_s2", "scale", "runtime_s")
 #: the columns of a pushover curve: tilt (deg), ux, uz (m), drift, cycles
 CURVE_COLUMNS = 5
+#: a tilting run's angles and a limit analysis' (atan of its multiplier), deg: a tilting table
+#: turns below 90 deg (TiltSettings' max_angle_deg), and no angle is negative
+ANGLE = Range(0.0, 90.0, unit="deg")
+#: the lateral load multiplier at collapse, tan of the collapse angle: >= 0, and 1e6 is tan(89.99994 deg)
+LOAD_MULTIPLIER = Range(0.0, 1e6)
+#: the height a wall's drift is measured against, m: > 0, and 1e4 m is above any structure (the tallest, 828 m)
+HEIGHT = Range(0.0, 1e4, low_open=True, unit="m")
+#: the rules of the fields of a tilt or limit summary the report reads (:mod:`drydem.report.study`);
+#: each may be null or absent (no value) but those of :data:`SUMMARY_NOT_NULL`
+SUMMARY_RULES = {"tilt": {"collapse_angle_deg": ANGLE, "last_equilibrium_deg": ANGLE, "load_multiplier": LOAD_MULTIPLIER,
+                          "stable_under_gravity": FLAG, "wall_height_m": HEIGHT},
+                 "limit": {"collapse_angle_deg": ANGLE, "load_multiplier": LOAD_MULTIPLIER, "method": OneOf(ANALYSES["limit"])}}
+SUMMARY_NOT_NULL = ("wall_height_m", "method")
+#: the rules of a tilt summary's settings (``analysis``) that a run folder's record takes
+TILT_SETTING_RULES = {"increment_deg": SETTING_RANGES["increment_deg"], "adaptive": FLAG}
+#: the rules of the tables of a summary's model (:func:`drydem.io.results.model_summary`) the
+#: report reads: the joint's (kn, ks and friction never null; its law's fields where given) and
+#: the contacts' points per length (null: not recorded)
+MODEL_RULES = {"joint": JOINT_RULES, "contacts": {"points_per_length": POINTS}}
+MODEL_NOT_NULL = ("kn", "ks", "friction")
+#: the rules of a finished run's parameters (:class:`RunSpec`; each null: the target's own), those
+#: its model obeyed (every analysis) and its tilting settings (a tilting run's increment alone)
+SPEC_RULES = {"kn": JOINT_STIFFNESS, "ks": JOINT_STIFFNESS, "friction": FRICTION, "points": POINTS,
+              "increment_deg": SETTING_RANGES["increment_deg"]}
 
 
 def read_record(path: str | Path) -> dict:
@@ -62,22 +92,33 @@ def read_record(path: str | Path) -> dict:
     the file and what is wrong otherwise (a sweep killed while writing one without the atomic
     write, a disk full, a hand edit)."""
     path = Path(path)
-    record = _read_json(path, "record")
+    record = read_json(path, "record")
     problem = _record_problem(record, path.name.removesuffix(".json"))
     if problem is not None:
         raise RecordError(f"{path}: {problem}")
     return record
 
 
-def _read_json(path: Path, what: str):
+def read_json(path: Path, what: str):
     """The JSON in ``path``, a run's ``what`` (record, summary); RecordError naming the file if it
-    cannot be read or is not JSON (a run killed while writing it without the atomic write, a hand edit)."""
+    cannot be read, is not JSON (a run killed while writing it without the atomic write, a hand
+    edit) or is nested deeper than Python's recursion limit (no file drydem writes is)."""
     try:
         return json.loads(path.read_text(encoding="utf-8"))
     except OSError as exc:
         raise RecordError(f"{path}: cannot read the {what} ({exc.strerror})") from None
     except ValueError as exc:  # not JSON, or not UTF-8
         raise RecordError(f"{path}: not a JSON {what}, empty or cut short? ({exc})") from None
+    except RecursionError:
+        raise RecordError(f"{path}: not a {what}: JSON nested deeper than {sys.getrecursionlimit()} levels") from None
+
+
+def table_problems(table: Mapping, rules: Mapping[str, Rule], where: str, *, optional: Collection[str] = ()) -> list[str]:
+    """``WHERE FIELD = VALUE: must be ...`` for every field of the JSON object ``table`` named in
+    ``rules`` that breaks its rule (:func:`~drydem.model.parameters.field_problems`); a field in
+    ``optional`` may also be null or absent."""
+    values = SimpleNamespace(**{field: table.get(field) for field in rules})
+    return field_problems(values, rules, lambda field: f"{where} {field}", optional=optional)
 
 
 def _record_problem(record, run_id: str) -> str | None:
@@ -85,7 +126,7 @@ def _record_problem(record, run_id: str) -> str | None:
     if not isinstance(record, dict):
         return f"a record is a JSON object, not {type(record).__name__}"
     status = record.get("status")
-    if status not in RECORD_KEYS:
+    if status not in OneOf(tuple(RECORD_KEYS)):
         return f"status = {status!r}: must be one of {list(RECORD_KEYS)}"
     missing = sorted(RECORD_KEYS[status] - set(record))
     if missing:
@@ -95,29 +136,40 @@ def _record_problem(record, run_id: str) -> str | None:
     try:
         spec = RunSpec(**record["spec"])
         spec_id = spec.id
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, AttributeError) as exc:  # AttributeError: a joint law that is not a JSON object
         return f"spec is not the parameters of a run ({exc})"
     if spec_id != run_id:
         return f"its parameters are those of run {spec_id!r}, not of {run_id!r}"
-    if spec.analysis not in ANALYSES:
-        return f"spec analysis = {spec.analysis!r}: must be one of {list(ANALYSES)}"
+    problem = _spec_problem(spec, status)
+    if problem is not None:
+        return problem
     if status == "failed":
         return None if isinstance(record["error"], str) else "error must be the run's error message"
     return _result_problem(spec, record["summary"], record["pushover"])
+
+
+def _spec_problem(spec: RunSpec, status: str) -> str | None:
+    """What is wrong with a run's parameters, or None: its analysis one of :data:`ANALYSES`, its
+    protocol a name; a finished run's within :data:`SPEC_RULES` (those it ran with), a failed
+    run's numbers or null (they may be those that failed it: run again, they would fail again)."""
+    if spec.analysis not in OneOf(tuple(ANALYSES)):
+        return f"spec analysis = {spec.analysis!r}: must be one of {list(ANALYSES)}"
+    if not isinstance(spec.protocol, str):
+        return f"spec protocol = {spec.protocol!r}: must be the name of a protocol (a string)"
+    ranged = {} if status == "failed" else {k: v for k, v in SPEC_RULES.items() if k != "increment_deg" or spec.analysis == "tilt"}
+    problems = field_problems(spec, ranged, lambda field: f"spec {field}", optional=ranged)
+    numbers = [key for key in SPEC_RULES if key not in ranged and not (getattr(spec, key) is None or _numeric(getattr(spec, key)))]
+    problems += [f"spec {key} = {getattr(spec, key)!r}: must be a number or null" for key in numbers]
+    return "; ".join(problems) or None
 
 
 def _result_problem(spec: RunSpec, summary, curve) -> str | None:
     """What is wrong with the ``summary`` and pushover ``curve`` of a finished run of ``spec``, or None."""
     if not isinstance(summary, dict) or not SUMMARY_KEYS[spec.analysis] <= set(summary):
         return f"summary must hold {sorted(SUMMARY_KEYS[spec.analysis])}"
-    if spec.analysis == "shake":
-        problem = _shake_problem(spec, summary)
-        if problem is not None:
-            return problem
-    elif not (summary["collapse_angle_deg"] is None or _numeric(summary["collapse_angle_deg"])):
-        return f"summary collapse_angle_deg = {summary['collapse_angle_deg']!r}: must be a number (deg) or null"
-    if spec.analysis == "tilt" and not isinstance(summary["drift_limit_angles_deg"], dict):
-        return "summary drift_limit_angles_deg must map drift limits to angles"
+    problem = _shake_problem(spec, summary) if spec.analysis == "shake" else _collapse_problem(spec.analysis, summary)
+    if problem is not None:
+        return problem
     if not isinstance(curve, list) or not all(isinstance(row, list) and len(row) == CURVE_COLUMNS and all(map(_numeric, row)) for row in curve):
         return f"pushover must be a list of rows of {CURVE_COLUMNS} numbers (tilt, ux, uz, drift, cycles)"
     return None
@@ -137,6 +189,40 @@ def _shake_problem(spec: RunSpec, summary: dict) -> str | None:
     if not isinstance(summary["motion"], str):
         return f"summary motion = {summary['motion']!r}: must be the run's motion (a string)"
     return None
+
+
+def _collapse_problem(analysis: str, summary: dict) -> str | None:
+    """What is wrong with what the report reads of a tilt or limit ``summary``, or None: its fields
+    within :data:`SUMMARY_RULES` (angles in [0, 90] deg, a height > 0, a known method, ...), a
+    tilt's drift limit angles and settings (:func:`_tilt_problems`) and its model's (:func:`_model_problems`)."""
+    optional = set(SUMMARY_RULES[analysis]) - set(SUMMARY_NOT_NULL)
+    problems = table_problems(summary, SUMMARY_RULES[analysis], "summary", optional=optional)
+    problems += (_tilt_problems(summary) if analysis == "tilt" else []) + _model_problems(summary.get("model"))
+    return "; ".join(problems) or None
+
+
+def _tilt_problems(summary: dict) -> list[str]:
+    """The problems of a tilt summary beyond :data:`SUMMARY_RULES`: each drift limit's angle in
+    [0, 90] deg or null (never reached); the settings within :data:`TILT_SETTING_RULES`."""
+    drift = summary["drift_limit_angles_deg"]
+    if not isinstance(drift, dict):
+        return ["summary drift_limit_angles_deg must map drift limits to angles"]
+    problems = table_problems(drift, dict.fromkeys(drift, ANGLE), "summary drift_limit_angles_deg", optional=drift)
+    settings = summary.get("analysis", {})
+    if not isinstance(settings, dict):
+        return [*problems, "summary analysis must be the tilting settings (a table)"]
+    return problems + table_problems(settings, TILT_SETTING_RULES, "summary analysis", optional=TILT_SETTING_RULES)
+
+
+def _model_problems(model) -> list[str]:
+    """The problems of the model a summary records (none without one): its joint and contacts
+    tables, where given, within :data:`MODEL_RULES` (the joint's kn, ks and friction never null)."""
+    if model is None:
+        return []
+    if not (isinstance(model, dict) and all(isinstance(model.get(table, {}), dict) for table in MODEL_RULES)):
+        return ["summary model must be a table, and its joint and contacts tables"]
+    return [problem for table, rules in MODEL_RULES.items() if table in model
+            for problem in table_problems(model[table], rules, f"summary model {table}", optional=set(rules) - set(MODEL_NOT_NULL))]
 
 
 def _numeric(value) -> bool:
@@ -183,7 +269,7 @@ def run_folder_record(folder: Path) -> dict | None:
     path = Path(folder) / SUMMARY_FILE
     if not path.is_file():
         return None
-    summary = _read_json(path, "summary")
+    summary = read_json(path, "summary")
     keys = set(summary) if isinstance(summary, dict) else set()
     analysis = next((a for a in ("tilt", "limit") if SUMMARY_KEYS[a] | {"analysis", "model"} <= keys), None)
     if analysis is None:
@@ -194,12 +280,9 @@ def run_folder_record(folder: Path) -> dict | None:
     if not (isinstance(settings, dict) and isinstance(joint, dict) and isinstance(contacts, dict) and isinstance(target, str)):
         raise RecordError(f"{path}: not a drydem {analysis} summary: it needs its target and its analysis, "
                           "model joint and contacts tables")
-    if not all(_numeric(joint.get(key)) for key in ("kn", "ks", "friction")):
-        raise RecordError(f"{path}: model joint kn, ks and friction must be numbers (Pa/m, Pa/m, -), not "
-                          f"{joint.get('kn')!r}, {joint.get('ks')!r}, {joint.get('friction')!r}")
     law = {k: v for k, v in joint.items() if k not in NOT_LAW_KEYS and v is not None}
-    spec = RunSpec(analysis=analysis, target=target, protocol=_protocol(analysis, summary), kn=joint["kn"], ks=joint["ks"],
-                   friction=joint["friction"], points=contacts.get("points_per_length"),
+    spec = RunSpec(analysis=analysis, target=target, protocol=_protocol(analysis, summary), kn=joint.get("kn"), ks=joint.get("ks"),
+                   friction=joint.get("friction"), points=contacts.get("points_per_length"),
                    increment_deg=settings.get("increment_deg") if analysis == "tilt" else None,
                    joint_law=joint_law_text(law) if law.get("model", "constant") != "constant" else None)
     curve = _pushover_csv(Path(folder) / PUSHOVER_FILE) if analysis == "tilt" else []

@@ -33,7 +33,9 @@ import numpy as np
 from drydem.analysis.drift import DLS_DRIFT, EC8_DRIFT_LIMITS
 from drydem.errors import DrydemError
 from drydem.masonry.published import savalle2022
-from drydem.parametric.records import SUMMARY_FILE, RecordError, Records, load_records, load_run_folders, run_folders
+from drydem.model.parameters import Range
+from drydem.parametric.records import (ANGLE, SUMMARY_FILE, RecordError, Records, load_records, load_run_folders, read_json, run_folders,
+                                       table_problems)
 from drydem.files import replaced_atomically
 from drydem.report.joints import joint_law, law_words, relative_error_percent
 from drydem.report.plots import new_figure
@@ -47,6 +49,10 @@ MONTECARLO_FOLDER = "montecarlo"
 MONTECARLO_TITLE = "Monte Carlo scatter of the collapse angle"
 #: the statistics of a Monte Carlo summary's collapse angle the report shows (count aside)
 MONTECARLO_STATISTICS = ("mean", "std", "cov", "p05")
+#: the rules of those statistics (:func:`drydem.parametric.montecarlo.statistics`), each null
+#: where there is none, but the count: samples, a billion of them years of computing; the
+#: angles' mean, std and p05 in [0, 90] deg; their CoV (std / mean, ddof = 1) at most sqrt(count)
+MONTECARLO_RULES = {"count": Range(0, 10**9, integer=True), "mean": ANGLE, "std": ANGLE, "cov": Range(0.0, math.sqrt(10**9)), "p05": ANGLE}
 MONTECARLO_NOTE = (
     "Each row a `drydem montecarlo` run (its folder, NAME, in montecarlo/ or in the results folder): the statistics of its "
     "collapse angles over the samples with a verdict, "
@@ -81,11 +87,14 @@ def paper_wall(record: dict) -> str | None:
 def angle_text(summary: dict) -> str:
     """A tilting run's collapse angle for a table: the angle (deg); ">= X" for a run that found
     no equilibrium within max_cycles past its last one (X deg) and no collapse either (a lower
-    bound, no verdict); "cannot stand" for a model that falls under its own weight; "-" else."""
+    bound, no verdict); "cannot stand" for a model that falls under its own weight; "-" else (a
+    run without equilibrium that records no last one). The angles are checked when the record is
+    read (:data:`drydem.parametric.records.SUMMARY_RULES`)."""
     from drydem.analysis.tilt import NO_EQUILIBRIUM
 
-    if summary.get("ended_by") == NO_EQUILIBRIUM:  # records of earlier versions gave that tilt as the collapse angle
-        return f">= {summary.get('last_equilibrium_deg', summary['collapse_angle_deg']):.1f}"
+    bound = summary.get("last_equilibrium_deg", summary["collapse_angle_deg"])  # earlier versions gave it as the collapse angle
+    if summary.get("ended_by") == NO_EQUILIBRIUM and bound is not None:
+        return f">= {bound:.1f}"
     if summary.get("collapse_angle_deg") is None and summary.get("stable_under_gravity") is False:
         return "cannot stand"
     return _cell(summary.get("collapse_angle_deg"))
@@ -382,16 +391,37 @@ class MonteCarloRun:
 
 
 def read_montecarlo(path: Path) -> MonteCarloRun:
-    """The Monte Carlo run whose top summary is ``path``; OSError, ValueError, KeyError,
-    TypeError or ModelError when it cannot be read as one."""
+    """The Monte Carlo run whose top summary is ``path``; RecordError naming the file, and the
+    field and its rule, when it cannot be read as one: its target's name a string, its collapse
+    angle's statistics within :data:`MONTECARLO_RULES`, its imperfections those of
+    :class:`~drydem.masonry.imperfections.Imperfections`."""
+    summary = read_json(Path(path), "Monte Carlo summary")
+    stats, name, settings = (_json_table(summary, key) for key in ("collapse_angle_deg", "target", "settings"))
+    if stats is None or not isinstance((name or {}).get("name"), str) or _json_table(settings, "imperfections") is None:
+        raise RecordError(f"{path}: not a drydem montecarlo summary: it needs its target's name, its settings' imperfections "
+                          "and its collapse_angle_deg statistics (tables)")
+    problems = table_problems(stats, MONTECARLO_RULES, "collapse_angle_deg", optional=MONTECARLO_STATISTICS)
+    if problems:
+        raise RecordError(f"{path}: {'; '.join(problems)}")
+    collapse = {key: stats[key] for key in MONTECARLO_RULES}
+    return MonteCarloRun(Path(path).parent.name, name["name"], collapse, _imperfections(path, settings["imperfections"]))
+
+
+def _json_table(summary, key: str) -> dict | None:
+    """The table ``key`` of a JSON object ``summary``, None if either is not a table."""
+    table = summary.get(key) if isinstance(summary, dict) else None
+    return table if isinstance(table, dict) else None
+
+
+def _imperfections(path: Path, settings: dict) -> str:
+    """The imperfections of a Monte Carlo summary's settings in words; RecordError naming the file
+    if they are not :class:`~drydem.masonry.imperfections.Imperfections`' (unknown keys, values out of range)."""
     from drydem.masonry.imperfections import Imperfections
 
-    summary = json.loads(Path(path).read_text(encoding="utf-8"))
-    stats = summary["collapse_angle_deg"]
-    collapse = {key: None if stats[key] is None else float(stats[key]) for key in MONTECARLO_STATISTICS}
-    collapse["count"] = int(stats["count"])
-    imperfections = Imperfections(**summary["settings"]["imperfections"])
-    return MonteCarloRun(Path(path).parent.name, str(summary["target"]["name"]), collapse, str(imperfections))
+    try:
+        return str(Imperfections(**settings))
+    except (TypeError, DrydemError) as exc:
+        raise RecordError(f"{path}: settings imperfections: {exc}") from None
 
 
 def montecarlo_summaries(results: Path) -> list[Path]:
@@ -411,8 +441,8 @@ def montecarlo_runs(results: Path) -> tuple[list[MonteCarloRun], list[str]]:
     for path in montecarlo_summaries(results):
         try:
             found.append(read_montecarlo(path))
-        except (OSError, ValueError, KeyError, TypeError, DrydemError) as exc:
-            unreadable.append(f"{path}: {type(exc).__name__}: {exc}")
+        except RecordError as exc:
+            unreadable.append(str(exc))
     return sorted(found, key=lambda run: (run.wall, run.name)), unreadable
 
 

@@ -1,0 +1,205 @@
+"""The report against hostile summaries: every field it reads is checked when a record is loaded
+(types, finiteness, physical ranges), so that a bad record is named as corrupt, with its file,
+field and rule, and left out, and the report is still written for the good ones; never a
+traceback, never nonsense in a table."""
+
+import csv
+import json
+
+import pytest
+from click.testing import CliRunner
+
+from drydem.cli import main
+from drydem.io.results import PUSHOVER_COLUMNS
+from drydem.parametric.study import RunSpec
+
+#: the rows of the good runs in the report's tables of the user's runs
+GOOD_TILT_ROW = "| pier.toml | kn 1e+08 Pa/m, ks 1e+08 Pa/m | 0.5 | 4 | fixed | 1 | 24.0 | 20.0 |"
+GOOD_LIMIT_ROW = "| pier.toml | 0.5 | associative | 24.4 | 0.4545 |"
+GOOD_MONTECARLO_ROW = "| WD1 | good | 3 | 18.00 | 1.00 | 5.0 | 17.00 |"
+
+
+def tilt_summary() -> dict:
+    """A ``drydem tilt`` summary of a pier (what the report reads of it)."""
+    return {"target": "pier.toml", "collapse_angle_deg": 24.0, "load_multiplier": 0.4452, "last_equilibrium_deg": 24.0,
+            "stable_under_gravity": True, "ended_by": "stop displacement", "drift_limit_angles_deg": {"0.005": 10.0, "0.01": 20.0},
+            "wall_height_m": 0.055, "analysis": {"increment_deg": 1.0, "adaptive": False},
+            "model": {"joint": {"kn": 1e8, "ks": 1e8, "friction": 0.5, "model": "constant"}, "contacts": {"points_per_length": 4}}}
+
+
+def limit_summary() -> dict:
+    """A ``drydem limit`` summary of the pier."""
+    return {"target": "pier.toml", "collapse_angle_deg": 24.44, "load_multiplier": 0.4545, "method": "associative", "analysis": {},
+            "model": {"joint": {"kn": 1e8, "ks": 1e8, "friction": 0.5, "model": "constant"}, "contacts": {"points_per_length": 4}}}
+
+
+def changed(summary: dict, path: tuple, value) -> dict:
+    """``summary`` with the field at ``path`` (keys, outermost first) set to ``value``."""
+    table = summary
+    for key in path[:-1]:
+        table = table[key]
+    table[path[-1]] = value
+    return summary
+
+
+def run_folder(results, name: str, summary: dict):
+    """A run's folder ``results/name``: its summary.json (``summary`` as JSON text, or the text
+    itself) and a tilt's pushover.csv; the summary's path."""
+    folder = results / name
+    folder.mkdir(parents=True)
+    path = folder / "summary.json"
+    path.write_text(summary if isinstance(summary, str) else json.dumps(summary))
+    with (folder / "pushover.csv").open("w", newline="") as file:
+        csv.writer(file).writerows([PUSHOVER_COLUMNS, *([t, 0.01 * t, 1e-4 * t, 0.0, 1e-4 * t / 0.055, 100] for t in range(25))])
+    return path
+
+
+def report(results) -> tuple[str, str]:
+    """``drydem report results``: its stderr and the report's text (it must succeed, no traceback)."""
+    result = CliRunner().invoke(main, ["report", str(results)])
+    assert result.exit_code == 0 and result.exception is None, result.output
+    assert "Traceback" not in result.stderr
+    return result.stderr, (results / "report" / "report.md").read_text()
+
+
+def assert_left_out(results, bad, message: str, good_row: str) -> str:
+    """The report of ``results`` names ``bad`` as corrupt with ``message`` and holds the good run's ``good_row``."""
+    stderr, text = report(results)
+    assert f"corrupt record left out: {bad}: {message}" in stderr
+    assert "1 runs recorded (0 failed)" in text and "1 corrupt records left out" in text and f"- `{bad}: {message}" in text
+    assert good_row in text
+    return text
+
+
+BAD_TILT_FIELDS = {
+    "string DLS angle": (("drift_limit_angles_deg", "0.01"), "abc", "summary drift_limit_angles_deg 0.01 = 'abc': must be a number in [0, 90] deg"),
+    "list DLS angle": (("drift_limit_angles_deg", "0.01"), [1], "summary drift_limit_angles_deg 0.01 = [1]: must be a number in [0, 90] deg"),
+    "string increment": (("analysis", "increment_deg"), "tiny", "summary analysis increment_deg = 'tiny': must be a number in (0, 90) deg"),
+    "string adaptive": (("analysis", "adaptive"), "yes", "summary analysis adaptive = 'yes': must be true or false"),
+    "string points": (("model", "contacts", "points_per_length"), "many",
+                      "summary model contacts points_per_length = 'many': must be an integer in [1, 32]"),
+    "boolean kn": (("model", "joint", "kn"), True, "summary model joint kn = True: must be a number in [1e+04, 1e+15] Pa/m"),
+    "list joint law": (("model", "joint", "model"), ["power"], "summary model joint model = ['power']: must be one of"),
+    "string lower bound": (("last_equilibrium_deg",), "x", "summary last_equilibrium_deg = 'x': must be a number in [0, 90] deg"),
+    "string height": (("wall_height_m",), "tall", "summary wall_height_m = 'tall': must be a number in (0, 1e+04] m"),
+    "negative height": (("wall_height_m",), -5, "summary wall_height_m = -5: must be a number in (0, 1e+04] m"),
+    "overflowing angle": (("collapse_angle_deg",), 1e308, "summary collapse_angle_deg = 1e+308: must be a number in [0, 90] deg"),
+    "string angle": (("collapse_angle_deg",), "26", "summary collapse_angle_deg = '26': must be a number in [0, 90] deg"),
+    "string stability": (("stable_under_gravity",), "no", "summary stable_under_gravity = 'no': must be true or false"),
+}
+
+
+@pytest.mark.parametrize("field", BAD_TILT_FIELDS)
+def test_a_tilt_summary_with_a_bad_field_is_named_corrupt_and_left_out(tmp_path, field):
+    path, value, message = BAD_TILT_FIELDS[field]
+    run_folder(tmp_path, "good", tilt_summary())
+    summary = changed(tilt_summary(), path, value)
+    if field == "string lower bound":  # the field the report reads of a run without equilibrium
+        summary |= {"ended_by": "no equilibrium within max_cycles", "collapse_angle_deg": None}
+    bad = run_folder(tmp_path, "bad", summary)
+    text = assert_left_out(tmp_path, bad, message, GOOD_TILT_ROW)
+    assert "tilting runs: 1;" in text
+
+
+@pytest.mark.parametrize("field, value, message", [
+    ("method", 5, "summary method = 5: must be one of ('associative', 'non-associative')"),
+    ("method", {"a": 1}, "summary method = {'a': 1}: must be one of ('associative', 'non-associative')"),
+    ("load_multiplier", "x", "summary load_multiplier = 'x': must be a number in [0, 1e+06]"),
+    ("collapse_angle_deg", -3.0, "summary collapse_angle_deg = -3.0: must be a number in [0, 90] deg"),
+], ids=["integer method", "table method", "string multiplier", "negative angle"])
+def test_a_limit_summary_with_an_unknown_method_or_a_bad_number_is_named_corrupt_and_left_out(tmp_path, field, value, message):
+    run_folder(tmp_path, "good", limit_summary())
+    bad = run_folder(tmp_path, "bad", limit_summary() | {field: value})
+    text = assert_left_out(tmp_path, bad, message, GOOD_LIMIT_ROW)
+    assert "limit analyses: 1;" in text
+
+
+def sweep_record(spec: dict, run_id: str | None = None, **summary) -> dict:
+    """A sweep's record of a made-up tilting run of ``spec`` (RunSpec's fields), named ``run_id``
+    (default: the spec's id), its summary changed by ``summary``."""
+    return {"id": run_id or RunSpec(**spec).id, "spec": spec, "status": "ok", "error": None, "pushover": [[0.0, 0.0, 0.0, 0.0, 10]],
+            "summary": {"collapse_angle_deg": 20.0, "drift_limit_angles_deg": {"0.01": 10.0}, "wall_height_m": 0.1} | summary}
+
+
+PIER = {"analysis": "tilt", "target": "pier.toml", "protocol": "fixed"}
+
+
+@pytest.mark.parametrize("record, message", [
+    ({"status": ["ok"], "id": "x"}, "status = ['ok']: must be one of ['ok', 'failed']"),
+    (sweep_record(PIER | {"points": "many"}), "spec points = 'many': must be an integer in [1, 32]"),
+    (sweep_record(PIER | {"protocol": ["fixed"]}), "spec protocol = ['fixed']: must be the name of a protocol (a string)"),
+    (sweep_record(PIER | {"joint_law": "[1]"}, "x"), "spec is not the parameters of a run ('list' object has no attribute 'get')"),
+    (sweep_record(PIER, wall_height_m=-5), "summary wall_height_m = -5: must be a number in (0, 1e+04] m"),
+    ({"id": RunSpec(**PIER, friction="rough").id, "spec": PIER | {"friction": "rough"}, "status": "failed", "error": "ModelError: made up"},
+     "spec friction = 'rough': must be a number or null"),
+], ids=["list status", "string points", "list protocol", "list joint law", "negative height", "failed with a string friction"])
+def test_a_sweep_record_with_a_bad_field_is_named_corrupt_and_left_out(tmp_path, record, message):
+    run_folder(tmp_path, "good", tilt_summary())
+    bad = tmp_path / "runs" / f"{record['id']}.json"
+    bad.parent.mkdir()
+    bad.write_text(json.dumps(record))
+    assert_left_out(tmp_path, bad, message, GOOD_TILT_ROW)
+
+
+def test_a_failed_run_whose_parameters_failed_it_is_no_corrupt_record(tmp_path):
+    """Its parameters out of their ranges are why it failed: named with its error, not run again."""
+    spec = RunSpec(**PIER, kn=-1.0, ks=-1.0)
+    failed = {"id": spec.id, "spec": spec.__dict__, "status": "failed", "error": "ModelError: [joint] kn = -1.0: must be a number in"}
+    (tmp_path / "runs").mkdir()
+    (tmp_path / "runs" / f"{spec.id}.json").write_text(json.dumps(failed))
+    stderr, text = report(tmp_path)
+    assert "corrupt" not in stderr + text and "1 failed" in text
+    assert f"- `{spec.id}`: ModelError: [joint] kn = -1.0: must be a number in" in text
+
+
+DEEP = "[" * 200_000 + "]" * 200_000
+
+
+def test_json_nested_too_deep_is_named_corrupt_not_a_recursion_error(tmp_path):
+    run_folder(tmp_path, "good", tilt_summary())
+    bad_summary = run_folder(tmp_path, "deep", DEEP)
+    bad_record = tmp_path / "runs" / "x.json"
+    bad_record.parent.mkdir()
+    bad_record.write_text(DEEP)
+    stderr, text = report(tmp_path)
+    assert f"corrupt record left out: {bad_summary}: not a summary: JSON nested deeper than" in stderr
+    assert f"corrupt record left out: {bad_record}: not a record: JSON nested deeper than" in stderr
+    assert "1 runs recorded (0 failed)" in text and "2 corrupt records left out" in text and GOOD_TILT_ROW in text
+
+
+def montecarlo_summary(results, name: str, **statistics):
+    """A ``drydem montecarlo`` summary of WD1 in results/montecarlo/NAME (its statistics changed by ``statistics``); its path."""
+    path = results / "montecarlo" / name / "summary.json"
+    path.parent.mkdir(parents=True)
+    stats = {"count": 3, "mean": 18.0, "std": 1.0, "cov": 0.05, "p05": 17.0} | statistics
+    path.write_text(json.dumps({"target": {"name": "WD1"}, "collapse_angle_deg": stats, "settings": {"imperfections": {}}}))
+    return path
+
+
+@pytest.mark.parametrize("statistics, message", [
+    ({"count": 10**400}, "collapse_angle_deg count = 1000"),
+    ({"count": "3"}, "collapse_angle_deg count = '3': must be an integer in [0, 1e+09]"),
+    ({"count": -1}, "collapse_angle_deg count = -1: must be an integer in [0, 1e+09]"),
+    ({"mean": 1e308}, "collapse_angle_deg mean = 1e+308: must be a number in [0, 90] deg"),
+    ({"cov": float("nan")}, "collapse_angle_deg cov = nan: must be a number in [0, 3.162e+04]"),
+], ids=["huge count", "string count", "negative count", "overflowing mean", "NaN CoV"])
+def test_a_montecarlo_summary_with_a_bad_statistic_is_named_and_left_out(tmp_path, statistics, message):
+    montecarlo_summary(tmp_path, "good")
+    bad = montecarlo_summary(tmp_path, "bad", **statistics)
+    _, text = report(tmp_path)
+    assert f"1 Monte Carlo summaries cannot be read, left out:\n\n- `{bad}: {message}" in text
+    assert GOOD_MONTECARLO_ROW in text and "| bad |" not in text
+
+
+def test_a_montecarlo_summary_nested_too_deep_or_with_bad_imperfections_is_named_and_left_out(tmp_path):
+    montecarlo_summary(tmp_path, "good")
+    deep = tmp_path / "montecarlo" / "deep" / "summary.json"
+    deep.parent.mkdir()
+    deep.write_text(DEEP)
+    odd = montecarlo_summary(tmp_path, "odd")
+    odd.write_text(json.dumps(json.loads(odd.read_text()) | {"settings": {"imperfections": {"height_sd_mm": -1}}}))
+    _, text = report(tmp_path)
+    assert "2 Monte Carlo summaries cannot be read, left out:" in text
+    assert f"- `{deep}: not a Monte Carlo summary: JSON nested deeper than" in text
+    assert f"- `{odd}: settings imperfections: imperfections height_sd_mm = -1: must be a number in" in text
+    assert GOOD_MONTECARLO_ROW in text
