@@ -186,6 +186,8 @@ def test_joint_laws_from_the_model_file():
     assert model.overridden(joint_law={"model": "constant"}, kn=1e8).joint == JointMaterial(kn=1e8)
     bad = [
         ({"model": "power", "kn_exponent": 0.5}, "needs stress_ref; .* needs kn_min"),
+        ({"model": "power"}, "needs kn_exponent; .* needs stress_ref; .* needs kn_min"),
+        ({"model": "power", "ks_exponent": 2.0, "stress_ref": 1e3, "kn_min": 1e6}, "needs kn_exponent"),
         ({"model": "power", "kn_exponent": 1.5, "stress_ref": 1e3, "kn_min": 1e6}, "kn_exponent = 1.5 > 1 needs kn_max"),
         ({"model": "power", "kn_exponent": 1.0, "ks_exponent": 2.0, "stress_ref": 1e3, "kn_min": 1e6}, "ks_exponent = 2.0 > 1 needs kn_max"),
         ({"model": "affine", "kn_per_stress": 1e4, "kn_exponent": 0.5}, "kn_exponent applies to model = 'power'"),
@@ -216,6 +218,7 @@ def test_joint_law_from_the_command_line(tmp_path):
     joint = json.loads((out / "summary.json").read_text())["model"]["joint"]
     assert (joint["model"], joint["kn_exponent"], joint["stress_ref"], joint["kn_min"]) == ("power", 1.0, 1000.0, 1e6)
     for bad, message in [(["--joint-model", "power", "--kn-exponent", "1", "--joint-kn-min", "1e6"], "needs stress_ref"),
+                         (["--joint-model", "power"], "model = 'power' needs kn_exponent"),
                          (["--kn-per-stress", "100"], "kn_per_stress applies to model = 'affine', not 'constant'"),
                          (["--joint-model", "affine", "--kn-per-stress", "true"], "'true' is not a valid float"),
                          (["--joint-model", "affine", "--kn-per-stress", "-1"], "kn_per_stress = -1.0: must be a number in [0, 1e+07] 1/m")]:

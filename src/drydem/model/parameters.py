@@ -224,10 +224,11 @@ class JointMaterial:
             refuse(_clamp_problems(self))
 
     def law_value(self, key: str) -> float | None:
-        """The value of the law's parameter ``key`` (one of :data:`LAW_FIELDS`): as given, or its
-        default (see the class docstring); None for a key of another law."""
+        """The value of the law's parameter ``key`` (one of :data:`LAW_FIELDS`): as given, or the
+        default of an optional key (see the class docstring); None for a key of another law or a
+        required key not given (a joint that :func:`_law_problems` refuses)."""
         value = getattr(self, key)
-        if value is not None or key not in sum(LAW_KEYS[self.model], ()):
+        if value is not None or key not in LAW_KEYS[self.model][1]:
             return value
         return {"kn_min": JOINT_STIFFNESS.low, "kn_max": JOINT_STIFFNESS.high,
                 "ks_exponent": self.kn_exponent, "ks_per_stress": self.kn_per_stress}[key]
