@@ -70,6 +70,11 @@ def test_save_and_load_round_trip(tmp_path):
         (('name = "brick"', 'name = "base"'), r"duplicate block names \['base'\]"),
         (('name = "brick"', 'name = "brick"\ncolour = "red"'), r"\['colour'\] in \[\[block\]\] #1 \('brick'\)"),
         (("[0, 0.006, 0.0055]]", "[0, 0.006, 0.0055], [0.01, 0.0, 0.003]]"), r"block 'brick': vertex 8 .* not convex"),
+        # an L's inner corner lies on the hull's y = -0.006 face: the hull would fill the L in
+        (("[0, 0.006, 0.0055]]", "[0, 0.006, 0.0055], [0.0125, -0.006, 0.00275]]"),
+         r"#1 \('brick'\) vertex 8 \[0.0125, -0.006, 0.00275\] lies inside a face .* not convex"),
+        (('name = "brick"', 'name = ""'), r"\[\[block\]\] #1 name = '': must be a non-empty text"),
+        (('name = "brick"', "name = 5"), r"\[\[block\]\] #1 name = 5: must be a non-empty text"),
         (("[0, -0.006, 0.0055], [0.025, -0.006, 0.0055], [0.025, 0.006, 0.0055], [0, 0.006, 0.0055]]",
           "[0, -0.006, 0.0], [0.025, -0.006, 0.0], [0.025, 0.006, 0.0], [0, 0.006, 0.0]]"), r"block 'brick': degenerate"),
         (('name = "brick"\nvertices', 'name = "brick"\nbox = { min = [0, 0, 0], max = [1, 1, 1] }\nvertices'), r"#1 \('brick'\) needs exactly one of"),
@@ -83,6 +88,15 @@ def test_bad_input_is_named_in_the_error(tmp_path, change, message):
     with pytest.raises(dd.DrydemError, match=message) as info:
         load_model(path)
     assert str(info.value).startswith(str(path))  # every message names the file
+
+
+def test_a_vertex_splitting_an_edge_or_repeated_is_no_corner_and_is_dropped(tmp_path):
+    """A point on an edge of the hull (an edge split in two) or repeating a corner describes the
+    same convex block: the brick is the same box, 8 corners (GOOD's brick, 0.025 x 0.012 x 0.0055 m)."""
+    extra = "[0, 0.006, 0.0055], [0.0125, -0.006, 0.0], [0, 0.006, 0.0055]]"
+    model = load_model(write(tmp_path, GOOD.replace("[0, 0.006, 0.0055]]", extra)))
+    brick = model.block_shape[1]
+    assert len(brick.vertices) == 8 and brick.volume == pytest.approx(0.025 * 0.012 * 0.0055, rel=1e-12)
 
 
 def test_invalid_toml_and_missing_file_name_the_file(tmp_path):

@@ -41,7 +41,7 @@ import numpy as np
 
 from drydem.errors import ModelError
 from drydem.files import read_toml
-from drydem.model.geometry import box, convex_hull
+from drydem.model.geometry import ConvexPolyhedron, box, convex_hull, face_interior_points
 from drydem.model.assembly import Block, Model, build_model
 from drydem.model.parameters import DENSITY, is_number
 from drydem.model.tables import SECTIONS, errors_naming, no_unknown, parameters_from_dict
@@ -71,6 +71,8 @@ def _block(entry: dict, index: int, source: str) -> Block:
     name = entry.get("name", f"block{index}") if isinstance(entry, dict) else f"block{index}"
     where = f"[[block]] #{index} ({name!r})"
     no_unknown(entry, BLOCK_KEYS, source, where)
+    if not (isinstance(name, str) and name.strip()):
+        raise ModelError(f"{source}: [[block]] #{index} name = {name!r}: must be a non-empty text in quotes (messages and results name the block by it)")
     if ("box" in entry) == ("vertices" in entry):
         raise ModelError(f"{source}: {where} needs exactly one of 'box' or 'vertices'")
     if "box" in entry:
@@ -84,7 +86,9 @@ def _block(entry: dict, index: int, source: str) -> Block:
         vertices = entry["vertices"]
         if not isinstance(vertices, list):
             raise ModelError(f"{source}: {where} vertices = {vertices!r}: must be a list of [x, y, z] points (m)")
-        shape = convex_hull([_point(v, f"{source}: {where} vertex {k}") for k, v in enumerate(vertices)], name=f"block {name!r}")
+        points = [_point(v, f"{source}: {where} vertex {k}") for k, v in enumerate(vertices)]
+        shape = convex_hull(points, name=f"block {name!r}")
+        _refuse_face_interior_points(points, shape, f"{source}: {where}")
     fixed = entry.get("fixed", False)
     if not isinstance(fixed, bool):
         raise ModelError(f"{source}: {where} fixed = {fixed!r}: must be true or false")
@@ -92,6 +96,17 @@ def _block(entry: dict, index: int, source: str) -> Block:
     if density is not None:
         DENSITY.check(density, f"{source}: {where} density")
     return Block(name=str(name), shape=shape, density=density, fixed=fixed)
+
+
+def _refuse_face_interior_points(points: list, shape: ConvexPolyhedron, where: str) -> None:
+    """ModelError if a listed vertex lies inside a face of the hull (neither a corner nor on an
+    edge): the hull would drop it, and such a point is the re-entrant corner of a non-convex
+    shape, as an L's inner corner, which the hull would silently fill in."""
+    inner = face_interior_points(np.asarray(points), shape)
+    if inner.size:
+        k = int(inner[0])
+        raise ModelError(f"{where} vertex {k} {points[k]} lies inside a face of the convex hull of the vertices, not at a corner: "
+                         "the shape is not convex (a block is the convex hull of its vertices; split it into convex blocks)")
 
 
 def _point(value, where: str) -> list[float]:

@@ -161,6 +161,24 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
     return ConvexPolyhedron(vertices, faces, normals, volume, centroid, second)
 
 
+def face_interior_points(points: np.ndarray, shape: ConvexPolyhedron) -> np.ndarray:
+    """Indices of the ``points`` ((n, 3), m; on or inside ``shape``, their hull) farther than the
+    hull's tolerance (that of :func:`convex_hull`) from every edge of ``shape``: points inside
+    a face or inside the solid, which the hull drops, as opposed to its corners and to points
+    on its edges (an edge split in two, as a mesh generator may leave)."""
+    from scipy.spatial import cKDTree
+
+    tol = RELATIVE_TOLERANCE * 1e3 * shape.size
+    off_corners = np.flatnonzero(cKDTree(shape.vertices).query(points)[0] > tol)  # few: a tree, not a points x vertices table
+    tails = np.concatenate(shape.faces)
+    heads = np.concatenate([np.roll(f, -1) for f in shape.faces])
+    a, edge = shape.vertices[tails], shape.vertices[heads] - shape.vertices[tails]
+    p = points[off_corners, None, :]
+    along = np.clip(np.einsum("pej,ej->pe", p - a, edge) / np.einsum("ej,ej->e", edge, edge), 0.0, 1.0)
+    distance = np.linalg.norm(p - (a + along[..., None] * edge), axis=2).min(axis=1, initial=np.inf)
+    return off_corners[distance > tol]
+
+
 def box(lower, upper, *, name: str = "block") -> ConvexPolyhedron:
     """Axis-aligned box between corners ``lower`` and ``upper`` (m)."""
     lo, hi = np.asarray(lower, float), np.asarray(upper, float)
