@@ -198,6 +198,20 @@ def test_every_bad_field_of_a_parameter_table_is_named_at_once():
                                   "[joint] friction = -1.0: must be a number in (0, 10]")
 
 
+def test_a_400_digit_integer_or_a_long_text_is_refused_and_shown_elided(tmp_path):
+    """JSON and TOML hold integers beyond a float's range (1.8e308): no number here, and no
+    OverflowError; a message shows such a value, or a long text, cut in the middle with its length."""
+    with pytest.raises(dd.ModelError) as info:
+        dd.JointMaterial(kn=10**400, friction="x" * 10_000)
+    assert str(info.value) == ("[joint] kn = 100000000000000000...000000000000000000 (401 characters): must be a number in "
+                               "[1e+04, 1e+15] Pa/m; [joint] friction = 'xxxxxxxxxxxxxxxxx...xxxxxxxxxxxxxxxxx' (10002 characters): "
+                               "must be a number in (0, 10]")
+    path = model_file(tmp_path)
+    path.write_text(path.read_text().replace("kn = 1e8", "kn = " + "9" * 400))
+    result = CliRunner().invoke(main, ["check", str(path)])
+    assert refused(result, "[joint] kn = 999999999999999999...999999999999999999 (400 characters): must be a number")
+
+
 @pytest.mark.parametrize("every", [0, 1.5, True])
 def test_a_vtk_series_keeps_every_positive_integer_th_state_only(tmp_path, every):
     from drydem.io.model_file import load_model

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import sys
 from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, fields
 
@@ -32,13 +33,31 @@ LOAD_DIRECTION = {"y": 0, "x": 1}
 
 
 def is_number(value) -> bool:
-    """A finite int or float, and not a boolean (``True`` is an int in Python, not a number here)."""
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    """A finite float, or an int within a float's range, and not a boolean (``True`` is an int in
+    Python, not a number here; an int of 400 digits, which JSON and TOML can hold, is no float)."""
+    if isinstance(value, float):
+        return math.isfinite(value)
+    return isinstance(value, int) and not isinstance(value, bool) and abs(value) <= sys.float_info.max
 
 
 def is_integer(value) -> bool:
     """An int, and not a boolean."""
     return isinstance(value, int) and not isinstance(value, bool)
+
+
+#: the longest value a message shows whole, characters (a value from a file may be a 400-digit
+#: number or a megabyte of text)
+SHOWN_CHARACTERS = 40
+
+
+def shown(value) -> str:
+    """``repr(value)`` for a message, its middle elided past :data:`SHOWN_CHARACTERS` with the
+    length said: ``1000000000...0000000000 (401 characters)``."""
+    text = repr(value)
+    if len(text) <= SHOWN_CHARACTERS:
+        return text
+    half = SHOWN_CHARACTERS // 2 - 2
+    return f"{text[:half]}...{text[-half:]} ({len(text)} characters)"
 
 
 class Rule:
@@ -50,7 +69,7 @@ class Rule:
 
     def problem(self, value, where: str) -> str | None:
         """``where = value: must be ...`` if ``value`` breaks the rule, else None."""
-        return None if value in self else f"{where} = {value!r}: {self}"
+        return None if value in self else f"{where} = {shown(value)}: {self}"
 
     def check(self, value, where: str) -> None:
         """ModelError ``where = value: must be ...`` unless ``value`` obeys the rule."""
