@@ -161,6 +161,25 @@ def test_check_reads_vrml_in_millimetres(tmp_path):
     assert "blocks          3 (2 movable, 1 fixed)" in result.output and "mass            0.00864 kg" in result.output
 
 
+@pytest.mark.parametrize("target", ["WD1", "WD1.toml"])
+def test_unit_on_a_target_in_metres_is_refused_not_ignored(target):
+    """--unit scales imported geometry only: on a built-in wall or a model file it would be
+    silently ignored, so it is refused (the model's coordinates are metres)."""
+    from drydem.masonry import designs
+
+    if target.endswith(".toml"):
+        target = str(designs.find("WD1"))
+    result = CliRunner().invoke(main, ["check", target, "--unit", "mm"])
+    assert result.exit_code == 1 and "--unit mm applies to imported geometry" in result.output, result.output
+    assert CliRunner().invoke(main, ["check", target, "--unit", "m"]).exit_code == 0
+
+
+def test_save_every_without_vtk_is_refused_not_ignored(tmp_path):
+    result = CliRunner().invoke(main, ["tilt", "WD1", "--save-every", "3", "--out", str(tmp_path / "run")])
+    assert result.exit_code == 1 and "--save-every 3 thins the VTK series: it needs --vtk or --video" in result.output, result.output
+    assert not (tmp_path / "run").exists()
+
+
 def test_an_unknown_target_lists_the_built_in_walls():
     result = CliRunner().invoke(main, ["check", "WD9"])
     assert result.exit_code == 1 and "not a built-in wall (WD1, WD2" in result.output

@@ -89,14 +89,26 @@ def joint_law_options(command):
     return bundled
 
 
+def given(option: str) -> bool:
+    """Whether the current command's parameter ``option`` (its Python name) was given on the
+    command line, not left at its default (an option that applies only with another one is
+    refused without it rather than silently ignored)."""
+    from click.core import ParameterSource
+
+    return click.get_current_context().get_parameter_source(option) == ParameterSource.COMMANDLINE
+
+
 def resolve_target(target: str, unit: str = "m") -> Target:
     """Load TARGET or exit with its error; print to stderr what an imported file could not say."""
-    from drydem.io.target import load_target
+    from drydem.io.target import MESH_SUFFIXES, load_target
 
     try:
         found = load_target(target, unit_m=UNITS[unit])
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
+    if unit != "m" and (found.builtin or found.path.suffix.lower() not in MESH_SUFFIXES):
+        raise click.ClickException(f"{target}: --unit {unit} applies to imported geometry ({', '.join(MESH_SUFFIXES)}); "
+                                   "a built-in, a wall file and a model file are in metres")
     for note in found.notes:
         click.echo(f"note: {note}", err=True)
     return found

@@ -11,7 +11,7 @@ import click
 
 from drydem.errors import DrydemError
 from drydem.model.parameters import CRITERIA
-from drydem.cli.common import CHECKPOINT, results_folder, signals_interrupt, resolve_target, joint_law_options, main, threads_option, unit_option
+from drydem.cli.common import CHECKPOINT, given, results_folder, signals_interrupt, resolve_target, joint_law_options, main, threads_option, unit_option
 
 if TYPE_CHECKING:
     from drydem.io.target import Target
@@ -127,6 +127,8 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
         monitor_index(model, tilt.monitor, settings.tilt_axis)
         if resume and overwrite:
             raise DrydemError("--resume goes on from the run in --out and --overwrite deletes it: give one of them")
+        if given("save_every") and not (vtk or video):
+            raise DrydemError(f"--save-every {save_every} thins the VTK series: it needs --vtk or --video")
         if resume and (out is None or not (out / CHECKPOINT).is_file()):
             raise DrydemError(f"--resume needs --out DIR holding a {CHECKPOINT} from an earlier run" + (f" ({out} has none)" if out else ""))
         folder = results_folder(out, found.name, resume=resume, overwrite=overwrite)

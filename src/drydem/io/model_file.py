@@ -72,7 +72,8 @@ def _block(entry: dict, index: int, source: str) -> Block:
     where = f"[[block]] #{index} ({name!r})"
     no_unknown(entry, BLOCK_KEYS, source, where)
     if not (isinstance(name, str) and name.strip()):
-        raise ModelError(f"{source}: [[block]] #{index} name = {name!r}: must be a non-empty text in quotes (messages and results name the block by it)")
+        raise ModelError(f"{source}: [[block]] #{index} name = {name!r}: must be a non-empty text in quotes "
+                         "(messages and results name the block by it)")
     if ("box" in entry) == ("vertices" in entry):
         raise ModelError(f"{source}: {where} needs exactly one of 'box' or 'vertices'")
     if "box" in entry:

@@ -128,12 +128,12 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
         raise GeometryError(f"{name}: a block needs at least 4 vertices, got {len(pts)}")
     far = float(np.abs(pts).max())
     if far > MAX_COORDINATE_M:
-        raise GeometryError(f"{name}: a vertex is {far:.3g} m from the origin: coordinates must be within "
-                            f"{MAX_COORDINATE_M:g} m (a model in another unit than metres? drydem's --unit scales it)")
+        raise GeometryError(f"{name}: a vertex is {far:.3g} m from the origin: coordinates must be within {MAX_COORDINATE_M:g} m "
+                            "(a model in another unit than metres? a model file is in metres; --unit scales imported geometry)")
     scale = float(np.linalg.norm(pts.max(0) - pts.min(0)))
     if scale < MIN_BLOCK_SIZE_M:
         raise GeometryError(f"{name}: {scale:.3g} m across: a block must be at least {MIN_BLOCK_SIZE_M:g} m across "
-                            "(a model in another unit than metres? drydem's --unit scales it)")
+                            "(a model in another unit than metres? a model file is in metres; --unit scales imported geometry)")
     from scipy.spatial import ConvexHull, QhullError  # here: scipy.spatial takes a fifth of a second to import
 
     try:
