@@ -110,6 +110,11 @@ def test_an_interrupted_tilt_keeps_its_checkpoint_and_resumes_from_it(tmp_path, 
     assert changed.exit_code == 1 and "tilt setting increment_deg: 0.1 in the checkpoint, 0.2 now" in changed.output
     result = CliRunner().invoke(main, ["tilt", "perforated_wall", "--out", str(out), "--resume"])
     assert result.exit_code == 0 and "resuming from" in result.output and "checkpoint.npz: last equilibrium at" in result.output
+    # the run is finished: resuming again keeps its results and runs nothing
+    summary = (out / "summary.json").read_bytes()
+    again = CliRunner().invoke(main, ["tilt", "perforated_wall", "--out", str(out), "--resume"])
+    assert again.exit_code == 0 and "holds a finished run of these options (summary.json): nothing to resume" in again.output
+    assert "collapse angle" not in again.output and (out / "summary.json").read_bytes() == summary
 
 
 def test_designs_lists_the_seven_walls_with_their_brief_check():

@@ -115,6 +115,7 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
     from tqdm import tqdm
 
     from drydem.analysis.tilt import CHECKPOINT_EVERY_S, NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY, check_loading, monitor_index, tilt_analysis
+    from drydem.analysis.tilt.checkpointing import check_fingerprint, fingerprint
     from drydem.engine.checkpoint import load_checkpoint
     from drydem.io.results import PushoverWriter
     from drydem.io.vtk import VtkSeries
@@ -134,8 +135,13 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
         folder = results_folder(out, found.name, resume=resume, overwrite=overwrite)
         if resume:
             _, saved = load_checkpoint(folder / CHECKPOINT)
+            check_fingerprint(folder / CHECKPOINT, saved, fingerprint(model, settings))
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
+    if resume and (folder / "summary.json").is_file():
+        click.echo(f"{folder} holds a finished run of these options (summary.json): nothing to resume, its results are kept "
+                   "(--overwrite runs it again)")
+        return
     click.echo(f"{found.name} ({found.path}): {model.n_blocks} blocks, {model.joint.stiffness_text}, "
                f"mu {model.joint.friction:g}, {model.contacts.points_per_length} points per length -> {folder}")
     if settings.tilt_axis != "y":
