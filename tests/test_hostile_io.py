@@ -102,12 +102,13 @@ def test_an_unnamed_mesh_prints_what_it_assumed(tmp_path):
     ("nowhere/wall.obj", "nowhere/wall.obj: the folder {tmp}/nowhere does not exist"),
     ("file.txt/wall.stl", "file.txt/wall.stl: {tmp}/file.txt is not a folder"),
     ("folder", "{tmp}/folder' is a directory"),
+    ("wall.json/", "{tmp}/wall.json/' ends with a separator: it names a folder; give a file name"),  # was written as wall.json
 ])
 def test_export_to_an_unwritable_path_names_it_and_writes_nothing(tmp_path, output, message):
     (tmp_path / "file.txt").write_text("keep")
     (tmp_path / "folder").mkdir()
     before = sorted(tmp_path.rglob("*"))
-    fails(["export", "WD3", tmp_path / output], message.format(tmp=tmp_path))
+    fails(["export", "WD3", f"{tmp_path}/{output}"], message.format(tmp=tmp_path))
     assert sorted(tmp_path.rglob("*")) == before
 
 

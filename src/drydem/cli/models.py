@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -174,9 +175,17 @@ def show(target: str, out: Path | None, strict: bool, unit: str, seed: int, heig
         _fail_if_strict(strict, violations, found)
 
 
+def _file_name(ctx, param, value: str) -> Path:
+    """OUTPUT as a path, or a usage error if it ends with a separator: it then names a folder
+    (``out.json/``), which Path would silently read as the file ``out.json``."""
+    if value.endswith(("/", os.sep)):
+        raise click.BadParameter(f"{value!r} ends with a separator: it names a folder; give a file name")
+    return Path(value)
+
+
 @main.command()
 @click.argument("target")
-@click.argument("output", type=click.Path(dir_okay=False, path_type=Path))
+@click.argument("output", type=click.Path(dir_okay=False), callback=_file_name)
 @click.option("--overwrite", is_flag=True, help="Replace OUTPUT if it exists (else an existing file is kept and the command fails).")
 @unit_option
 def export(target: str, output: Path, overwrite: bool, unit: str) -> None:
