@@ -20,8 +20,10 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
+from drydem.parametric import study as study_module
 from drydem.parametric import sweep as sweep_module
 from drydem.parametric.calibrate import StiffnessSearch, calibrate_stiffness
+from drydem.parametric.limits import MAX_RUNS
 from drydem.parametric.records import load_records, read_record, record_path, write_record
 from drydem.parametric.study import RunSpec, load_study
 from drydem.parametric.sweep import SweepError, claim, lock_path, pending, release, sweep
@@ -130,6 +132,47 @@ def test_a_bad_value_anywhere_is_an_error_naming_the_file_and_rule(folder, chang
     with pytest.raises(ModelError) as caught:
         load_study(study)
     assert message in str(caught.value) and str(caught.value).startswith(str(study))
+
+
+@pytest.mark.parametrize("name", ['"../../x"', '"{folder}/elsewhere"', '""', '" "', '"."', '".."', '"a\\\\b"', "5"],
+                         ids=["parent path", "absolute path", "empty", "blank", "dot", "dot dot", "backslash", "integer"])
+def test_a_study_name_that_is_not_a_plain_file_name_is_refused_before_any_folder_is_made(folder, name, monkeypatch):
+    study = folder / "small.toml"
+    study.write_text(STUDY.replace('name = "small"', f"name = {name.format(folder=folder)}"))
+    (folder / "a" / "b").mkdir(parents=True)
+    monkeypatch.chdir(folder / "a" / "b")  # results/../../x would be folder/a/x
+    refused(invoke("sweep", study, "--workers", 1), f"{study}: [study] name = ", "(it names a results folder)")
+    assert sorted(str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_dir()) == ["a", "a/b"]
+
+
+def test_a_study_description_that_is_not_text_is_refused(folder):
+    study = folder / "small.toml"
+    study.write_text(STUDY.replace('name = "small"', 'name = "small"\ndescription = 3'))
+    with pytest.raises(ModelError, match=r"\[study\] description = 3: must be a string"):
+        load_study(study)
+
+
+def test_a_grid_of_more_runs_than_a_study_makes_is_refused_at_once_naming_its_sizes(folder):
+    ks = ", ".join(f"{1e7 * (1 + k / 100):g}" for k in range(400))
+    friction = ", ".join(f"{0.3 + k / 1000:g}" for k in range(400))
+    study = folder / "small.toml"
+    study.write_text(STUDY.replace("kn = [1e7, 1e8, 1e9]", f"kn = [1e7, 1e8, 1e9]\nks = [{ks}]\nfriction = [{friction}]"))
+    start = time.perf_counter()
+    with pytest.raises(ModelError) as caught:
+        load_study(study)
+    assert time.perf_counter() - start < 5.0  # refused before its 960000 runs are laid out and checked
+    assert (f"{study}: [[grid]] #0 ('stiffness'): 960000 runs (1 protocol x 2 targets x 3 kn x 400 ks x 400 friction x 1 points): "
+            f"a study makes at most {MAX_RUNS} runs") in str(caught.value)
+
+
+def test_grids_that_together_make_more_runs_than_a_study_makes_are_refused_naming_each_count(folder, monkeypatch):
+    monkeypatch.setattr(study_module, "MAX_RUNS", 7)  # the small study makes 8 runs: 6 tilt, 2 limit
+    with pytest.raises(ModelError) as caught:
+        load_study(folder / "small.toml")
+    assert (f"{folder / 'small.toml'}: 8 runs (grids #0 'stiffness' 6, #1 'limit' 2; a run several grids share counted once): "
+            "a study makes at most 7 runs") in str(caught.value)
+    monkeypatch.setattr(study_module, "MAX_RUNS", 8)
+    assert len(load_study(folder / "small.toml").runs) == 8
 
 
 def test_a_grid_that_is_not_a_table_is_named(folder):
@@ -410,7 +453,11 @@ def test_a_scheduler_address_that_is_not_one_is_named(folder, address):
     (["--increment", "0"], "--increment = 0.0: must be a number in (0, 90) deg"),
     (["--increment", "90"], "--increment = 90.0: must be a number in (0, 90) deg"),
     (["--designs", "WD1,WD9"], "--designs 'WD1,WD9': no experimental collapse angle for ['WD9']; known: WD1, WD2"),
-    (["--designs", " , "], "--designs '': needs at least one wall"),
+    (["--designs", " , "], "--designs ',': an empty name (two commas in a row, or one at an end)"),
+    (["--designs", ""], "--designs '': needs at least one wall"),
+    (["--designs", "WD1,,WD2"], "--designs 'WD1,,WD2': an empty name (two commas in a row, or one at an end)"),
+    (["--designs", "WD1,WD2,"], "--designs 'WD1,WD2,': an empty name"),
+    (["--designs", "WD1,WD2,WD1"], "--designs 'WD1,WD2,WD1': WD1 given more than once; give each wall once"),
 ])
 def test_calibrate_options_are_checked_before_anything_runs(tmp_path, options, message):
     refused(invoke("calibrate", tmp_path / "results", *options), message)

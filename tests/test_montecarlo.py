@@ -4,6 +4,8 @@ on the number of samples, resumption, --overwrite and bad inputs."""
 
 import json
 import math
+import re
+import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict
 
@@ -12,7 +14,11 @@ import pytest
 from click.testing import CliRunner
 from scipy import integrate, stats
 
-from drydem.parametric.montecarlo import MonteCarloSettings, monte_carlo, sample_seed, statistics
+from drydem.errors import DrydemError
+from drydem.parametric import montecarlo as montecarlo_module
+from drydem.parametric.limits import MAX_SAMPLES
+from drydem.parametric.montecarlo import (MonteCarloError, MonteCarloSettings, SummaryWriter, check_resumable, monte_carlo, sample_seed,
+                                          statistics)
 from drydem.analysis.tilt import TiltSettings
 from drydem.cli import main
 from drydem.masonry.imperfections import Imperfections, imperfect_blocks
@@ -177,6 +183,75 @@ def test_a_resumed_run_computes_only_the_missing_and_corrupt_samples_with_the_sa
     assert (tmp_path / "samples" / "0000" / "summary.json").stat().st_mtime_ns == kept.st_mtime_ns
     assert without_runtime(second.summary["samples"][:3]) == without_runtime(first.summary["samples"])
     assert [s["seed"] for s in second.summary["samples"]] == [sample_seed(3, k) for k in range(4)]
+
+
+def test_a_run_asked_for_fewer_samples_than_it_holds_is_refused_and_keeps_them(tall_brick, tmp_path):
+    wall = load_wall(tall_brick)
+    with ThreadPoolExecutor(1) as pool:
+        monte_carlo(wall, settings(3), tmp_path, pool, target={"name": "tall"})
+    summary = (tmp_path / "summary.json").read_text()
+    message = "holds 3 samples (up to sample 2); --samples 2 would leave 1 of them out of its summary: give --samples 3 or more"
+    with pytest.raises(MonteCarloError, match=re.escape(message)):
+        check_resumable(tmp_path, settings(2), wall)
+    with ThreadPoolExecutor(1) as pool, pytest.raises(MonteCarloError, match=re.escape(message)):
+        monte_carlo(wall, settings(2), tmp_path, pool, target={"name": "tall"})
+    assert (tmp_path / "summary.json").read_text() == summary
+    check_resumable(tmp_path, settings(3), wall)  # as many, or more, go on
+
+
+def failed_sample(wall, settings, index):
+    """A stand-in for run_sample: the record of a sample failed at once."""
+    sample = {"index": index, "seed": sample_seed(settings.seed, index), "imperfections": asdict(settings.imperfections),
+              "status": "failed", "error": "stand-in", "runtime_s": 0.0}
+    return {"summary": {"sample": sample}, "pushover": []}
+
+
+class Stop(Exception):
+    """An interruption after some samples."""
+
+
+def test_a_run_of_the_most_samples_starts_at_once_and_an_interrupted_one_leaves_its_summary(tall_brick, tmp_path, monkeypatch):
+    monkeypatch.setattr(montecarlo_module, "run_sample", failed_sample)
+    finished = []
+
+    def stop_after_three(entry):
+        finished.append(entry["index"])
+        if len(finished) == 3:
+            raise Stop
+
+    start = time.perf_counter()
+    with ThreadPoolExecutor(1) as pool, pytest.raises(Stop):
+        monte_carlo(load_wall(tall_brick), settings(MAX_SAMPLES), tmp_path, pool, target={"name": "tall"}, in_flight=1,
+                    on_sample=stop_after_three)
+    assert time.perf_counter() - start < 10.0  # not laid out sample by sample first
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert (summary["samples_requested"], summary["samples_recorded"]) == (MAX_SAMPLES, 3)
+
+
+def test_the_summary_is_rewritten_no_faster_than_its_writing_stays_a_small_part_of_the_run(tmp_path):
+    builds = []
+
+    def slow_build():  # a summary of many samples: slow to build and write
+        builds.append(1)
+        time.sleep(0.05)
+        return {"samples": len(builds)}
+
+    writer = SummaryWriter(tmp_path, slow_build)
+    for _ in range(5):  # samples finishing faster than SUMMARY_PACE x 0.05 s
+        writer.changed()
+    assert len(builds) == 1 and writer.stale
+    time.sleep(writer.took * montecarlo_module.SUMMARY_PACE)  # then due
+    writer.changed()
+    assert len(builds) == 2 and not writer.stale and json.loads((tmp_path / "summary.json").read_text()) == {"samples": 2}
+
+
+def test_more_samples_than_a_run_takes_are_refused_naming_the_limit_and_why(tall_brick):
+    result = run(tall_brick, "--samples", MAX_SAMPLES + 1, "--height-sd", 1)
+    assert result.exit_code == 2 and "Traceback" not in result.output
+    assert (f"Invalid value for '--samples': {MAX_SAMPLES + 1}: must be an integer in [1, {MAX_SAMPLES:.4g}] "
+            "(the statistics' sampling error") in result.output
+    with pytest.raises(DrydemError, match=rf"samples = {MAX_SAMPLES + 1}: must be an integer in \[1, "):
+        settings(MAX_SAMPLES + 1)
 
 
 def test_the_same_seed_gives_the_same_samples(tall_brick, tmp_path):

@@ -14,6 +14,18 @@ from pathlib import Path
 from drydem.errors import DrydemError, ModelError
 
 
+def plain_name_problem(name) -> str | None:
+    """Why ``name``, read from an input file, cannot name one file or folder inside a results
+    folder (``must be ...``), None if it can: a string, not blank, without a path separator (/ or
+    \\) or a NUL, and neither "." nor "..". So RESULTS/NAME stays inside RESULTS: "../x" or an
+    absolute path would write elsewhere, "." and ".." are RESULTS itself and its parent."""
+    if not isinstance(name, str):
+        return "must be a string (it names a results folder)"
+    if not name.strip() or name in (".", "..") or any(c in name for c in "/\\\0"):
+        return "must be a non-empty name without / or \\, and not . or .. (it names a results folder)"
+    return None
+
+
 def writable(path: str | Path) -> Path:
     """``path`` if a file can be created there; else a DrydemError naming it and the reason (its
     folder is missing or not a folder or not writable, the path is a folder, or the system

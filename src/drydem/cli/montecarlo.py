@@ -13,16 +13,27 @@ from drydem.cli.common import (
     scheduler_option, signals_interrupt, workers_option,
 )
 from drydem.cli.tilting import TiltOptions, tilt_options
+from drydem.parametric.limits import MAX_SAMPLES, SAMPLES, SAMPLES_REASON
+
+
+def _samples(ctx, param, value: int) -> int:
+    """--samples within :data:`drydem.parametric.limits.SAMPLES` (at most MAX_SAMPLES, whose
+    reason the message gives); click has refused a value under 1 or not a whole number."""
+    if value not in SAMPLES:
+        raise click.BadParameter(f"{value}: {SAMPLES} ({SAMPLES_REASON}); for more, start another run with another --seed and --out")
+    return value
 
 
 @main.command()
 @click.argument("target")
-@click.option("--samples", type=click.IntRange(min=1), default=100, show_default=True,
-              help="Imperfect walls analysed; sample k's seed depends on --seed and k only, so more samples extend a run.")
+@click.option("--samples", type=click.IntRange(min=1), default=100, show_default=True, callback=_samples,
+              help=f"Imperfect walls analysed, at most {MAX_SAMPLES} ({SAMPLES_REASON}); sample k's seed depends on --seed and k "
+                   "only, so more samples extend a run.")
 @imperfection_options
 @tilt_options(adaptive=True)
 @click.option("--out", type=click.Path(path_type=Path), help="Results folder (default: results/TARGET-montecarlo-TIME).")
-@click.option("--resume", is_flag=True, help="Go on with the run in --out (same TARGET and options; --samples may grow): the samples "
+@click.option("--resume", is_flag=True, help="Go on with the run in --out (same TARGET and options; --samples may grow, never below "
+                                              "the samples it holds, which would leave some out of its summary): the samples "
                                               "recorded there are kept, the missing and corrupt ones run.")
 @click.option("--overwrite", is_flag=True, help="Replace the results of an earlier run in --out (they are kept otherwise).")
 @workers_option
@@ -34,7 +45,7 @@ def montecarlo(target, samples, seed, height_sd, height_distribution, flatness_s
     seed, each a tilting analysis (drydem tilt's options; adaptive by default). Writes
     OUT/samples/NNNN (each sample's summary.json with its seed and imperfections, and
     pushover.csv) as they finish, OUT/summary.json (every sample's collapse and DLS angles, and
-    their mean, std, CoV, 5th percentile) after each, and OUT/histogram.png at the end. Per
+    their mean, std, CoV, 5th percentile) as they finish, and OUT/histogram.png at the end. Per
     sample there are no figures, VTK series or videos (drydem tilt TARGET gives them for a
     wall; no --vtk, --video, --unit). Exits 1 when no sample found a collapse angle, 130 or 143
     when interrupted (--resume goes on)."""

@@ -98,7 +98,7 @@ def report(results_dir: Path, out: Path | None) -> None:
 
 @main.command()
 @click.argument("results_dir", type=click.Path(path_type=Path))
-@click.option("--designs", default="WD1,WD2,WD3,WD4,WD5,WD6,WD7", show_default=True, help="Walls to fit, comma-separated.")
+@click.option("--designs", default="WD1,WD2,WD3,WD4,WD5,WD6,WD7", show_default=True, help="Walls to fit, comma-separated, each once.")
 @click.option("--kn-min", type=float, default=1e7, show_default=True, help="Smallest kn searched, Pa/m.")
 @click.option("--kn-max", type=float, default=1e9, show_default=True, help="Largest kn searched, Pa/m.")
 @click.option("--ks-ratio", type=float, default=1.0, show_default=True, help="ks = ratio x kn.")
@@ -119,7 +119,8 @@ def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, joint_l
     from drydem.files import writable, writable_folder
     from drydem.parametric.workers import open_workers
 
-    search = StiffnessSearch(tuple(d.strip() for d in designs.split(",") if d.strip()), kn_min, kn_max, ks_ratio, increment, joint_law)
+    names = tuple(d.strip() for d in designs.split(",")) if designs.strip() else ()  # an empty name kept, to be refused
+    search = StiffnessSearch(names, kn_min, kn_max, ks_ratio, increment, joint_law)
     problems = search.problems(name=lambda field: "--" + field.replace("_", "-"))
     if problems:
         raise click.ClickException("\n".join(problems))

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from drydem.errors import ModelError
-from drydem.files import read_toml
+from drydem.files import plain_name_problem, read_toml
 from drydem.model.tables import SECTIONS, errors_naming, no_unknown, parameters_from_dict
 from drydem.masonry.layout import BrickSize, Layout, parse_layout
 from drydem.model.assembly import Model, build_model
@@ -110,14 +110,15 @@ def wall_from_dict(data: dict, *, source: str, text: str = "", default_name: str
 
 def _texts(meta: dict, default_name: str) -> tuple[str, str, str]:
     """``[wall]``'s name (default ``default_name``), title and description, each a string; the
-    name also names the results folder, so it must be a non-empty name without a path separator."""
+    name also names the results folder, so it must be a plain file name (:func:`drydem.files.plain_name_problem`)."""
     values = {"name": default_name, "title": "", "description": ""} | meta
     for key, value in values.items():
         if not isinstance(value, str):
             raise ModelError(f"[wall] {key} = {value!r}: must be a string")
     name = values["name"]
-    if not name.strip() or "/" in name or "\\" in name:
-        raise ModelError(f"[wall] name = {name!r}: must be a non-empty name without / or \\ (it names the results folder)")
+    problem = plain_name_problem(name)
+    if problem is not None:
+        raise ModelError(f"[wall] name = {name!r}: {problem}")
     return name, values["title"], values["description"]
 
 

@@ -188,12 +188,7 @@ class StiffnessSearch:
         ks_ratio x kn a joint stiffness at both ends; the increment a tilt step (TiltSettings')."""
         from drydem.analysis.tilt import SETTING_RANGES
 
-        found = []
-        known = experimental_angles()
-        unknown = [d for d in self.designs if d not in known]
-        if not self.designs or unknown:
-            what = f"no experimental collapse angle for {unknown}" if unknown else "needs at least one wall"
-            found.append(f"{name('designs')} {','.join(self.designs)!r}: {what}; known: {', '.join(sorted(known))}")
+        found = _design_problems(self.designs, name)
         bounds = _bound_problems(self, name)
         found += bounds + field_problems(self, {"ks_ratio": KS_RATIO, "increment": SETTING_RANGES["increment_deg"]}, name)
         ks = (self.ks_ratio * self.kn_min, self.ks_ratio * self.kn_max)
@@ -212,6 +207,22 @@ class StiffnessSearch:
         """The runs that evaluate ``kn``, one per design."""
         return [RunSpec(analysis="tilt", target=d, protocol="adaptive", kn=kn, ks=self.ks_ratio * kn, increment_deg=self.increment,
                         joint_law=joint_law_text(self.joint_law)) for d in self.designs]
+
+
+def _design_problems(designs: tuple[str, ...], name: Callable[[str], str]) -> list[str]:
+    """Why ``designs`` cannot be fitted: none, an empty name (two commas in a row, or one at an
+    end), a wall without an experimental angle, or one given twice (its error would count twice
+    in the mean that is minimised)."""
+    known = experimental_angles()
+    given, listed = f"{name('designs')} {','.join(designs)!r}", f"known: {', '.join(sorted(known))}"
+    if not designs or "" in designs:
+        what = "an empty name (two commas in a row, or one at an end)" if designs else "needs at least one wall"
+        return [f"{given}: {what}; {listed}"]
+    unknown = [d for d in designs if d not in known]
+    twice = list(dict.fromkeys(d for d in designs if designs.count(d) > 1))
+    found = [f"{given}: no experimental collapse angle for {unknown}; {listed}"] if unknown else []
+    return found + ([f"{given}: {', '.join(twice)} given more than once; give each wall once (its error would count twice in "
+                     "the mean)"] if twice else [])
 
 
 def _law_problems(law: dict, kn_range: tuple[float, float], ks_ratio: float) -> list[str]:

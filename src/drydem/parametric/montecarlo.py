@@ -18,11 +18,13 @@ written beside its place and renamed into it, whole or not at all.
 
 ``OUT/summary.json``: the settings, every recorded sample (index order) with its collapse and
 DLS angles and outcome, and the statistics (:func:`statistics`) of both angles; rewritten
-after each sample.
+after each sample (paced once it takes long to write, :class:`SummaryWriter`) and at the end.
 
 A run started again with the same settings (:func:`check_resumable`) skips the samples validly
-recorded and runs the missing and the corrupt ones (:func:`pending_samples`). One run at a
-time works on a folder (:func:`hold_folder`).
+recorded and runs the missing and the corrupt ones (:func:`pending_samples`); it may ask for
+more samples, never for fewer than it holds (:func:`check_samples_kept`). One run at a time
+works on a folder (:func:`hold_folder`). A run has at most
+:data:`~drydem.parametric.limits.MAX_SAMPLES` samples.
 """
 
 from __future__ import annotations
@@ -49,12 +51,17 @@ from drydem.errors import DrydemError
 from drydem.io.results import PushoverWriter, tilt_summary, write_summary
 from drydem.masonry.imperfections import Imperfections, imperfect_model
 from drydem.masonry.walls import Wall
+from drydem.model.parameters import Range, field_problems, refuse
 from drydem.parametric.calibrate import wall_angle
+from drydem.parametric.limits import SAMPLES
 
 #: the percentile reported as ``p05``
 PERCENTILE = 5.0
 SAMPLES_FOLDER = "samples"
 LOCK_FILE = ".montecarlo.lock"
+#: the rules of a run's number of samples (at most MAX_SAMPLES, :mod:`drydem.parametric.limits`
+#: says why) and of its seed (any whole number >= 0: numpy's SeedSequence takes any)
+SETTINGS_RULES = {"samples": SAMPLES, "seed": Range(0, None, integer=True)}
 
 
 class MonteCarloError(DrydemError):
@@ -76,10 +83,7 @@ class MonteCarloSettings:
     model_overrides: Mapping[str, object] = field(default_factory=dict)
 
     def __post_init__(self):
-        if isinstance(self.samples, bool) or not isinstance(self.samples, int) or self.samples < 1:
-            raise DrydemError(f"samples = {self.samples!r}: must be a whole number >= 1")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
-            raise DrydemError(f"seed = {self.seed!r}: must be a whole number >= 0")
+        refuse(field_problems(self, SETTINGS_RULES))
 
     def identity(self, wall: Wall) -> dict:
         """Everything that makes the samples of ``wall`` what they are (all but their number), as
@@ -195,10 +199,13 @@ class PendingSamples:
 
 
 def pending_samples(folder: Path, settings: MonteCarloSettings) -> PendingSamples:
-    """What is recorded in ``folder`` and what is left to run (see :class:`PendingSamples`)."""
+    """What is recorded in ``folder`` and what is left to run (see :class:`PendingSamples`); the
+    folder is listed once (:func:`sample_indices`), not looked up once per sample, so that a
+    large run starts at once."""
     recorded, todo, corrupt = {}, [], []
+    present = sample_indices(folder)
     for index in range(settings.samples):
-        if not sample_folder(folder, index).exists():
+        if index not in present:
             todo.append(index)
             continue
         try:
@@ -209,10 +216,32 @@ def pending_samples(folder: Path, settings: MonteCarloSettings) -> PendingSample
     return PendingSamples(recorded, todo, corrupt)
 
 
+def sample_indices(folder: Path) -> set[int]:
+    """The indices of the sample folders in ``folder`` (``samples/NNNN``, valid or corrupt; not
+    the hidden partial ones), or none if it has no samples folder."""
+    try:
+        names = os.listdir(Path(folder) / SAMPLES_FOLDER)
+    except FileNotFoundError:
+        return set()
+    return {int(name) for name in names if name.isascii() and name.isdigit() and sample_folder(folder, int(name)).name == name}
+
+
+def check_samples_kept(folder: Path, settings: MonteCarloSettings) -> None:
+    """MonteCarloError if ``folder`` holds a sample beyond ``settings.samples``: a run goes on
+    only with at least the samples it has, since its summary lists the samples asked for and
+    would silently leave the others out (more samples extend it, module docstring)."""
+    indices = sample_indices(folder)
+    beyond = sum(index >= settings.samples for index in indices)
+    if beyond:
+        raise MonteCarloError(f"{folder}: holds {len(indices)} samples (up to sample {max(indices)}); --samples {settings.samples} "
+                              f"would leave {beyond} of them out of its summary: give --samples {max(indices) + 1} or more to go on, "
+                              "or --overwrite to start again")
+
+
 def check_resumable(folder: Path, settings: MonteCarloSettings, wall: Wall) -> None:
     """MonteCarloError unless ``folder/summary.json`` is a Monte Carlo run's with the same
-    settings (all but the number of samples: more extend it, fewer summarise its first ones),
-    naming those that differ."""
+    settings (all but the number of samples: more extend it; fewer than it holds are refused,
+    :func:`check_samples_kept`), naming those that differ."""
     path = Path(folder) / "summary.json"
     try:
         recorded = json.loads(path.read_text(encoding="utf-8"))["settings"]
@@ -224,6 +253,7 @@ def check_resumable(folder: Path, settings: MonteCarloSettings, wall: Wall) -> N
         raise MonteCarloError(f"{folder}: the recorded run had other settings ({', '.join(differ)}: "
                               + "; ".join(f"{key} {recorded.get(key)} there, {current.get(key)} now" for key in differ)
                               + "); resume with the same options, or start another --out")
+    check_samples_kept(folder, settings)
 
 
 def statistics(values) -> dict:
@@ -327,39 +357,89 @@ def monte_carlo(wall: Wall, settings: MonteCarloSettings, folder: Path, executor
     """Run on ``executor`` the samples of ``settings`` not validly recorded in ``folder``
     (:func:`pending_samples`), at most ``in_flight`` at a time (default: all), writing each
     sample's record as it comes and the top summary (:func:`run_summary`, ``target`` in it)
-    before the first and after each; ``on_sample(entry)`` for each sample finished here.
-    MonteCarloError if another run holds the folder or the executor loses a sample (the
-    samples finished are recorded)."""
+    before the first, as they come (:class:`SummaryWriter`) and at the end, however it ends;
+    ``on_sample(entry)`` for each sample finished here. MonteCarloError if another run holds
+    the folder, the folder holds samples beyond ``settings.samples``
+    (:func:`check_samples_kept`), or the executor loses a sample (the samples finished are
+    recorded)."""
     folder = Path(folder)
     (folder / SAMPLES_FOLDER).mkdir(parents=True, exist_ok=True)
     with hold_folder(folder):
+        check_samples_kept(folder, settings)
         plan = pending_samples(folder, settings)
         entries = dict(plan.recorded)
-        summary = run_summary(target, wall, settings, entries)
-        write_summary(folder, summary)
-        queue = iter(plan.todo)
-        window = in_flight or max(len(plan.todo), 1)
-        running: dict[Future, int] = {}
-        while True:
-            while len(running) < window and (index := next(queue, None)) is not None:
-                running[executor.submit(run_sample, wall, settings, index)] = index
-            if not running:
-                break
-            done, _ = wait(running, return_when=FIRST_COMPLETED)
-            for future in done:
-                index = running.pop(future)
-                try:
-                    record = future.result()
-                except Exception as exc:
-                    raise MonteCarloError(f"sample {index} was lost by the executor ({type(exc).__name__}: {exc}); the samples "
-                                          "finished are recorded: resume to go on") from exc
+        summaries = SummaryWriter(folder, lambda: run_summary(target, wall, settings, entries))
+        try:
+            for index, record in _analysed(wall, settings, plan.todo, executor, in_flight):
                 write_sample(folder, record)
                 entries[index] = sample_entry(record["summary"])
-                summary = run_summary(target, wall, settings, entries)
-                write_summary(folder, summary)
+                summaries.changed()
                 if on_sample is not None:
                     on_sample(entries[index])
-    return MonteCarloOutcome(len(plan.todo), len(plan.recorded), tuple(plan.corrupt), summary)
+        finally:
+            if summaries.stale:
+                summaries.write()
+    return MonteCarloOutcome(len(plan.todo), len(plan.recorded), tuple(plan.corrupt), summaries.summary)
+
+
+def _analysed(wall: Wall, settings: MonteCarloSettings, todo: list[int], executor: Executor,
+              in_flight: int | None) -> Iterator[tuple[int, dict]]:
+    """(index, record) of each sample of ``todo`` as it finishes on ``executor``, at most
+    ``in_flight`` submitted at a time (default: all); MonteCarloError if the executor loses one."""
+    queue = iter(todo)
+    window = in_flight or max(len(todo), 1)
+    running: dict[Future, int] = {}
+    while True:
+        while len(running) < window and (index := next(queue, None)) is not None:
+            running[executor.submit(run_sample, wall, settings, index)] = index
+        if not running:
+            return
+        done, _ = wait(running, return_when=FIRST_COMPLETED)
+        for future in done:
+            index = running.pop(future)
+            try:
+                record = future.result()
+            except Exception as exc:
+                raise MonteCarloError(f"sample {index} was lost by the executor ({type(exc).__name__}: {exc}); the samples "
+                                      "finished are recorded: resume to go on") from exc
+            yield index, record
+
+
+#: the top summary is rewritten once the time since its last write is this many times what that
+#: write took (:class:`SummaryWriter`)
+SUMMARY_PACE = 10.0
+
+
+class SummaryWriter:
+    """A run's top summary (``build()``), written now and then again after a sample once the
+    time since the last write is at least :data:`SUMMARY_PACE` times what that write took.
+
+    The summary lists every sample, so it grows with each: written after every sample, a run
+    of n samples would write n^2 / 2 entries (hours of a 10^5-sample run spent rewriting it).
+    Paced, writing it takes under 1 / SUMMARY_PACE of the run; a small run's summary takes
+    milliseconds, so it is still written after every sample. Between writes it lags the sample
+    folders, which are the results (a resumed run reads them); :func:`monte_carlo` writes it at
+    the end, however the run ends."""
+
+    def __init__(self, folder: Path, build: Callable[[], dict]):
+        self.folder, self.build = folder, build
+        self.summary: dict = {}
+        self.stale = True
+        self.last = self.took = 0.0
+        self.write()
+
+    def changed(self) -> None:
+        """A sample was added: write the summary if it is due."""
+        self.stale = True
+        if time.perf_counter() - self.last >= SUMMARY_PACE * self.took:
+            self.write()
+
+    def write(self) -> None:
+        start = time.perf_counter()
+        self.summary = self.build()
+        write_summary(self.folder, self.summary)
+        self.last = time.perf_counter()
+        self.took, self.stale = self.last - start, False
 
 
 def experiment(name: str) -> dict | None:

@@ -37,6 +37,11 @@ corrected). Its runs are the product of targets, motions, scales and overrides (
 no increment). ``[defaults]`` may also give duration_s, restitution or contact_damping_ratio
 (a grid's own restitution or ratio replaces the default of the other).
 
+``[study]``'s name names the default results folder (results/NAME): a plain file name, neither
+a path nor "." or "..". A study makes at most :data:`~drydem.parametric.limits.MAX_RUNS` runs,
+all grids together (that module says why); a grid larger than that is refused before it is
+expanded.
+
 A study is checked whole when it is loaded: every target is loaded and every run's overrides
 applied to it (the parameter classes check the values), and every shake run's motion read and its
 settings built, so that a bad value anywhere stops the study before its first run, with every
@@ -51,14 +56,16 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
+import math
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 from drydem.errors import DrydemError, ModelError
-from drydem.files import read_toml
+from drydem.files import plain_name_problem, read_toml
 from drydem.model.assembly import Model
 from drydem.model.parameters import is_number
 from drydem.model.tables import no_unknown
+from drydem.parametric.limits import MAX_RUNS
 
 #: the analyses of a study and their protocols (a shake run has one: the time history)
 ANALYSES = {"tilt": ("fixed", "adaptive"), "limit": ("associative", "non-associative"), "shake": ("time-history",)}
@@ -236,8 +243,31 @@ def load_study(path: str | Path) -> Study:
     grids = data.get("grid")
     if not isinstance(grids, list) or not grids:
         raise ModelError(f"{source}: no [[grid]] entries")
-    runs: list[RunSpec] = []
-    problems: list[str] = []
+    name, description = meta.get("name", path.stem), meta.get("description", "")
+    problems = _texts_problems(name, description, source)
+    runs = _runs(grids, defaults, path, problems)
+    if problems:
+        unique = list(dict.fromkeys(problems))
+        raise ModelError(unique[0] if len(unique) == 1 else f"{source}: {len(unique)} problems, nothing run:\n  " + "\n  ".join(unique))
+    return Study(name, description, runs, source)
+
+
+def _texts_problems(name, description, source: str) -> list[str]:
+    """Why ``[study]``'s name or description cannot be used: the name names the default results
+    folder, results/NAME, so it must be one plain file name (:func:`drydem.files.plain_name_problem`:
+    "../x" or an absolute path would write elsewhere); the description is text."""
+    problems = [] if isinstance(description, str) else [f"{source}: [study] description = {description!r}: must be a string"]
+    problem = plain_name_problem(name)
+    return problems + ([] if problem is None else [f"{source}: [study] name = {name!r}: {problem}"])
+
+
+def _runs(grids: list, defaults: dict, path: Path, problems: list[str]) -> list[RunSpec]:
+    """The runs of every grid, each once, each checked on its target; a problem found is
+    appended to ``problems``. Once the runs exceed :data:`MAX_RUNS` the grids after are not
+    expanded: the study is refused, naming each grid's count."""
+    source = str(path)
+    runs: dict[RunSpec, None] = {}
+    counts: list[str] = []
     models: dict[str, object] = {}  # target -> its model, or the message saying why it cannot be loaded
     motions: dict[str, object] = {}  # motion -> its unscaled GroundMotion, or the message saying why it cannot be read
     for k, grid in enumerate(grids):
@@ -247,13 +277,41 @@ def load_study(path: str | Path) -> Study:
             analysis = grid.get("analysis", "tilt") if isinstance(grid, dict) else None
             keys = GRID_KEYS.get(analysis, set()) if isinstance(analysis, str) else set()
             no_unknown(grid, keys or set().union(*GRID_KEYS.values()), where, f"the grid (a {analysis} analysis)" if keys else "the grid")
-            runs += _grid_runs(_with_defaults(defaults, grid), path.parent, where, models, problems, motions)
+            found = _grid_runs(_with_defaults(defaults, grid), path.parent, where, models, problems, motions)
         except ModelError as exc:
             problems.append(str(exc))
-    if problems:
-        unique = list(dict.fromkeys(problems))
-        raise ModelError(unique[0] if len(unique) == 1 else f"{source}: {len(unique)} problems, nothing run:\n  " + "\n  ".join(unique))
-    return Study(str(meta.get("name", path.stem)), str(meta.get("description", "")), list(dict.fromkeys(runs)), source)
+            continue
+        runs |= dict.fromkeys(found)
+        counts.append(f"#{k} {name!r} {len(found)}")
+        if len(runs) > MAX_RUNS:
+            problems.append(f"{source}: {'at least ' if k + 1 < len(grids) else ''}{len(runs)} runs (grids {', '.join(counts)}; a run "
+                            f"several grids share counted once): {_too_many()}")
+            break
+    return list(runs)
+
+
+def _too_many() -> str:
+    """Why a study is refused when it makes more than MAX_RUNS runs, and what to do."""
+    return (f"a study makes at most {MAX_RUNS} runs (each a record to keep and to report; drydem.parametric.limits says why); "
+            "give fewer values, or split it into several study files, which may share one --out")
+
+
+def _refuse_too_many(where: str, sizes: dict[str, int]) -> None:
+    """ModelError if a grid of ``sizes`` (the number of values of each of its keys) makes more
+    than :data:`MAX_RUNS` runs, naming each size: checked before the grid is expanded, so that a
+    grid of millions is refused at once rather than laid out and checked run by run."""
+    count = math.prod(sizes.values())
+    if count > MAX_RUNS:
+        raise ModelError(f"{where}: {count} runs ({' x '.join(f'{n} {key}' for key, n in sizes.items())}): {_too_many()}")
+
+
+def _sizes(values: dict[str, list], grid: dict) -> dict[str, int]:
+    """How many values each key of ``grid`` has (``values``: its lists), ks after kn: one for
+    ks = "kn" (the default), the ks of each kn."""
+    ks_values = grid.get("ks", "kn")
+    sizes = {key: len(found) for key, found in values.items() if key not in ("friction", "points")}
+    ks = 1 if ks_values == "kn" else len(_list(ks_values))
+    return sizes | {"ks": ks, "friction": len(values["friction"]), "points": len(values["points"])}
 
 
 def _with_defaults(defaults: dict, grid: dict) -> dict:
@@ -282,6 +340,7 @@ def _grid_runs(grid: dict, folder: Path, where: str, models: dict, problems: lis
     bad = [p for p in values["protocol"] if p not in ANALYSES[analysis]]
     if bad:
         raise ModelError(f"{where}: protocol {bad} is not one of {list(ANALYSES[analysis])} for a {analysis} analysis")
+    _refuse_too_many(where, _sizes(values, grid))
     targets = _targets(values["targets"], folder, where)
     runs = [RunSpec(analysis=analysis, target=target, protocol=protocol, kn=kn, ks=ks, friction=friction, points=points,
                     increment_deg=grid.get("increment_deg", 0.1))
@@ -317,6 +376,7 @@ def _shake_runs(grid: dict, folder: Path, where: str, models: dict, problems: li
     bad = [scale for scale in values["scales"] if not (is_number(scale) and scale > 0)]
     if bad:
         raise ModelError(f"{where}: scales {bad}: each must be a finite number > 0 (a factor on every motion)")
+    _refuse_too_many(where, _sizes(values, grid))
     targets = _targets(values["targets"], folder, where)
     named = [m for m in values["motions"] if not isinstance(m, str)]
     if named:

@@ -34,6 +34,7 @@ from drydem.analysis.drift import DLS_DRIFT, EC8_DRIFT_LIMITS
 from drydem.errors import DrydemError
 from drydem.masonry.published import savalle2022
 from drydem.model.parameters import Range
+from drydem.parametric.limits import MAX_SAMPLES
 from drydem.parametric.records import (ANGLE, SUMMARY_FILE, RecordError, Records, load_records, load_run_folders, read_json, run_folders,
                                        table_problems)
 from drydem.files import replaced_atomically
@@ -50,9 +51,11 @@ MONTECARLO_TITLE = "Monte Carlo scatter of the collapse angle"
 #: the statistics of a Monte Carlo summary's collapse angle the report shows (count aside)
 MONTECARLO_STATISTICS = ("mean", "std", "cov", "p05")
 #: the rules of those statistics (:func:`drydem.parametric.montecarlo.statistics`), each null
-#: where there is none, but the count: samples, a billion of them years of computing; the
-#: angles' mean, std and p05 in [0, 90] deg; their CoV (std / mean, ddof = 1) at most sqrt(count)
-MONTECARLO_RULES = {"count": Range(0, 10**9, integer=True), "mean": ANGLE, "std": ANGLE, "cov": Range(0.0, math.sqrt(10**9)), "p05": ANGLE}
+#: where there is none, but the count: samples, at most those of a run (MAX_SAMPLES,
+#: drydem.parametric.limits); the angles' mean, std and p05 in [0, 90] deg; their CoV (std /
+#: mean, ddof = 1) at most sqrt(count)
+MONTECARLO_RULES = {"count": Range(0, MAX_SAMPLES, integer=True), "mean": ANGLE, "std": ANGLE, "cov": Range(0.0, math.sqrt(MAX_SAMPLES)),
+                    "p05": ANGLE}
 MONTECARLO_NOTE = (
     "Each row a `drydem montecarlo` run (its folder, NAME, in montecarlo/ or in the results folder): the statistics of its "
     "collapse angles over the samples with a verdict, "
