@@ -74,11 +74,15 @@ def test_a_csv_from_a_spreadsheet_with_bom_crlf_and_blank_lines_reads(tmp_path):
     np.testing.assert_array_equal(read_motion(path).acceleration_m_s2[:, 0], [1.0, 2.0])
 
 
-def test_a_csv_record_starting_after_zero_is_shifted_to_start_at_zero(tmp_path):
+def test_a_csv_record_starting_after_zero_is_shifted_to_start_at_zero_with_a_note(tmp_path):
     path = written(tmp_path, "late.csv", "time_s,acc_x_m_s2\n2.0,1\n2.5,2\n3.0,3\n")
     read = read_csv_motion(path)
     np.testing.assert_array_equal(read.time_s, [0.0, 0.5, 1.0])  # 2.0, 2.5, 3.0 less 2.0: exact
     assert read.duration_s == 1.0
+    assert read.notes == (f"{path}: the record starts at t = 2 s; it was shifted by 2 s to start at 0",)
+    # the note goes with the motion through the correction and the scaling; a record from 0 has none
+    assert read.baseline_corrected().scaled(2.0).notes == read.notes
+    assert read_csv_motion(written(tmp_path, "zero.csv", "time_s,acc_x_m_s2\n0,1\n0.5,2\n")).notes == ()
 
 
 @pytest.mark.parametrize("name, text, message", [
@@ -93,6 +97,11 @@ def test_a_csv_record_starting_after_zero_is_shifted_to_start_at_zero(tmp_path):
     ("back.csv", "time_s,acc_x_m_s2\n0,1\n0.2,2\n0.1,3\n", "line 4: time_s = 0.1 is not after 0.2 (line 3): times must increase strictly"),
     ("same.csv", "time_s,acc_x_m_s2\n0,1\n0,2\n", "line 3: time_s = 0 is not after 0 (line 2)"),
     ("negative.csv", "time_s,acc_x_m_s2\n-0.1,1\n0,2\n", "line 2: time_s = -0.1: times must be >= 0 s"),
+    # the finding: times 1e-300 apart made the baseline's linear system singular (a traceback)
+    ("tiny_dt.csv", "time_s,acc_x_m_s2\n0,0\n1e-300,1\n2e-300,0\n",
+     "line 3: time_s = 1e-300 is 1e-300 s after 0 (line 2): a record's samples must be at least 1e-06 s apart"),
+    ("close.csv", "time_s,acc_x_m_s2\n0,0\n0.01,1\n0.0100005,0\n", "line 4: time_s = 0.0100005 is 5e-07 s after 0.01 (line 3)"),
+    ("long.csv", "time_s,acc_x_m_s2\n0,0\n1e30,0\n", "line 3: time_s = 1e+30: the record lasts 1e+30 s; at most 1e+06 s"),
     ("one.csv", "time_s,acc_x_m_s2\n0,1\n", "1 rows of samples; a motion needs at least 2"),
     ("header.csv", "time_s,acc_x_m_s2\n", "0 rows of samples; a motion needs at least 2"),
     ("empty.csv", "", "empty: no header line; expected the columns time_s, acc_x_m_s2"),
@@ -167,13 +176,14 @@ def test_the_main_direction_is_the_horizontal_axis_with_the_larger_peak():
      "line 3: 'VELOCITY TIME SERIES IN UNITS OF CM/S': expected 'ACCELERATION TIME SERIES IN UNITS OF G'"),
     (AT2_NEW.replace("NPTS=     7, DT=   .0050 SEC", "7 points every 5 ms"),
      "line 4: '7 points every 5 ms': expected 'NPTS=  5590, DT=   .0050 SEC' or '5590    0.0050    NPTS, DT'"),
-    (AT2_NEW.replace("DT=   .0050", "DT=   0.000"), "line 4: DT = 0.0: must be a number in (0, inf) s"),
+    (AT2_NEW.replace("DT=   .0050", "DT=   0.000"), "line 4: DT = 0.0: must be a number in [1e-06, inf) s"),
+    (AT2_NEW.replace("DT=   .0050", "DT=   1e-300"), "line 4: DT = 1e-300: must be a number in [1e-06, inf) s"),
     (AT2_NEW.replace("DT=   .0050", "DT=   fast"), "line 4: DT: 'fast' is not a number"),
     (AT2_NEW.replace("NPTS=     7", "NPTS=   7.5"), "line 4: NPTS = '7.5': must be an integer in [2, inf)"),
     (AT2_NEW.replace(".5000000E+00", ".5000000E+0x"), "line 6: '.5000000E+0x' is not a number"),
     (AT2_NEW.replace(".5000000E+00", "NaN"), "line 6: 'NaN' is not a finite number"),
     ("PEER NGA STRONG MOTION DATABASE RECORD\n", "1 lines; a PEER .AT2 file has 4 header lines"),
-], ids=["truncated", "too-long", "velocity", "no-npts", "zero-dt", "word-dt", "fractional-npts", "word-value", "nan", "short"])
+], ids=["truncated", "too-long", "velocity", "no-npts", "zero-dt", "tiny-dt", "word-dt", "fractional-npts", "word-value", "nan", "short"])
 def test_a_bad_at2_record_is_refused_naming_the_file_and_the_problem(tmp_path, text, message):
     path = written(tmp_path, "bad.AT2", text)
     refused(lambda: read_motion(path), f"{path}: ", message)
@@ -261,6 +271,27 @@ def test_a_bad_pulse_is_refused_naming_the_parameter_and_rule(kind, arguments, m
     refused(lambda: pulse(kind, **settings), message)
 
 
+@pytest.mark.parametrize("kind", PULSES)
+def test_a_pulse_carries_its_period_for_the_analysis_to_resolve(kind):
+    assert pulse(kind, amplitude_m_s2=1.0, frequency_hz=4.0).scaled(2.0).period_s == 0.25  # 1 / f, through the scaling
+    assert motion([0.0, 1.0], [1.0, 2.0]).period_s is None  # a record's content is not known
+
+
+def test_a_motion_is_followed_only_over_twenty_timesteps():
+    """The pulse's period (a record's duration) must span at least STEPS_PER_PERIOD = 20
+    timesteps: 1 / f = 0.25 s is 20 steps of 12.5 ms, not of 12.6 ms."""
+    one_sine = pulse("one-sine", amplitude_m_s2=1.0, frequency_hz=4.0)
+    assert one_sine.resolution_problem(0.0125) is None
+    assert one_sine.resolution_problem(0.0126) == (
+        "one-sine pulse 1 m/s2, 4 Hz along x: its period, 0.25 s, spans 19.8 timesteps of 0.0126 s (the model's at the start of the "
+        "shaking); the analysis follows a motion only over at least 20 timesteps: give a frequency of at most 3.968 Hz "
+        "(--frequency; FREQUENCY_HZ of a study's pulse)")
+    record = motion([0.0, 1e-4, 2e-4], [0.0, 1.0, 0.0])
+    assert record.resolution_problem(1e-5) is None
+    assert "its duration, 0.0002 s, spans 2 timesteps of 0.0001 s" in record.resolution_problem(1e-4)
+    assert "give a record lasting at least 0.002 s" in record.resolution_problem(1e-4)
+
+
 def test_every_bad_pulse_parameter_is_named_at_once():
     refused(lambda: pulse("sine", amplitude_m_s2=math.inf, frequency_hz=0), "amplitude_m_s2 = inf", "frequency_hz = 0")
 
@@ -282,6 +313,7 @@ def test_velocity_and_displacement_integrate_a_constant_acceleration_exactly():
     ([0.0], np.zeros((1, 3)), "time_s must be a list of at least 2 times"),
     ([0.0, 1.0], np.zeros((2, 2)), "acceleration_m_s2 must have shape (2, 3)"),
     ([0.0, 1.0], [[0, 0, 0], [0, np.nan, 0]], "must be finite numbers"),
+    ([0.0, 2e6], np.zeros((2, 3)), "the motion lasts 2e+06 s; at most 1e+06 s (the longest analysed time)"),
 ])
 def test_a_motion_with_bad_samples_is_refused_naming_it(time, acceleration, message):
     refused(lambda: GroundMotion(time, acceleration, "my record"), "my record: ", message)
@@ -353,6 +385,24 @@ def test_a_record_already_at_rest_is_left_practically_unchanged():
 
 def test_a_baseline_correction_of_two_samples_is_refused():
     refused(lambda: motion([0.0, 1.0], [1.0, 2.0]).baseline_corrected(), "test record: a baseline correction needs at least 3 samples")
+
+
+@pytest.mark.parametrize("time_scale", [1e-300, 1e-3, 1e5])
+def test_a_baseline_correction_is_the_same_in_any_time_scale(time_scale):
+    """The conditions are solved in t / T: the baseline c0 + c1 t / T of a record depends on
+    its accelerations and the shape of its sampling, not on its time unit (at 1e-300 s, the
+    integrals in seconds, of order a T^2, were below the smallest float: a singular matrix)."""
+    record = motion([0.0, 0.25, 0.5, 1.0], [0.0, 2.0, -1.0, 0.5])
+    scaled = GroundMotion(record.time_s * time_scale, record.acceleration_m_s2, "scaled record").baseline_corrected()
+    np.testing.assert_allclose(scaled.acceleration_m_s2, record.baseline_corrected().acceleration_m_s2, rtol=1e-12, atol=1e-15)
+
+
+def test_a_baseline_correction_of_one_long_step_and_short_ones_is_refused():
+    """1 - sum (dt / T)^3 is 0 for 2 samples (dependent conditions) and about 3e-9 here, where
+    the baseline's coefficients would be ~1e8 times the record's peak."""
+    nearly_two = motion([0.0, 1e-9, 1.0], [1.0, 0.0, 2.0])
+    refused(nearly_two.baseline_corrected, "test record: a baseline correction needs samples spread over the record: one step spans "
+            "99.999999900% of it", "1 - sum (dt / T)^3 = 3e-09, at least 1e-06", "--no-baseline")
 
 
 # ---------------------------------------------------------------- per explicit cycle

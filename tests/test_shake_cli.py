@@ -53,11 +53,13 @@ def files(tmp_path_factory):
                         supports=dd.Supports(fix_y=True), points=2)
     squat = stack_model([0.0055], supports=dd.Supports(fix_y=True), points=2)
     paths = {"block": folder / "block.toml", "squat": folder / "squat.toml", "record": folder / "record.csv",
-             "bad": folder / "bad.csv", "missing": folder / "nosuch.csv"}
+             "bad": folder / "bad.csv", "missing": folder / "nosuch.csv", "tiny": folder / "tiny.csv", "xy": folder / "xy.csv"}
     save_model(block, paths["block"])
     save_model(squat, paths["squat"])
     paths["record"].write_text(RECORD)
     paths["bad"].write_text("time_s,acc_x_m_s2\n0,0\n0.1,oops\n")
+    paths["tiny"].write_text("time_s,acc_x_m_s2\n0,0\n1e-300,1\n2e-300,0\n")
+    paths["xy"].write_text("time_s,acc_x_m_s2,acc_y_m_s2\n0,0,0\n0.025,2,0.5\n0.05,0,0\n")
     return paths
 
 
@@ -190,11 +192,18 @@ def test_an_overturning_pulse_names_the_block_and_overwrite_replaces_only_the_ea
     ([*PULSE, "--duration", "-1"], "--duration = -1.0: must be"),
     ([*PULSE, "--duration", "nan"], "--duration = nan: must be"),
     ([*PULSE, "--output-interval", "0", "--rayleigh-mass", "-1"], "--output-interval = 0.0: must be a number in (0, 1000] s; --rayleigh-mass"),
-    (["--motion", "{record}", "--scale", "nan"], "--scale = nan: must be a number"),
+    (["--motion", "{record}", "--scale", "nan"], "--scale = nan: must be a finite number other than 0"),
+    (["--motion", "{record}", "--scale", "0"], "--scale = 0.0: must be a finite number other than 0 (0 is a table at rest, no motion"),
+    (["--pulse", "one-sine", "--amplitude", "0", "--frequency", "5"], "--amplitude = 0.0: must be a finite number other than 0"),
+    (["--motion", "{tiny}"], "tiny.csv: line 3: time_s = 1e-300 is 1e-300 s after 0 (line 2): a record's samples must be at least 1e-06 s apart"),
+    # the block is in-plane (fix_y): a motion along y would move nothing
+    ([*PULSE, "--direction", "y"], "--direction y shakes the model along y (peak 8 m/s2), but its blocks are held in y ([supports] fix_y = true)"),
+    (["--motion", "{xy}"], "xy.csv: its column acc_y_m_s2 shakes the model along y (peak "),
     (["--motion", "{record}", "--amplitude", "3"], "--amplitude applies to a --pulse only"),
     (["--motion", "{record}", "--direction", "y"], "record.csv: direction = 'y' applies to a single-component .AT2 record"),
     (["--pulse", "sine", "--amplitude", "3"], "--pulse sine needs --frequency F (Hz)"),
-    (["--pulse", "sine", "--amplitude", "nan", "--frequency", "-2"], "--amplitude = nan: must be a number in (-inf, inf) m/s2; --frequency"),
+    (["--pulse", "sine", "--amplitude", "nan", "--frequency", "-2"], "--amplitude = nan: must be a finite number other than 0 (0 is a "
+                                                                     "table at rest, no motion; a negative one flips the motion); --frequency"),
     (["--pulse", "ricker", "--amplitude", "3", "--frequency", "2", "--cycles", "2"], "--cycles 2: a ricker pulse is one period"),
     ([*PULSE, "--baseline"], "--baseline corrects a --motion record; a pulse is analytic"),
     ([*PULSE, "--kn", "-1"], "[joint] kn = -1.0: must be a number in [1e+04, 1e+15] Pa/m"),
@@ -205,6 +214,27 @@ def test_bad_input_is_refused_with_its_option_or_file_and_no_traceback(files, tm
     result = shake(files["block"], *[a.format(**files) for a in arguments], "--out", out)
     assert result.exit_code != 0 and message in result.output, result.output
     assert not out.exists()  # refused before anything was written
+
+
+def test_a_pulse_the_timestep_cannot_follow_is_refused_at_the_run_start(files, tmp_path):
+    """The finding: --frequency 1e12 ran and reported. The timestep is the model's (known once
+    it has settled and its damping is set): the period must span 20 of them."""
+    out = tmp_path / "fast"
+    result = shake(files["block"], "--pulse", "one-sine", "--amplitude", "2", "--frequency", "1e12", "--damping-ratio", "0.05",
+                   "--out", out)
+    assert result.exit_code == 1
+    assert "one-sine pulse 2 m/s2, 1e+12 Hz along x: its period, 1e-12 s, spans" in result.output
+    assert "the analysis follows a motion only over at least 20 timesteps: give a frequency of at most" in result.output
+    assert "(--frequency;" in result.output and not (out / "summary.json").exists()
+
+
+def test_a_record_starting_late_is_run_from_zero_with_a_note(files, tmp_path):
+    late = tmp_path / "late.csv"
+    late.write_text("time_s,acc_x_m_s2\n" + "".join(f"{100 + 0.025 * k:.3f},{a}\n" for k, a in enumerate([0, 2, 0, -1, 0, 1, 0])))
+    result = shake(files["block"], "--motion", late, "--damping-ratio", "0.05", "--output-interval", "0.02", "--out", tmp_path / "late")
+    assert result.exit_code == 0, result.output
+    assert f"note: {late}: the record starts at t = 100 s; it was shifted by 100 s to start at 0" in result.stderr
+    assert json.loads((tmp_path / "late" / "summary.json").read_text())["motion"]["duration_s"] == pytest.approx(0.15)
 
 
 def test_housners_restitution_of_a_squat_block_is_refused_before_the_run(files, tmp_path):

@@ -22,6 +22,7 @@ import numpy as np
 
 from drydem import compiled_cache
 from drydem.engine.contacts import SubContacts, world_points
+from drydem.model.rotation import matrices
 
 #: a contact carries its upper block when its normal is within 60 deg of the vertical
 SUPPORT_COSINE = 0.5
@@ -49,6 +50,20 @@ def unsupported(model, contacts: SubContacts) -> np.ndarray:
     touching = np.zeros(model.n_blocks, dtype=bool)
     touching[contacts.pairs.ravel()] = True
     return np.flatnonzero(model.block_movable & ~model.block_fixed[:, 2] & ~touching)
+
+
+def dropped_out(model, state, contacts: SubContacts, active: np.ndarray, lost_drop: np.ndarray) -> np.ndarray:
+    """(nb,) bool: the block, still in the analysis (``active``), has a rigid-body drop beyond its
+    ``lost_drop`` (nb,) m: its centroid is lower than where it was drawn by more than that plus
+    the settlement its joints' elastic closure explains (:func:`elastic_settlement`; the load
+    paths are looked for only when some such block has dropped that far at all). The rule by
+    which the tilting and shaking analyses take a block for fallen out of the model."""
+    position = state.position
+    drop = model.block_centroid[:, 2] - position[:, 2]
+    if not np.any((drop > lost_drop) & active):
+        return np.zeros(model.n_blocks, dtype=bool)
+    paths = load_paths(contacts, position, matrices(state.quaternion))
+    return (drop - elastic_settlement(*paths, position[:, 2]) > lost_drop) & active
 
 
 def elastic_settlement(lower: np.ndarray, upper: np.ndarray, closure: np.ndarray, height: np.ndarray) -> np.ndarray:

@@ -51,12 +51,12 @@ class _Restitution(click.ParamType):
                    "PEER NGA .AT2 file (in g).")
 @click.option("--direction", type=click.Choice(["x", "y", "z"]), help="Direction of an .AT2 record or of a --pulse (default x); a CSV "
                                                                        "file names its directions in its header.")
-@click.option("--scale", type=float, default=1.0, show_default=True, help="Multiplies the motion.")
+@click.option("--scale", type=float, default=1.0, show_default=True, help="Multiplies the motion (not 0; negative: the other way).")
 @click.option("--baseline/--no-baseline", default=None,
               help="Baseline-correct the --motion record (the default): a linear baseline subtracted from the acceleration brings "
                    "the table to rest (zero velocity and displacement) at the record's end. Pulses are analytic and never corrected.")
 @click.option("--pulse", type=click.Choice(PULSE_KINDS), help="An analytic pulse instead of a record (with --amplitude and --frequency).")
-@click.option("--amplitude", type=float, help="Peak acceleration of the --pulse, m/s2 (negative: the other way).")
+@click.option("--amplitude", type=float, help="Peak acceleration of the --pulse, m/s2 (not 0; negative: the other way).")
 @click.option("--frequency", type=float, help="Frequency of the --pulse, Hz (ricker: its peak frequency).")
 @click.option("--cycles", type=int, help="Periods of a --pulse sine (default 1).")
 @click.option("--duration", type=float, help="Analysed time, s (default: the motion's duration; beyond it the table is no longer accelerated).")
@@ -97,7 +97,7 @@ def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequenc
     from tqdm import tqdm
 
     from drydem.analysis.shake import HOUSNER, ShakeSettings, shake_analysis
-    from drydem.analysis.shake.run import housner_target
+    from drydem.analysis.shake.run import check_held_axes, housner_target
     from drydem.analysis.tilt import monitor_index
     from drydem.io.results import HistoryWriter
     from drydem.io.vtk import ShakeSeries
@@ -114,12 +114,15 @@ def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequenc
                       rayleigh_mass_per_s=rayleigh_mass, rayleigh_stiffness_s=rayleigh_stiffness, monitor=monitor)
         _check_shake_options(values)
         settings = ShakeSettings(motion=ground, **values)
+        check_held_axes(model, ground, _component_option(motion, direction))
         monitored = monitor_index(model, monitor)
         if settings.restitution == HOUSNER:
             housner_target(model, monitored)  # refused before the run: a squat block does not rock
         folder = results_folder(out, found.name, resume=None, overwrite=overwrite)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
+    for note in ground.notes:
+        click.echo(f"note: {note}", err=True)
     click.echo(f"{found.name} ({found.path}): {model.n_blocks} blocks, {model.joint.stiffness_text}, "
                f"mu {model.joint.friction:g}, {model.contacts.points_per_length} points per length; {ground.name}, "
                f"PGA {ground.pga_m_s2:.4g} m/s2, {settings.analysed_s:g} s -> {folder}")
@@ -183,14 +186,15 @@ def _shake_motion(motion, direction, scale, baseline, pulse, amplitude, frequenc
     naming the file or the option at fault."""
     from types import SimpleNamespace
 
-    from drydem.analysis.shake.motion import PULSE_RULES, pulse as make_pulse, read_motion
-    from drydem.model.parameters import Range, field_problems, refuse
+    from drydem.analysis.shake.motion import NONZERO, PULSE_RULES, pulse as make_pulse, read_motion
+    from drydem.model.parameters import field_problems, refuse
 
-    refuse([problem for problem in [Range(None, None).problem(scale, "--scale")] if problem])
+    refuse([problem for problem in [NONZERO.problem(scale, "--scale")] if problem])
     if pulse is not None:
         values = dict(amplitude_m_s2=amplitude, frequency_hz=frequency, cycles=1 if cycles is None else cycles,
                       direction=direction or "x")
-        refuse(field_problems(SimpleNamespace(**values), {field: PULSE_RULES[field] for field in values}, PULSE_OPTIONS.get))
+        rules = {field: PULSE_RULES[field] for field in values} | {"amplitude_m_s2": NONZERO}
+        refuse(field_problems(SimpleNamespace(**values), rules, PULSE_OPTIONS.get))
         if pulse != "sine" and values["cycles"] != 1:
             raise DrydemError(f"--cycles {cycles}: a {pulse} pulse is one period; --pulse sine repeats it")
         ground, corrected = make_pulse(pulse, **values), False
@@ -200,6 +204,14 @@ def _shake_motion(motion, direction, scale, baseline, pulse, amplitude, frequenc
         if corrected:
             ground = ground.baseline_corrected()
     return (ground if scale == 1.0 else ground.scaled(scale)), corrected
+
+
+def _component_option(motion, direction):
+    """What gave a motion's component along an axis, for messages: ``--direction AXIS`` for a
+    pulse or an .AT2 record, the column of a CSV record (``FILE: its column acc_y_m_s2``)."""
+    if motion is not None and motion.suffix.lower() == ".csv":
+        return lambda axis: f"{motion}: its column acc_{axis}_m_s2"
+    return lambda axis: f"--direction {axis}" if direction is not None else f"--direction {axis} (the default)"
 
 
 def _check_shake_options(values: dict) -> None:

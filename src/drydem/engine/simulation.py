@@ -42,6 +42,10 @@ ENGINES = ("numba", "numba-3d")
 NON_NEGATIVE = Range(0.0, None)
 #: cycles run in one call of the kernel loop between progress reports
 CHUNK = 5_000
+#: cycles at most in one call of the kernel loop on a shaking table: the divergence test allows
+#: for the table's work up to the call's end (Simulation._table_slack), so a call is kept short
+#: that the allowance does not run far ahead of the cycles it is tested at
+TABLE_CHUNK = 256
 #: 1/kg: blocks this heavy keep their velocities through a cycle's forces (Simulation.move)
 IMMOVABLE_INVERSE_MASS = 1e-300
 #: the ground acceleration of a table at rest (LoopSettings.ground_acceleration)
@@ -117,6 +121,8 @@ class Simulation:
         self.blocks: BlockConstants | None = None
         self.cycles = 0
         self.time_s = 0.0
+        #: m/s: the sum over the cycles run with a ground acceleration of |a_g| dt (:meth:`_table_slack`)
+        self.table_impulse_m_s = 0.0
         self._fixed_timestep = timestep
         self._scaled_timestep: float | None = None
         self._update_inertia()
@@ -280,10 +286,12 @@ class Simulation:
         done, detections = 0, 0
         code, stats = loop.RUNNING, StepStats(np.inf, np.inf)
         while done < max_cycles:
-            chunk = min(CHUNK, max_cycles - done)
+            chunk = min(CHUNK if ground is None else TABLE_CHUNK, max_cycles - done)
+            table = AT_REST if ground is None else ground[done:done + chunk]
+            slack = travel_slack + self._table_slack(g, table, float(m.block_mass[moving].sum()))
             settings = loop.LoopSettings(
-                g, self.timestep, self.damping, chunk, criterion, limit, max(weight, 1e-300), travel_slack, self.tracker.absolute_limit,
-                AT_REST if ground is None else ground[done:done + chunk], self.closure_limit, self._first_velocity_dt,
+                g, self.timestep, self.damping, chunk, criterion, limit, max(weight, 1e-300), slack, self.tracker.absolute_limit,
+                table, self.closure_limit, self._first_velocity_dt,
             )
             tracker = self.tracker
             with using_threads(threads_for(tracker.contacts.count)):
@@ -291,14 +299,16 @@ class Simulation:
                                                         tracker.broad_state, tracker.neighbours)
             stats = StepStats(ratio, speed)
             self._first_velocity_dt = self.timestep
+            self.table_impulse_m_s += float(np.linalg.norm(table[:n], axis=1).sum()) * self.timestep
             done += n
             self.cycles += n
             self.time_s += n * self.timestep
             if progress is not None:
                 progress(done, stats)
             if code == loop.DIVERGED:
+                supplied = "gravity" if ground is None else "gravity and the table's motion"
                 raise DivergenceError(
-                    f"{m.source}: the integration diverged after {self.cycles} cycles (more kinetic energy than gravity "
+                    f"{m.source}: the integration diverged after {self.cycles} cycles (more kinetic energy than {supplied} "
                     f"can have supplied; timestep {self.timestep:.3g} s): "
                     "reduce the timestep (solver.timestep_safety) or check the stiffness and masses"
                 )
@@ -313,6 +323,32 @@ class Simulation:
             if stop is not None and stop():
                 break
         return EquilibriumResult(code == loop.CONVERGED, done, criterion_name, float(stats.ratio), float(stats.max_speed), detections)
+
+    def _table_slack(self, gravity: np.ndarray, table: np.ndarray, moving_mass: float) -> float:
+        """kg m: the travel slack of the divergence test (:func:`drydem.engine.loop.cycle_loop`)
+        that allows for the kinetic energy the shaking table can have given the blocks by the end
+        of a call cycling ``table`` (its acceleration at each cycle, m/s2; none: 0).
+
+        The test bounds the kinetic energy by the work of the body forces, g_max sum m |x - x0|:
+        true of gravity, which is conservative, but not of the table frame's inertial force
+        -m a_g(t), which changes with time: a block that the table threw up (it dropped faster
+        than g) lands where it started, with travel 0, and speed. Its work is bounded otherwise.
+        With U the energy in the table's frame (kinetic, elastic and gravity's potential),
+        dU/dt = -a_g . sum m v - dissipation <= |a_g| sqrt(2 M K) (Cauchy-Schwarz, M the moving
+        mass, K the kinetic energy), and K <= U + G*, G* = |g| max over the past of
+        sum m |x - x0|; so (Bihari's inequality) sqrt(K) <= sqrt(U0 + G*) + sqrt(M / 2) V with
+        V = integral of |a_g| dt, and K <= 2 (U0 + G*) + M V^2. The test allows
+        DIVERGENCE_FACTOR (10) times g_max (travel + slack); the slack here adds M V^2 / 2
+        / g_max, V summed to the call's end (:attr:`table_impulse_m_s` before it; a call is at
+        most TABLE_CHUNK cycles), so the allowance of the table's work, 10 M V^2 / 2, is 5 times
+        the bound. A blow-up grows exponentially and soon passes it (and a NaN is caught at
+        every cycle)."""
+        if table.shape[0] == 0:
+            return 0.0
+        magnitude = np.linalg.norm(table, axis=1)
+        speed = self.table_impulse_m_s + float(magnitude.sum()) * self.timestep
+        g_max = float(np.linalg.norm(gravity)) + float(magnitude.max())  # the loop's g_max for this call
+        return 0.0 if speed == 0.0 or g_max == 0.0 else 0.5 * moving_mass * speed**2 / g_max
 
     # -- diagnostics ----------------------------------------------------------------------
     def energy(self, *, gravity=(0.0, 0.0, -G)) -> dict[str, float]:

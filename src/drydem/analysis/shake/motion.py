@@ -24,7 +24,7 @@ from scipy.integrate import cumulative_trapezoid, trapezoid
 
 from drydem.errors import ModelError
 from drydem.files import read_text
-from drydem.model.parameters import G, OneOf, Range, Rule, check_fields
+from drydem.model.parameters import G, OneOf, Range, Rule, check_fields, is_number
 
 #: the analytic pulses of :func:`pulse`
 PULSES = ("one-sine", "sine", "ricker")
@@ -38,7 +38,23 @@ SUFFIXES = (".csv", ".at2")
 
 #: any finite real: a negative scale factor or amplitude flips the motion
 REAL = Range(None, None)
-#: s: the explicit timestep
+#: s: the least time between two samples of a record read from a file: 1 us, a sampling rate
+#: of 1 MHz, is beyond any accelerometer or shaking-table controller (their rates are kHz);
+#: closer times are no record (times like 1e-300 s leave the baseline's integrals, of order
+#: a T^2, below the smallest float). A motion built in code may be finer (a step change
+#: idealised as two samples 1e-9 s apart)
+MIN_SAMPLE_STEP_S = 1e-6
+#: s: the longest motion: the longest analysed time (ShakeSettings duration_s), 11.6 days
+MAX_DURATION_S = 1e6
+#: the least timesteps of the analysis in a pulse's period 1/f, or in a record's duration: the
+#: same least sampling as a pulse's own (PULSE_RULES samples_per_period), below which a peak
+#: is missed by more than 1 - cos(pi / 20) = 1.2 %
+STEPS_PER_PERIOD = 20
+#: a baseline correction's well-posedness, 1 - sum (dt_i / T)^3 (:meth:`GroundMotion.baseline_corrected`),
+#: at least this: 0 with 2 samples (dependent conditions), 3/4 with 3 evenly spaced ones; its
+#: coefficients grow as 1 / this, so below 1e-6 they would be a million times the record's peak
+BASELINE_POSEDNESS = 1e-6
+#: s: the explicit timestep, or a pulse's period
 TIMESTEP = Range(0.0, None, low_open=True, unit="s")
 #: a number of cycles
 COUNT = Range(0, None, integer=True)
@@ -59,6 +75,23 @@ PULSE_RULES = {
 }
 
 
+class NonZero(Rule):
+    """A finite number other than 0 (a negative one flips the motion): the scale factor or
+    amplitude of a motion asked for on the command line (``drydem shake --scale``,
+    ``--amplitude``), where 0 would be a table at rest, no shaking test at all. (In code a zero
+    motion is allowed: a table at rest is a test of its own.)"""
+
+    def __contains__(self, value) -> bool:
+        return is_number(value) and value != 0
+
+    def __str__(self) -> str:
+        return "must be a finite number other than 0 (0 is a table at rest, no motion; a negative one flips the motion)"
+
+
+#: the rule of a motion's factor asked for on the command line
+NONZERO = NonZero()
+
+
 def _check(where: str, rules: dict[str, Rule], **values) -> None:
     """One ModelError naming ``WHERE NAME = VALUE`` and the rule for each value breaking its rule."""
     check_fields(SimpleNamespace(**values), rules, where)
@@ -71,6 +104,10 @@ class GroundMotion:
     time_s : (n,) sample times, s: strictly increasing, from 0; n >= 2.
     acceleration_m_s2 : (n, 3) the table's acceleration at each sample, m/s2 (x, y, z).
     name : the file name or the pulse's description, for messages and reports.
+    period_s : a pulse's period 1/f, s, which the analysis must resolve
+    (:meth:`resolution_problem`); None for a record, whose content is not known.
+    notes : what reading the motion changed, for the commands to print (a record shifted to
+    start at 0).
 
     Both arrays are stored as read-only float copies. Between samples the acceleration is
     linear; after the last one the table moves freely (zero acceleration).
@@ -79,6 +116,8 @@ class GroundMotion:
     time_s: np.ndarray
     acceleration_m_s2: np.ndarray
     name: str
+    period_s: float | None = None
+    notes: tuple[str, ...] = ()
 
     def __post_init__(self):
         try:
@@ -89,9 +128,12 @@ class GroundMotion:
         problem = _samples_problem(time, acceleration)
         if problem is not None:
             raise ModelError(f"{self.name}: {problem}")
+        if self.period_s is not None:
+            TIMESTEP.check(self.period_s, f"{self.name}: period_s")
         time.flags.writeable = acceleration.flags.writeable = False
         object.__setattr__(self, "time_s", time)
         object.__setattr__(self, "acceleration_m_s2", acceleration)
+        object.__setattr__(self, "notes", tuple(self.notes))
 
     @property
     def duration_s(self) -> float:
@@ -150,6 +192,16 @@ class GroundMotion:
         conditions instead of a least-squares fit, as for shaking-table drive signals, whose
         stroke must come back to its start.
 
+        The conditions are solved in the time u = t / T: they are homogeneous, and the final
+        velocity and displacement in u are those in t over T and T^2, so the coefficients are the
+        same, and no record's time scale can leave them outside floating point's range. In u
+        the conditions' matrix is [[1, 1/2], [1/2, 1/6 + q']] (the trapezoidal rule integrates
+        the baseline's linear velocity exactly, and overestimates the displacement of its
+        quadratic one by q' = sum (dt_i / T)^3 / 12), whose determinant is -q / 12 with
+        q = 1 - sum (dt_i / T)^3: 0 for 2 samples (the conditions are then dependent), near 0 for
+        a record that is one long step and a few short ones. A record whose q is below
+        :data:`BASELINE_POSEDNESS` is refused: its baseline would be far larger than the record.
+
         The baseline shifts every sample, so the PGA changes, by at most the baseline's peak
         max(|c0|, |c0 + c1|): slightly for a record that nearly ends at rest. A record that
         already ends at rest (zero final velocity and displacement) has c0 = c1 = 0 and is left
@@ -157,16 +209,35 @@ class GroundMotion:
         """
         if self.time_s.size < 3:
             raise ModelError(f"{self.name}: a baseline correction needs at least 3 samples; the record has {self.time_s.size}")
-        basis = np.stack([np.ones_like(self.time_s), self.time_s / self.duration_s], axis=1)
-        coefficients = np.linalg.solve(self._final_state(basis), self._final_state(self.acceleration_m_s2))
+        u = self.time_s / self.duration_s
+        posedness = 1.0 - float(np.sum(np.diff(u) ** 3))
+        if posedness < BASELINE_POSEDNESS:
+            longest = float(np.diff(u).max())
+            raise ModelError(f"{self.name}: a baseline correction needs samples spread over the record: one step spans "
+                             f"{longest:.9%} of it, which leaves the conditions of zero final velocity and displacement "
+                             f"nearly dependent (1 - sum (dt / T)^3 = {posedness:.3g}, at least {BASELINE_POSEDNESS:g}); "
+                             "resample the record, or do not correct it (--no-baseline)")
+        basis = np.stack([np.ones_like(u), u], axis=1)
+        coefficients = np.linalg.solve(_final_state(basis, u), _final_state(self.acceleration_m_s2, u))
         return replace(self, acceleration_m_s2=self.acceleration_m_s2 - basis @ coefficients,
                        name=f"{self.name}, baseline-corrected")
 
-    def _final_state(self, acceleration: np.ndarray) -> np.ndarray:
-        """(2, k) the final velocity (row 0) and displacement (row 1) of each of the k columns
-        of ``acceleration`` (n, k), integrated as :meth:`velocity_m_s` and :meth:`displacement_m`."""
-        velocity = cumulative_trapezoid(acceleration, self.time_s, axis=0, initial=0.0)
-        return np.stack([velocity[-1], trapezoid(velocity, self.time_s, axis=0)])
+    def resolution_problem(self, dt_s: float) -> str | None:
+        """What keeps an analysis of timestep ``dt_s`` (s) from following the motion, or None.
+
+        The table's acceleration is read at every cycle (:meth:`per_cycle`), so the shortest
+        time the motion must be followed over, a pulse's period (:attr:`period_s`) or, for a
+        record, its whole duration, must span at least :data:`STEPS_PER_PERIOD` timesteps; a
+        pulse shorter than that is passed over between two cycles, and the response to it
+        would be meaningless. (A record's content is not known: sampled finer than the
+        timestep, it is read at the cycles' times.)"""
+        span, what = (self.period_s, "its period") if self.period_s is not None else (self.duration_s, "its duration")
+        if span >= STEPS_PER_PERIOD * dt_s:
+            return None
+        advice = (f"give a frequency of at most {1.0 / (STEPS_PER_PERIOD * dt_s):.4g} Hz (--frequency; FREQUENCY_HZ of a study's pulse)"
+                  if self.period_s is not None else f"give a record lasting at least {STEPS_PER_PERIOD * dt_s:.4g} s")
+        return (f"{self.name}: {what}, {span:.4g} s, spans {span / dt_s:.3g} timesteps of {dt_s:.3g} s (the model's at the start "
+                f"of the shaking); the analysis follows a motion only over at least {STEPS_PER_PERIOD} timesteps: {advice}")
 
     def per_cycle(self, dt_s: float, cycles: int, start_s: float = 0.0) -> np.ndarray:
         """(cycles, 3) the table's acceleration at each explicit cycle, m/s2.
@@ -183,6 +254,14 @@ class GroundMotion:
                          for component in self.acceleration_m_s2.T], axis=1)
 
 
+def _final_state(acceleration: np.ndarray, time: np.ndarray) -> np.ndarray:
+    """(2, k) the final velocity (row 0) and displacement (row 1) of each of the k columns of
+    ``acceleration`` (n, k) sampled at ``time``, integrated as :meth:`GroundMotion.velocity_m_s`
+    and :meth:`GroundMotion.displacement_m` do."""
+    velocity = cumulative_trapezoid(acceleration, time, axis=0, initial=0.0)
+    return np.stack([velocity[-1], trapezoid(velocity, time, axis=0)])
+
+
 def _samples_problem(time: np.ndarray, acceleration: np.ndarray) -> str | None:
     """What is wrong with a motion's samples (the rules of :class:`GroundMotion`), or None."""
     if time.ndim != 1 or time.size < 2:
@@ -197,6 +276,8 @@ def _samples_problem(time: np.ndarray, acceleration: np.ndarray) -> str | None:
     if (steps <= 0.0).any():
         i = int(np.argmax(steps <= 0.0)) + 1
         return f"time_s must increase strictly; sample {i} (t = {time[i]:g} s) is not after sample {i - 1} (t = {time[i - 1]:g} s)"
+    if time[-1] > MAX_DURATION_S:
+        return f"the motion lasts {time[-1]:g} s; at most {MAX_DURATION_S:g} s (the longest analysed time)"
     return None
 
 
@@ -225,25 +306,40 @@ def _number(text: str, where: str) -> float:
     return value
 
 
-def _checked_times(path: Path, time: np.ndarray, lines: list[int]) -> np.ndarray:
-    """The times of a file's samples (read on ``lines``) shifted to start at 0; a ModelError
-    naming the file and line if one is negative or not after the one before."""
+def _checked_times(path: Path, time: np.ndarray, lines: list[int]) -> tuple[np.ndarray, tuple[str, ...]]:
+    """The times of a file's samples (read on ``lines``) shifted to start at 0, and a note
+    saying so if they did not; a ModelError naming the file and line if one is negative, not
+    after the one before, or closer to it than :data:`MIN_SAMPLE_STEP_S`, or if the record lasts
+    longer than :data:`MAX_DURATION_S`."""
     if time[0] < 0.0:
         raise ModelError(f"{path}: line {lines[0]}: time_s = {time[0]:g}: times must be >= 0 s")
-    late = np.flatnonzero(np.diff(time) <= 0.0)
+    steps = np.diff(time)
+    late = np.flatnonzero(steps <= 0.0)
     if late.size:
         i = int(late[0]) + 1
         raise ModelError(f"{path}: line {lines[i]}: time_s = {time[i]:g} is not after {time[i - 1]:g} "
                          f"(line {lines[i - 1]}): times must increase strictly")
-    return time - time[0]
+    close = np.flatnonzero(steps < MIN_SAMPLE_STEP_S)
+    if close.size:
+        i = int(close[0]) + 1
+        raise ModelError(f"{path}: line {lines[i]}: time_s = {time[i]:.10g} is {steps[i - 1]:.3g} s after {time[i - 1]:.10g} "
+                         f"(line {lines[i - 1]}): a record's samples must be at least {MIN_SAMPLE_STEP_S:g} s apart "
+                         "(a sampling rate of at most 1 MHz)")
+    if time[-1] - time[0] > MAX_DURATION_S:
+        raise ModelError(f"{path}: line {lines[-1]}: time_s = {time[-1]:.10g}: the record lasts {time[-1] - time[0]:.4g} s; "
+                         f"at most {MAX_DURATION_S:g} s (the longest analysed time)")
+    shifted = () if time[0] == 0.0 else (f"{path}: the record starts at t = {time[0]:.10g} s; it was shifted by "
+                                         f"{time[0]:.10g} s to start at 0",)
+    return time - time[0], shifted
 
 
 def read_csv_motion(path: str | Path) -> GroundMotion:
     """A motion from a CSV table: a header naming the columns ``time_s`` (s) and
     ``acc_x_m_s2`` (m/s2), and optionally ``acc_y_m_s2`` and ``acc_z_m_s2``, in any order
     (a missing one is zero); then one row of finite numbers per sample, at least 2, the times
-    strictly increasing from 0 or later (a record starting at t0 > 0 is shifted to start at 0).
-    Blank lines are skipped. A ModelError names the file, the line and the rule broken."""
+    strictly increasing from 0 or later, at least :data:`MIN_SAMPLE_STEP_S` apart (a record
+    starting at t0 > 0 is shifted to start at 0, and its ``notes`` say so). Blank lines are
+    skipped. A ModelError names the file, the line and the rule broken."""
     path = Path(path)
     rows = csv.reader(_read_text(path, "CSV motion", "utf-8-sig").splitlines())
     header = [name.strip() for name in next(rows, [])]
@@ -262,7 +358,8 @@ def read_csv_motion(path: str | Path) -> GroundMotion:
     acceleration = np.zeros((len(samples), 3))
     for column, name in enumerate(present[1:], start=1):
         acceleration[:, ACCELERATION_COLUMNS.index(name)] = table[:, column]
-    return GroundMotion(_checked_times(path, table[:, 0], lines), acceleration, path.name)
+    time, notes = _checked_times(path, table[:, 0], lines)
+    return GroundMotion(time, acceleration, path.name, notes=notes)
 
 
 def _present_columns(path: Path, header: list[str]) -> list[str]:
@@ -289,6 +386,8 @@ AT2_NPTS_DT = (re.compile(r"NPTS\s*=\s*(\S+?)\s*,?\s*DT\s*=\s*(\S+?)(?:\s*SECS?)
 AT2_UNITS = re.compile(r"\bACCELERATION\b.*\bUNITS\s+OF\s+G\b", re.IGNORECASE)
 #: the number of points, at least 2 (a motion's least)
 NPTS = Range(2, None, integer=True)
+#: s: an .AT2 record's time step DT, at least that of any record read from a file
+AT2_DT = Range(MIN_SAMPLE_STEP_S, None, unit="s")
 
 
 def read_at2(path: str | Path, direction: str = "x") -> GroundMotion:
@@ -298,8 +397,9 @@ def read_at2(path: str | Path, direction: str = "x") -> GroundMotion:
     The file has 4 header lines: a title; the event, date, station and component; the units,
     ``ACCELERATION TIME SERIES IN UNITS OF G``; the number of points and the time step, s, as
     ``NPTS=  5590, DT=   .0050 SEC`` (NGA-West2; the commas optional) or as
-    ``5590    0.0050    NPTS, DT`` (older files). Then the NPTS accelerations in g, several to
-    a line, sampled every DT from t = 0; they are converted to m/s2 with g = 9.81 m/s2
+    ``5590    0.0050    NPTS, DT`` (older files); DT at least :data:`MIN_SAMPLE_STEP_S`. Then
+    the NPTS accelerations in g, several to a line, sampled every DT from t = 0; they are
+    converted to m/s2 with g = 9.81 m/s2
     (:data:`~drydem.model.parameters.G`). A ModelError names the file, the line and the rule
     broken; the count of values must be NPTS (a truncated file is refused)."""
     path = Path(path)
@@ -322,7 +422,8 @@ def read_at2(path: str | Path, direction: str = "x") -> GroundMotion:
 
 def _at2_npts_dt(path: Path, line: str) -> tuple[int, float]:
     """NPTS and DT (s) from line 4 of an .AT2 file (:data:`AT2_NPTS_DT`); a ModelError naming
-    the file if the line is neither form or NPTS is not an integer >= 2 or DT not > 0."""
+    the file if the line is neither form or NPTS is not an integer >= 2 or DT below
+    :data:`MIN_SAMPLE_STEP_S`."""
     match = AT2_NPTS_DT[0].search(line) or AT2_NPTS_DT[1].match(line)
     if match is None:
         raise ModelError(f"{path}: line 4: {line.strip()!r}: expected 'NPTS=  5590, DT=   .0050 SEC' or '5590    0.0050    NPTS, DT'")
@@ -330,7 +431,7 @@ def _at2_npts_dt(path: Path, line: str) -> tuple[int, float]:
     npts = int(npts_text) if npts_text.isdigit() else npts_text
     NPTS.check(npts, f"{path}: line 4: NPTS")
     dt_s = _number(dt_text, f"{path}: line 4: DT")
-    TIMESTEP.check(dt_s, f"{path}: line 4: DT")
+    AT2_DT.check(dt_s, f"{path}: line 4: DT")
     return npts, dt_s
 
 
@@ -394,4 +495,4 @@ def pulse(kind: str, *, amplitude_m_s2: float, frequency_hz: float, cycles: int 
         name = f"{kind} pulse {amplitude_m_s2:g} m/s2, {frequency_hz:g} Hz{repeats} along {direction}"
     acceleration = np.zeros((time.size, 3))
     acceleration[:, DIRECTIONS.index(direction)] = values
-    return GroundMotion(time, acceleration, name)
+    return GroundMotion(time, acceleration, name, period_s=1.0 / frequency_hz)

@@ -1,8 +1,18 @@
 """One time history on a shaking table: :func:`shake_analysis`.
 
+Before anything is cycled, a motion along an axis in which every block is held ([supports]
+fix_x, fix_y or fix_z: an in-plane wall is held in y) is refused (:func:`check_held_axes`):
+that motion would move nothing, and the response reported would be no response to it.
+
 Stage 1: the model settles under vertical gravity with the static solver (local damping,
-cycled to equilibrium), as the tilting analysis does; a model that cannot stand, or reaches
-no equilibrium within ``max_cycles``, is not shaken (DrydemError saying which).
+cycled to equilibrium), as the tilting analysis does; a model that cannot stand (a block fell
+out while it settled, by the tilting analysis's rule,
+:func:`drydem.analysis.support.dropped_out`: a floating block), or reaches no equilibrium
+within ``max_cycles``, is not shaken (DrydemError saying which).
+
+Then the timestep of stage 2 is known: a motion it cannot follow (a pulse whose period, or a
+record whose duration, spans fewer than STEPS_PER_PERIOD timesteps,
+:meth:`~drydem.analysis.shake.motion.GroundMotion.resolution_problem`) is refused there.
 
 Stage 2: the time history. Local damping is off; the contacts get their dashpots (the ratio
 given or calibrated to the target restitution, :mod:`drydem.analysis.shake.restitution`) and
@@ -32,12 +42,14 @@ from collections.abc import Callable
 
 import numpy as np
 
+from drydem.analysis.shake.motion import DIRECTIONS, GroundMotion
 from drydem.analysis.shake.restitution import RockingBlock, calibrated_damping_ratio, housner_restitution
 from drydem.analysis.shake.settings import DURATION, HOUSNER, MONITOR_FELL, History, ShakeFrame, ShakeResult, ShakeSettings
+from drydem.analysis.support import dropped_out
 from drydem.analysis.tilt.settings import monitor_index
 from drydem.engine.damping import Damping
 from drydem.engine.simulation import Simulation
-from drydem.errors import DrydemError
+from drydem.errors import DrydemError, ModelError
 from drydem.model.assembly import Model
 from drydem.model.rotation import rotation_vectors, turn_angles
 
@@ -54,16 +66,66 @@ def shake_analysis(
     if model.solver.mass_scaling:
         model = model.replace(solver=replace(model.solver, mass_scaling=False))
     monitor = monitor_index(model, settings.monitor)
+    check_held_axes(model, settings.motion)
     sim = Simulation(model)
-    settled = sim.cycle_to_equilibrium()
-    if not settled.converged:
-        raise DrydemError(f"{model.source}: no equilibrium under gravity within {settled.cycles} cycles: the shaking starts "
-                          "from rest, so it was not run (raise [solver] max_cycles)")
+    settle(sim, settings.lost_drop_heights)
     ratio, restitution = damping_ratio(model, monitor, settings)
     sim.use_damping(Damping(0.0, ratio, settings.rayleigh_stiffness_s, settings.rayleigh_mass_per_s))
+    unresolved = settings.motion.resolution_problem(sim.timestep)
+    if unresolved is not None:
+        raise ModelError(f"{model.source}: {unresolved}")
     shaking = Shaking(sim, monitor, settings)
     shaking.run(on_progress, on_frame)
     return shaking.result(ratio, restitution, time.perf_counter() - start)
+
+
+def check_held_axes(model: Model, motion: GroundMotion, given_by: Callable[[str], str] | None = None) -> None:
+    """ModelError if ``motion`` moves the table along an axis in which every block is held
+    ([supports] fix_x, fix_y, fix_z): the table frame's inertial force along it is taken by the
+    supports (it acts at each block's centroid, so it turns nothing either), and that motion
+    would move nothing, silently. As the tilting analysis refuses to load an in-plane model
+    out of its plane (:func:`drydem.analysis.tilt.check_loading`). ``given_by(axis)`` names
+    what gave that component (a command's option; default: the motion's component)."""
+    for axis, held, peak in zip(DIRECTIONS, model.supports.mask[:3], motion.peaks_m_s2):
+        if held and peak > 0.0:
+            given = f"{motion.name}: its {axis} component" if given_by is None else given_by(axis)
+            others = " or ".join(other for other, fixed in zip(DIRECTIONS, model.supports.mask[:3]) if not fixed)
+            instead = f"shake it along {others}, or" if others else "or"
+            raise ModelError(f"{model.source}: {given} shakes the model along {axis} (peak {peak:.4g} m/s2), but its blocks are "
+                             f"held in {axis} ([supports] fix_{axis} = true): the motion would move nothing; {instead} give it "
+                             f"blocks free in {axis} ([supports] fix_{axis} = false)")
+
+
+def lost_drops(model: Model, lost_drop_heights: float) -> np.ndarray:
+    """(nb,) m: the drop past which each block has fallen out of the model, ``lost_drop_heights``
+    of its own height."""
+    return lost_drop_heights * np.array([np.ptp(shape.vertices[:, 2]) for shape in model.block_shape])
+
+
+def settle(sim: Simulation, lost_drop_heights: float) -> None:
+    """Stage 1: cycle to equilibrium under gravity; DrydemError if a block fell out of the model
+    meanwhile (dropped more than ``lost_drop_heights`` of its height,
+    :func:`~drydem.analysis.support.dropped_out`: as the tilting analysis's stage 1 says the
+    model cannot stand; a block drawn floating, or resting on nothing that holds it) or if there
+    is no equilibrium within max_cycles. The shaking starts from rest under gravity: from
+    anything else, the response would not be the motion's."""
+    model = sim.model
+    lost_drop = lost_drops(model, lost_drop_heights)
+
+    def fallen() -> np.ndarray:
+        return np.flatnonzero(dropped_out(model, sim.state, sim.contacts, sim.active, lost_drop) & model.block_movable)
+
+    settled = sim.cycle_to_equilibrium(stop=lambda: fallen().size > 0)
+    fell = [model.block_name[b] for b in fallen()]
+    if fell:
+        names = ", ".join(map(repr, fell[:10])) + (f" and {len(fell) - 10} more" if len(fell) > 10 else "")
+        raise DrydemError(f"{model.source}: the model cannot stand under its own weight: {names} fell while it settled under "
+                          f"gravity (dropped more than {lost_drop_heights:g} of its heights below where it is drawn, beyond its joints' "
+                          "elastic settlement; drydem check names the blocks that touch nothing): the shaking starts from rest, so it "
+                          "was not run")
+    if not settled.converged:
+        raise DrydemError(f"{model.source}: no equilibrium under gravity within {settled.cycles} cycles: the shaking starts "
+                          "from rest, so it was not run (raise [solver] max_cycles)")
 
 
 def damping_ratio(model: Model, monitor: int, settings: ShakeSettings) -> tuple[float, float | None]:
@@ -97,9 +159,7 @@ class Shaking:
         self.rest = sim.state.copy()
         self.start_cycles = sim.cycles
         self.timestep = sim.timestep
-        model = sim.model
-        heights = np.array([np.ptp(shape.vertices[:, 2]) for shape in model.block_shape])
-        self.lost_drop = settings.lost_drop_heights * heights
+        self.lost_drop = lost_drops(sim.model, settings.lost_drop_heights)
         self.fall_rotation = np.radians(settings.fall_rotation_deg)
         self.fallen: list[tuple[str, float, str]] = []
         self.ended_by = DURATION

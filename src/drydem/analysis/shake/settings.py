@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from drydem.analysis.shake.motion import GroundMotion
+from drydem.analysis.shake.motion import MAX_DURATION_S, GroundMotion
 from drydem.engine.contacts import SubContacts
 from drydem.errors import ModelError
 from drydem.model.parameters import Range, check_fields
@@ -24,7 +24,7 @@ DEFAULT_CONTACT_DAMPING_RATIO = 0.5
 
 #: the allowed values of ShakeSettings' numbers
 SETTING_RULES = {
-    "duration_s": Range(0.0, 1e6, low_open=True, unit="s"),
+    "duration_s": Range(0.0, MAX_DURATION_S, low_open=True, unit="s"),
     "output_interval_s": Range(0.0, 1e3, low_open=True, unit="s"),
     "contact_damping_ratio": Range(0.0, 10.0, unit="(ratio of critical)"),
     "rayleigh_mass_per_s": Range(0.0, 1e6, unit="1/s"),

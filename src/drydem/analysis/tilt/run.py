@@ -9,7 +9,7 @@ from functools import partial
 
 import numpy as np
 
-from drydem.analysis.support import elastic_settlement, load_paths
+from drydem.analysis.support import dropped_out
 from drydem.analysis.tilt.settings import (
     EQUILIBRIUM, FELL, GAVE_UP, MAX_CYCLES, MONITOR_FELL, STOP_DISPLACEMENT, Frame, Record, TiltSettings, check_loading,
     monitor_index, wall_height,
@@ -20,7 +20,7 @@ from drydem.engine.joints import kernel_joint
 from drydem.engine.simulation import Simulation, Snapshot
 from drydem.model.assembly import Model
 from drydem.model.parameters import G
-from drydem.model.rotation import matrices, rotation_vectors
+from drydem.model.rotation import rotation_vectors
 from drydem.model.state import State
 
 #: what :meth:`TiltRun.restore` goes back to: the simulation and the blocks lost by then
@@ -186,14 +186,8 @@ class TiltRun:
     def _dropped(self) -> np.ndarray:
         """(nb,) bool: the block, still in the analysis, has a rigid-body drop beyond its
         lost-drop: its centroid is lower than where it was drawn by more than that plus the
-        settlement the joints' elastic closure explains (:mod:`drydem.analysis.support`; looked for only
-        when some such block has dropped that far at all)."""
-        position = self.sim.state.position
-        drop = self.model.block_centroid[:, 2] - position[:, 2]
-        if not np.any((drop > self.lost_drop) & self.sim.active):
-            return np.zeros(self.model.n_blocks, dtype=bool)
-        paths = load_paths(self.sim.contacts, position, matrices(self.sim.state.quaternion))
-        return (drop - elastic_settlement(*paths, position[:, 2]) > self.lost_drop) & self.sim.active
+        settlement the joints' elastic closure explains (:func:`drydem.analysis.support.dropped_out`)."""
+        return dropped_out(self.model, self.sim.state, self.sim.contacts, self.sim.active, self.lost_drop)
 
     def _fallen(self, dropped: np.ndarray) -> np.ndarray:
         """Blocks still in the analysis (but the monitored one) that ``dropped`` out of the model."""
