@@ -63,8 +63,10 @@ CURVE_COLUMNS = 5
 #: a tilting run's angles and a limit analysis' (atan of its multiplier), deg: a tilting table
 #: turns below 90 deg (TiltSettings' max_angle_deg), and no angle is negative
 ANGLE = Range(0.0, 90.0, unit="deg")
-#: the lateral load multiplier at collapse, tan of the collapse angle: >= 0, and 1e6 is tan(89.99994 deg)
-LOAD_MULTIPLIER = Range(0.0, 1e6)
+#: the lateral load multiplier at collapse, tan of the collapse angle: a number >= 0, with no
+#: bound above (a limit analysis with cohesion or tension finds any multiplier: 1e8 for
+#: cohesion 1e8 Pa on light blocks)
+LOAD_MULTIPLIER = Range(0.0, None)
 #: the height a wall's drift is measured against, m: > 0, and 1e4 m is above any structure (the tallest, 828 m)
 HEIGHT = Range(0.0, 1e4, low_open=True, unit="m")
 #: the rules of the fields of a tilt or limit summary the report reads (:mod:`drydem.report.study`);

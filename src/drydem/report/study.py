@@ -406,7 +406,7 @@ def read_montecarlo(path: Path) -> MonteCarloRun:
     problems = table_problems(stats, MONTECARLO_RULES, "collapse_angle_deg", optional=MONTECARLO_STATISTICS)
     if problems:
         raise RecordError(f"{path}: {'; '.join(problems)}")
-    collapse = {key: stats[key] for key in MONTECARLO_RULES}
+    collapse = {key: stats.get(key) for key in MONTECARLO_RULES}  # a statistic may be absent (none)
     return MonteCarloRun(Path(path).parent.name, name["name"], collapse, _imperfections(path, settings["imperfections"]))
 
 
