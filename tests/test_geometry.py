@@ -50,6 +50,25 @@ def test_faces_are_counter_clockwise_with_outward_normals():
     np.testing.assert_allclose(total_area_vector, 0, atol=1e-12)  # closed surface
 
 
+@pytest.mark.parametrize("offset_m", [-1e-10, 0.0, 1e-10])
+def test_a_point_a_hair_off_a_face_dents_nothing(offset_m):
+    """A unit cube plus the centre of its bottom face, 1e-10 m below, on or above it (within the
+    hull's tolerance): Qhull keeps the point below as a vertex; the face must stay the square,
+    volume 1 m3 and centroid (0.5, 0.5, 0.5) m (a dent gave 0.963 m3 and z 0.515 m)."""
+    shape = dd.convex_hull(box_vertices([0, 0, 0], [1, 1, 1]).tolist() + [[0.5, 0.5, offset_m]])
+    assert len(shape.vertices) == 8 and all(len(face) == 4 for face in shape.faces)
+    assert shape.volume == pytest.approx(1.0, abs=1e-9)
+    np.testing.assert_allclose(shape.centroid, [0.5, 0.5, 0.5], atol=1e-9)
+
+
+def test_an_l_prism_with_its_inner_corner_a_hair_out_is_its_hull_not_a_dented_l():
+    """The L's inner corner (1, 1) pushed 1e-9 m out lies on the prism's end faces, inside them:
+    the hull is the pentagon prism (3.5 m3), never a dented L (3.33 m3 before)."""
+    section = [[0, 0], [2, 0], [2, 1], [1 + 1e-9, 1 + 1e-9], [1, 2], [0, 2]]
+    shape = dd.convex_hull([[x, y, z] for x, z in section for y in (0.0, 1.0)])
+    assert len(shape.vertices) == 10 and shape.volume == pytest.approx(3.5, abs=1e-9)
+
+
 def test_non_convex_vertex_set_is_rejected_naming_the_block():
     points = box_vertices([0, 0, 0], [1, 1, 1]).tolist() + [[0.5, 0.5, 0.5]]
     with pytest.raises(dd.GeometryError, match=r"pier.*vertex 8.*not convex"):

@@ -43,7 +43,7 @@ from drydem.errors import ModelError
 from drydem.files import read_toml
 from drydem.model.geometry import ConvexPolyhedron, box, convex_hull, face_interior_points
 from drydem.model.assembly import Block, Model, build_model
-from drydem.model.parameters import DENSITY, is_number
+from drydem.model.parameters import DENSITY, is_number, shown
 from drydem.model.tables import SECTIONS, errors_naming, no_unknown, parameters_from_dict
 
 BLOCK_KEYS = {"name", "fixed", "density", "box", "vertices"}
@@ -69,10 +69,10 @@ def model_from_dict(data: dict, *, source: str = "<dict>") -> Model:
 
 def _block(entry: dict, index: int, source: str) -> Block:
     name = entry.get("name", f"block{index}") if isinstance(entry, dict) else f"block{index}"
-    where = f"[[block]] #{index} ({name!r})"
+    where = f"[[block]] #{index} ({shown(name)})"
     no_unknown(entry, BLOCK_KEYS, source, where)
     if not (isinstance(name, str) and name.strip()):
-        raise ModelError(f"{source}: [[block]] #{index} name = {name!r}: must be a non-empty text in quotes "
+        raise ModelError(f"{source}: [[block]] #{index} name = {shown(name)}: must be a non-empty text in quotes "
                          "(messages and results name the block by it)")
     if ("box" in entry) == ("vertices" in entry):
         raise ModelError(f"{source}: {where} needs exactly one of 'box' or 'vertices'")
@@ -96,18 +96,20 @@ def _block(entry: dict, index: int, source: str) -> Block:
     density = entry.get("density")
     if density is not None:
         DENSITY.check(density, f"{source}: {where} density")
-    return Block(name=str(name), shape=shape, density=density, fixed=fixed)
+    return Block(name=name, shape=shape, density=density, fixed=fixed)
 
 
 def _refuse_face_interior_points(points: list, shape: ConvexPolyhedron, where: str) -> None:
     """ModelError if a listed vertex lies inside a face of the hull (neither a corner nor on an
-    edge): the hull would drop it, and such a point is the re-entrant corner of a non-convex
-    shape, as an L's inner corner, which the hull would silently fill in."""
+    edge): the hull would drop it, and such a point is most often the re-entrant corner of a
+    non-convex shape, as an L's inner corner, which the hull would silently fill in (else a
+    needless point on a flat face)."""
     inner = face_interior_points(np.asarray(points), shape)
     if inner.size:
         k = int(inner[0])
-        raise ModelError(f"{where} vertex {k} {points[k]} lies inside a face of the convex hull of the vertices, not at a corner: "
-                         "the shape is not convex (a block is the convex hull of its vertices; split it into convex blocks)")
+        raise ModelError(f"{where} vertex {k} {points[k]} lies inside a face of the convex hull of the vertices, not at a corner, "
+                         "and the hull would drop it: a re-entrant corner makes a non-convex shape (split it into convex "
+                         "blocks); a point on a flat face, remove it")
 
 
 def _point(value, where: str) -> list[float]:

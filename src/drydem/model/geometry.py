@@ -29,8 +29,9 @@ from drydem.errors import GeometryError
 if TYPE_CHECKING:
     from scipy.spatial import ConvexHull
 
-#: Relative tolerance (fraction of the block's size) for "on the hull" and "coplanar".
-RELATIVE_TOLERANCE = 1e-9
+#: fraction of a block's size (its bounding box's diagonal) within which a point is on the hull,
+#: on a face's plane or on an edge (:func:`convex_hull`, :func:`face_interior_points`)
+HULL_TOLERANCE = 1e-6
 #: the largest coordinate of a vertex, m: 1,000 km; beyond it a model is in another unit (its
 #: squares and cubes, areas and volumes, would also leave floating point's range near 1e100)
 MAX_COORDINATE_M = 1e6
@@ -140,7 +141,7 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
         hull = ConvexHull(pts)
     except QhullError as exc:
         raise GeometryError(f"{name}: degenerate block (vertices coplanar or collinear): {exc.args[0].splitlines()[0]}") from None
-    tol = RELATIVE_TOLERANCE * 1e3 * scale
+    tol = HULL_TOLERANCE * scale
     if hull.volume <= 1e-9 * scale**3:
         raise GeometryError(f"{name}: degenerate block (volume {hull.volume:.3g} m3 for size {scale:.3g} m)")
     depth = -(pts @ hull.equations[:, :3].T + hull.equations[:, 3]).max(axis=1)
@@ -162,13 +163,13 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
 
 
 def face_interior_points(points: np.ndarray, shape: ConvexPolyhedron) -> np.ndarray:
-    """Indices of the ``points`` ((n, 3), m; on or inside ``shape``, their hull) farther than the
-    hull's tolerance (that of :func:`convex_hull`) from every edge of ``shape``: points inside
-    a face or inside the solid, which the hull drops, as opposed to its corners and to points
-    on its edges (an edge split in two, as a mesh generator may leave)."""
+    """Indices of the ``points`` ((n, 3), m; their hull is ``shape``, which :func:`convex_hull`
+    refuses for a point inside it) farther than :data:`HULL_TOLERANCE` from every edge of
+    ``shape``: points inside a face, which the hull drops, as opposed to its corners and to
+    points on its edges (an edge split in two, as a mesh generator may leave)."""
     from scipy.spatial import cKDTree
 
-    tol = RELATIVE_TOLERANCE * 1e3 * shape.size
+    tol = HULL_TOLERANCE * shape.size
     off_corners = np.flatnonzero(cKDTree(shape.vertices).query(points)[0] > tol)  # few: a tree, not a points x vertices table
     tails = np.concatenate(shape.faces)
     heads = np.concatenate([np.roll(f, -1) for f in shape.faces])
@@ -202,9 +203,35 @@ def _merge_coplanar(pts: np.ndarray, hull: ConvexHull, tol: float) -> tuple[list
         unassigned = [s for s in unassigned if s not in group]
         on_plane = np.flatnonzero(np.abs(pts @ n + d) <= tol)
         idx = np.intersect1d(on_plane, hull.vertices)
-        faces.append(_counter_clockwise(pts, idx, n))
+        faces.append(_corners_only(pts, _counter_clockwise(pts, idx, n), n, tol))
         normals.append(n / np.linalg.norm(n))
     return faces, np.array(normals)
+
+
+def _corners_only(pts: np.ndarray, ring: np.ndarray, normal: np.ndarray, tol: float) -> np.ndarray:
+    """The corners of the face polygon ``ring`` (indices, counter-clockwise about ``normal``): its
+    vertices but those within ``tol`` of the segment between their neighbours (on an edge) or
+    turning the wrong way (inside the face). Qhull keeps a point a hair off a face as a vertex
+    of its own; in the ring it makes a dent, and the polygon would not be convex (the volume
+    and centroid wrong). A pass of Graham's scan from the ring's farthest vertex from its centre
+    (a corner), each vertex kept while it turns left by more than ``tol``."""
+    p = pts[ring]
+    start = int(np.argmax(np.linalg.norm(p - p.mean(0), axis=1)))
+    order = np.roll(np.arange(len(ring)), -start)
+    kept: list[int] = []
+    for k in [*order, order[0]]:
+        while len(kept) >= 2 and _left_turn(p[kept[-2]], p[kept[-1]], p[k], normal) <= tol:
+            kept.pop()
+        kept.append(k)
+    return ring[np.sort(kept[:-1])]  # in the ring's order from its first vertex, as Qhull gave it
+
+
+def _left_turn(a: np.ndarray, b: np.ndarray, c: np.ndarray, normal: np.ndarray) -> float:
+    """m: how far ``b`` lies out beyond the chord from ``a`` to ``c``, where a path a, b, c turning
+    left (seen from ``normal``'s side) has its corner: positive at a convex corner of a ring
+    counter-clockwise about ``normal``, negative at a dent."""
+    chord = c - a
+    return float(np.dot(np.cross(b - a, chord), normal)) / max(float(np.linalg.norm(chord)), 1e-300)
 
 
 def _counter_clockwise(pts: np.ndarray, idx: np.ndarray, normal: np.ndarray) -> np.ndarray:
