@@ -141,6 +141,9 @@ GRID = "[[grid]] #0 ('ida')"
     (('"pulse:one-sine:2"', '"records"'), "motions: {folder}/records: is a folder"),
     (('"pulse:one-sine:2"', '"block.toml"'), "motions: {folder}/block.toml: unknown motion file type '.toml'"),
     (('"pulse:one-sine:2"', '"records/bad.csv"'), "motions: {folder}/records/bad.csv: line 3: acc_x_m_s2: 'x' is not a number"),
+    # the block is in-plane (fix_y): a record along y alone would move nothing
+    (('"pulse:one-sine:2"', '"records/y.csv"'),
+     "y.csv, baseline-corrected: its y component shakes the model along y (peak 0.5 m/s2), but its blocks are held in y"),
     (('"pulse:one-sine:2"', '"pulse:square:2"'), "motions: 'pulse:square:2.0': pulse kind = 'square': must be one of"),
     (('"pulse:one-sine:2"', '"pulse:one-sine:fast"'), "the frequency 'fast' is not a number"),
     (('"pulse:one-sine:2"', '"pulse:one-sine:0"'), "motions: 'pulse:one-sine:0.0': pulse frequency_hz = 0.0: must be a number in (0, inf) Hz"),
@@ -164,6 +167,7 @@ GRID = "[[grid]] #0 ('ida')"
 ])
 def test_a_bad_shake_grid_is_refused_naming_the_grid_and_key(folder, change, message):
     (folder / "records" / "bad.csv").write_text("time_s,acc_x_m_s2\n0,0\n0.1,x\n")
+    (folder / "records" / "y.csv").write_text("time_s,acc_x_m_s2,acc_y_m_s2\n0,0,0\n0.1,0,1\n0.2,0,0\n")
     study = folder / "bad.toml"
     study.write_text(STUDY.replace(*change))
     with pytest.raises(ModelError) as caught:

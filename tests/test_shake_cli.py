@@ -53,13 +53,15 @@ def files(tmp_path_factory):
                         supports=dd.Supports(fix_y=True), points=2)
     squat = stack_model([0.0055], supports=dd.Supports(fix_y=True), points=2)
     paths = {"block": folder / "block.toml", "squat": folder / "squat.toml", "record": folder / "record.csv",
-             "bad": folder / "bad.csv", "missing": folder / "nosuch.csv", "tiny": folder / "tiny.csv", "xy": folder / "xy.csv"}
+             "bad": folder / "bad.csv", "missing": folder / "nosuch.csv", "tiny": folder / "tiny.csv", "xy": folder / "xy.csv",
+             "y": folder / "y.csv"}
     save_model(block, paths["block"])
     save_model(squat, paths["squat"])
     paths["record"].write_text(RECORD)
     paths["bad"].write_text("time_s,acc_x_m_s2\n0,0\n0.1,oops\n")
     paths["tiny"].write_text("time_s,acc_x_m_s2\n0,0\n1e-300,1\n2e-300,0\n")
     paths["xy"].write_text("time_s,acc_x_m_s2,acc_y_m_s2\n0,0,0\n0.025,2,0.5\n0.05,0,0\n")
+    paths["y"].write_text("time_s,acc_x_m_s2,acc_y_m_s2\n0,0,0\n0.025,0,0.5\n0.05,0,0\n")
     return paths
 
 
@@ -198,7 +200,7 @@ def test_an_overturning_pulse_names_the_block_and_overwrite_replaces_only_the_ea
     (["--motion", "{tiny}"], "tiny.csv: line 3: time_s = 1e-300 is 1e-300 s after 0 (line 2): a record's samples must be at least 1e-06 s apart"),
     # the block is in-plane (fix_y): a motion along y would move nothing
     ([*PULSE, "--direction", "y"], "--direction y shakes the model along y (peak 8 m/s2), but its blocks are held in y ([supports] fix_y = true)"),
-    (["--motion", "{xy}"], "xy.csv: its column acc_y_m_s2 shakes the model along y (peak "),
+    (["--motion", "{y}"], "y.csv: its column acc_y_m_s2 shakes the model along y (peak 0.25 m/s2), but its blocks are held in y"),
     (["--motion", "{record}", "--amplitude", "3"], "--amplitude applies to a --pulse only"),
     (["--motion", "{record}", "--direction", "y"], "record.csv: direction = 'y' applies to a single-component .AT2 record"),
     (["--pulse", "sine", "--amplitude", "3"], "--pulse sine needs --frequency F (Hz)"),
@@ -214,6 +216,15 @@ def test_bad_input_is_refused_with_its_option_or_file_and_no_traceback(files, tm
     result = shake(files["block"], *[a.format(**files) for a in arguments], "--out", out)
     assert result.exit_code != 0 and message in result.output, result.output
     assert not out.exists()  # refused before anything was written
+
+
+def test_a_record_with_a_component_along_a_held_axis_is_run_along_the_others_with_a_note(files, tmp_path):
+    """A 2- or 3-component record on an in-plane model: its y component moves nothing (the
+    supports take it), said in a note; its x component is analysed."""
+    result = shake(files["block"], "--motion", files["xy"], "--damping-ratio", "0.05", "--out", tmp_path / "xy")
+    assert result.exit_code == 0, result.output
+    assert (f"note: {files['xy']}: its column acc_y_m_s2 (peak 0.25 m/s2) moves nothing: the blocks are held in y "
+            "([supports] fix_y = true); the motion along x is analysed") in result.output
 
 
 def test_a_pulse_the_timestep_cannot_follow_is_refused_at_the_run_start(files, tmp_path):

@@ -114,14 +114,14 @@ def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequenc
                       rayleigh_mass_per_s=rayleigh_mass, rayleigh_stiffness_s=rayleigh_stiffness, monitor=monitor)
         _check_shake_options(values)
         settings = ShakeSettings(motion=ground, **values)
-        check_held_axes(model, ground, _component_option(motion, direction))
+        held_notes = check_held_axes(model, ground, _component_option(motion, direction))
         monitored = monitor_index(model, monitor)
         if settings.restitution == HOUSNER:
             housner_target(model, monitored)  # refused before the run: a squat block does not rock
         folder = results_folder(out, found.name, resume=None, overwrite=overwrite)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
-    for note in ground.notes:
+    for note in (*ground.notes, *held_notes):
         click.echo(f"note: {note}", err=True)
     click.echo(f"{found.name} ({found.path}): {model.n_blocks} blocks, {model.joint.stiffness_text}, "
                f"mu {model.joint.friction:g}, {model.contacts.points_per_length} points per length; {ground.name}, "

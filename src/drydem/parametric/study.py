@@ -444,9 +444,13 @@ def _problems(model, spec: RunSpec, motion=None) -> list[str]:
     if spec.analysis != "shake":
         checks.append(spec.tilt_settings)  # a limit run's increment is unused, but is part of its id
     else:
+        from drydem.analysis.shake.run import check_held_axes
+
         if isinstance(motion, str):  # the settings are checked all the same, on a stand-in motion
             checks.append(lambda message=motion: _raise(message))
             motion = ground_motion(f"{PULSE_PREFIX}one-sine:1.0")
+        else:  # a motion moving the model along held axes only would move nothing (the run refuses it)
+            checks.append(lambda: check_held_axes(model, motion))
         checks += [lambda: spec.shake_settings(motion), lambda: _monitored(model, spec)]
     found = []
     for check in checks:

@@ -1,8 +1,9 @@
 """One time history on a shaking table: :func:`shake_analysis`.
 
-Before anything is cycled, a motion along an axis in which every block is held ([supports]
+Before anything is cycled, a motion only along axes in which every block is held ([supports]
 fix_x, fix_y or fix_z: an in-plane wall is held in y) is refused (:func:`check_held_axes`):
-that motion would move nothing, and the response reported would be no response to it.
+that motion would move nothing, and the response reported would be no response to it (a
+component along such an axis beside others moves nothing either: a note says so).
 
 Stage 1: the model settles under vertical gravity with the static solver (local damping,
 cycled to equilibrium), as the tilting analysis does; a model that cannot stand (a block fell
@@ -79,21 +80,28 @@ def shake_analysis(
     return shaking.result(ratio, restitution, time.perf_counter() - start)
 
 
-def check_held_axes(model: Model, motion: GroundMotion, given_by: Callable[[str], str] | None = None) -> None:
-    """ModelError if ``motion`` moves the table along an axis in which every block is held
-    ([supports] fix_x, fix_y, fix_z): the table frame's inertial force along it is taken by the
-    supports (it acts at each block's centroid, so it turns nothing either), and that motion
-    would move nothing, silently. As the tilting analysis refuses to load an in-plane model
-    out of its plane (:func:`drydem.analysis.tilt.check_loading`). ``given_by(axis)`` names
-    what gave that component (a command's option; default: the motion's component)."""
-    for axis, held, peak in zip(DIRECTIONS, model.supports.mask[:3], motion.peaks_m_s2):
-        if held and peak > 0.0:
-            given = f"{motion.name}: its {axis} component" if given_by is None else given_by(axis)
-            others = " or ".join(other for other, fixed in zip(DIRECTIONS, model.supports.mask[:3]) if not fixed)
-            instead = f"shake it along {others}, or" if others else "or"
-            raise ModelError(f"{model.source}: {given} shakes the model along {axis} (peak {peak:.4g} m/s2), but its blocks are "
-                             f"held in {axis} ([supports] fix_{axis} = true): the motion would move nothing; {instead} give it "
-                             f"blocks free in {axis} ([supports] fix_{axis} = false)")
+def check_held_axes(model: Model, motion: GroundMotion, given_by: Callable[[str], str] | None = None) -> list[str]:
+    """The components of ``motion`` along an axis in which every block is held ([supports]
+    fix_x, fix_y, fix_z), as notes: the table frame's inertial force along it is taken by the
+    supports (it acts at each block's centroid, so it turns nothing either), so they move
+    nothing (a 3-component record on an in-plane wall: its x and z components are analysed).
+    ModelError if every component of ``motion`` is such, and the motion would move nothing,
+    silently: as the tilting analysis refuses to load an in-plane model out of its plane
+    (:func:`drydem.analysis.tilt.check_loading`). ``given_by(axis)`` names what gave that
+    component (a command's option; default: the motion's component)."""
+    axes = list(zip(DIRECTIONS, model.supports.mask[:3], motion.peaks_m_s2))
+    held = [(axis, peak) for axis, fixed, peak in axes if fixed and peak > 0.0]
+    free = [axis for axis, fixed, peak in axes if not fixed and peak > 0.0]
+    given = (lambda axis: f"{motion.name}: its {axis} component") if given_by is None else given_by
+    if held and not free:
+        axis, peak = held[0]
+        others = " or ".join(other for other, fixed in zip(DIRECTIONS, model.supports.mask[:3]) if not fixed)
+        instead = f"shake it along {others}, or" if others else "or"
+        raise ModelError(f"{model.source}: {given(axis)} shakes the model along {axis} (peak {peak:.4g} m/s2), but its blocks are "
+                         f"held in {axis} ([supports] fix_{axis} = true): the motion would move nothing; {instead} give it "
+                         f"blocks free in {axis} ([supports] fix_{axis} = false)")
+    return [f"{given(axis)} (peak {peak:.4g} m/s2) moves nothing: the blocks are held in {axis} ([supports] fix_{axis} = true); "
+            f"the motion along {' and '.join(free)} is analysed" for axis, peak in held]
 
 
 def lost_drops(model: Model, lost_drop_heights: float) -> np.ndarray:
