@@ -111,6 +111,15 @@ def test_a_bad_csv_motion_is_refused_naming_the_file_and_the_problem(tmp_path, n
     refused(lambda: read_motion(path), f"{path}: ", message)
 
 
+@pytest.mark.parametrize("start_s", [0.0, 1.0, 1000.0])
+def test_a_record_sampled_at_exactly_one_megahertz_is_read(tmp_path, start_s):
+    """1 us steps, the finest allowed (MIN_SAMPLE_STEP_S): 1.000001 - 1.0 rounds to 9.99999999e-07
+    s, which is no step below the rule (it was refused, its message saying 1e-06 < 1e-06)."""
+    times = [start_s + k * 1e-6 for k in range(4)]
+    path = written(tmp_path, "mhz.csv", "time_s,acc_x_m_s2\n" + "".join(f"{t!r},{k % 2}\n" for k, t in enumerate(times)))
+    assert len(read_csv_motion(path).time_s) == 4
+
+
 def test_a_binary_file_named_csv_is_refused(tmp_path):
     path = tmp_path / "binary.csv"
     path.write_bytes(b"\xff\xfe\x00\x01")

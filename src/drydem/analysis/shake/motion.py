@@ -319,7 +319,7 @@ def _checked_times(path: Path, time: np.ndarray, lines: list[int]) -> tuple[np.n
         i = int(late[0]) + 1
         raise ModelError(f"{path}: line {lines[i]}: time_s = {time[i]:g} is not after {time[i - 1]:g} "
                          f"(line {lines[i - 1]}): times must increase strictly")
-    close = np.flatnonzero(steps < MIN_SAMPLE_STEP_S)
+    close = np.flatnonzero(steps < MIN_SAMPLE_STEP_S - 4.0 * np.spacing(time[1:]))  # a 1 MHz record's steps round below 1e-6 s
     if close.size:
         i = int(close[0]) + 1
         raise ModelError(f"{path}: line {lines[i]}: time_s = {time[i]:.10g} is {steps[i - 1]:.3g} s after {time[i - 1]:.10g} "
