@@ -102,7 +102,8 @@ def test_an_unnamed_mesh_prints_what_it_assumed(tmp_path):
     ("nowhere/wall.obj", "nowhere/wall.obj: the folder {tmp}/nowhere does not exist"),
     ("file.txt/wall.stl", "file.txt/wall.stl: {tmp}/file.txt is not a folder"),
     ("folder", "{tmp}/folder' is a directory"),
-    ("wall.json/", "{tmp}/wall.json/' ends with a separator: it names a folder; give a file name"),  # was written as wall.json
+    ("wall.json/", "{tmp}/wall.json/' names a folder (it ends with a separator, . or ..); give a file name"),  # was written as wall.json
+    ("wall.json/.", "{tmp}/wall.json/.' names a folder (it ends with a separator, . or ..)"),
 ])
 def test_export_to_an_unwritable_path_names_it_and_writes_nothing(tmp_path, output, message):
     (tmp_path / "file.txt").write_text("keep")

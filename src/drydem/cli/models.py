@@ -176,10 +176,11 @@ def show(target: str, out: Path | None, strict: bool, unit: str, seed: int, heig
 
 
 def _file_name(ctx, param, value: str) -> Path:
-    """OUTPUT as a path, or a usage error if it ends with a separator: it then names a folder
-    (``out.json/``), which Path would silently read as the file ``out.json``."""
-    if value.endswith(("/", os.sep)):
-        raise click.BadParameter(f"{value!r} ends with a separator: it names a folder; give a file name")
+    """OUTPUT as a path, or a usage error if it ends with a separator or in ``.`` or ``..``: it
+    then names a folder (``out.json/``, ``out.json/.``), which Path would silently read as the
+    file ``out.json``."""
+    if value.endswith(("/", os.sep)) or os.path.basename(value) in (".", ".."):
+        raise click.BadParameter(f"{value!r} names a folder (it ends with a separator, . or ..); give a file name")
     return Path(value)
 
 
