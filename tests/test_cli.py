@@ -177,6 +177,8 @@ def test_unit_on_a_target_in_metres_is_refused_not_ignored(target):
     result = CliRunner().invoke(main, ["check", target, "--unit", "mm"])
     assert result.exit_code == 1 and "--unit mm applies to imported geometry" in result.output, result.output
     assert CliRunner().invoke(main, ["check", target, "--unit", "m"]).exit_code == 0
+    broken = CliRunner().invoke(main, ["check", "no_such_model.toml", "--unit", "mm"])  # said before any loading
+    assert broken.exit_code == 1 and "no_such_model.toml: --unit mm applies to imported geometry" in broken.output
 
 
 def test_save_every_without_vtk_is_refused_not_ignored(tmp_path):

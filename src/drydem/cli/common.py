@@ -102,13 +102,13 @@ def resolve_target(target: str, unit: str = "m") -> Target:
     """Load TARGET or exit with its error; print to stderr what an imported file could not say."""
     from drydem.io.target import MESH_SUFFIXES, load_target
 
+    if unit != "m" and Path(target).suffix.lower() not in MESH_SUFFIXES:
+        raise click.ClickException(f"{target}: --unit {unit} applies to imported geometry ({', '.join(MESH_SUFFIXES)}); "
+                                   "a built-in, a wall file and a model file are in metres")
     try:
         found = load_target(target, unit_m=UNITS[unit])
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
-    if unit != "m" and (found.builtin or found.path.suffix.lower() not in MESH_SUFFIXES):
-        raise click.ClickException(f"{target}: --unit {unit} applies to imported geometry ({', '.join(MESH_SUFFIXES)}); "
-                                   "a built-in, a wall file and a model file are in metres")
     for note in found.notes:
         click.echo(f"note: {note}", err=True)
     return found
