@@ -115,6 +115,8 @@ def test_an_interrupted_tilt_keeps_its_checkpoint_and_resumes_from_it(tmp_path, 
     again = CliRunner().invoke(main, ["tilt", "perforated_wall", "--out", str(out), "--resume"])
     assert again.exit_code == 0 and "holds a finished run of these options (summary.json): nothing to resume" in again.output
     assert "collapse angle" not in again.output and (out / "summary.json").read_bytes() == summary
+    frames = CliRunner().invoke(main, ["tilt", "perforated_wall", "--out", str(out), "--resume", "--vtk"])
+    assert frames.exit_code == 1 and "holds a finished run without a VTK series: --vtk and --video need it run again" in frames.output
 
 
 def test_designs_lists_the_seven_walls_with_their_brief_check():

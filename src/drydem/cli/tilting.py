@@ -139,8 +139,11 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     if resume and (folder / "summary.json").is_file():
+        if (vtk or video) and not (folder / "vtk").is_dir():
+            raise click.ClickException(f"{folder} holds a finished run without a VTK series: --vtk and --video need it run again "
+                                       "(--overwrite instead of --resume)")
         click.echo(f"{folder} holds a finished run of these options (summary.json): nothing to resume, its results are kept "
-                   "(--overwrite runs it again)")
+                   "(--overwrite runs it again" + ("; drydem animate renders its VTK series" if video else "") + ")")
         return
     click.echo(f"{found.name} ({found.path}): {model.n_blocks} blocks, {model.joint.stiffness_text}, "
                f"mu {model.joint.friction:g}, {model.contacts.points_per_length} points per length -> {folder}")
