@@ -136,7 +136,7 @@ def test_drydem_tilt_about_x_writes_its_axis_mechanism_and_vtk(tiny, tmp_path):
     result = CliRunner().invoke(main, ["tilt", str(tmp_path / "tiny.toml"), "--tilt-axis", "x", "--increment", "1",
                                        "--max-angle", "2", "--vtk", "--out", str(out)])
     assert result.exit_code == 0, result.output
-    assert "tilting about x: the lateral load acts along y" in result.output and "no collapse up to 2.0 deg" in result.output
+    assert "tilting about x: the lateral load acts along y" in result.output and "no collapse up to 2.00 deg" in result.output
     summary = json.loads((out / "summary.json").read_text())
     assert summary["analysis"]["tilt_axis"] == "x" and wall_of(summary["monitored_block"]) == 2
     assert (out / "mechanism.png").stat().st_size > 20_000 and (out / "pushover.png").is_file()

@@ -74,7 +74,7 @@ def test_tilt_options_override_the_model_and_the_shipped_example_runs(tmp_path):
         main, ["tilt", "perforated_wall", "--increment", "5", "--max-angle", "10", "--kn", "1e9", "--points", "2", "--out", str(out)]
     )
     assert result.exit_code == 0, result.output
-    assert "no collapse up to 10.0 deg" in result.output
+    assert "no collapse up to 10.00 deg (the last step within max_angle_deg = 10)" in result.output
     import json
 
     summary = json.loads((out / "summary.json").read_text())

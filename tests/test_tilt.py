@@ -38,6 +38,25 @@ def slender(heights, kn=1e10):
     return stack_model(heights, size_xy=(0.01, 0.012), joint=dd.JointMaterial(kn=kn, ks=kn, friction=1.0))
 
 
+@pytest.mark.parametrize("increment_deg, max_angle_deg", [(1.0, 30.0), (6.0, 80.0)])
+def test_adaptive_steps_past_the_maximum_angle_are_refined_and_the_block_still_slides_at_atan_mu(increment_deg, max_angle_deg):
+    """The first adaptive step, 16 increments (32 and 96 deg here), passes the maximum angle: it is
+    halved, as a failed trial is, not the end of the run ("no collapse up to 30 deg" before, for
+    a brick sliding at atan 0.5 = 26.57 deg)."""
+    model = stack_model([0.0055], joint=dd.JointMaterial(kn=1e8, ks=1e8, friction=0.5))
+    result = tilt_analysis(model, TiltSettings(increment_deg=increment_deg, adaptive=True, max_angle_deg=max_angle_deg))
+    exact = math.degrees(math.atan(0.5))
+    assert exact - increment_deg - 1e-9 <= result.collapse_angle_deg <= exact + 1e-9 and result.ended_by == "monitored block fell"
+
+
+def test_no_collapse_below_the_maximum_angle_ends_at_the_last_increment_within_it():
+    """A brick sliding at 26.57 deg tilted in 1 deg steps up to 20.5 deg: the last equilibrium is 20 deg, the last step within it."""
+    model = stack_model([0.0055], joint=dd.JointMaterial(kn=1e8, ks=1e8, friction=0.5))
+    for adaptive in (False, True):
+        result = tilt_analysis(model, TiltSettings(increment_deg=1.0, adaptive=adaptive, max_angle_deg=20.5))
+        assert (result.ended_by, result.collapse_angle_deg, result.last_equilibrium_deg) == ("maximum angle", None, 20.0)
+
+
 def test_slender_block_topples_at_atan_b_over_h():
     result = tilt_analysis(slender([0.04]), TiltSettings(increment_deg=STEP))
     assert within_one_step_below(result.collapse_angle_deg, math.degrees(math.atan(0.25)))

@@ -224,7 +224,8 @@ def _tilt_verdict(result, model: Model) -> list[str]:
         return [f"no equilibrium under gravity within [solver] max_cycles = {model.solver.max_cycles}: no verdict on whether it "
                 "stands; raise max_cycles (or check damping) and run again"]
     if result.ended_by == MAXIMUM_ANGLE:
-        return [f"no collapse up to {result.settings.max_angle_deg} deg"]
+        return [f"no collapse up to {result.last_equilibrium_deg:.2f} deg (the last step within max_angle_deg = "
+                f"{result.settings.max_angle_deg:g})"]
     if result.ended_by == NO_EQUILIBRIUM:
         return [f"last equilibrium {result.last_equilibrium_deg:.2f} deg; the next step reached no equilibrium within [solver] "
                 f"max_cycles = {model.solver.max_cycles} and did not collapse either: no collapse angle "

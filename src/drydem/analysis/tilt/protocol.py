@@ -106,11 +106,17 @@ def stand_under_gravity(protocol: TiltProtocol) -> bool | None:
 def step_up(protocol: TiltProtocol) -> str:
     """Stage 2: tilt by ``protocol.step`` and cycle to equilibrium, step after step, up to the
     maximum angle; a failed coarse adaptive trial (given up early by
-    :func:`~drydem.analysis.tilt.run.trial_limit`) is undone and halved. Returns why it ended
-    (TiltResult.ended_by)."""
+    :func:`~drydem.analysis.tilt.run.trial_limit`) is undone and halved, and so is a coarse
+    step that would pass the maximum angle (the angles below it are tried in increments, as
+    anywhere else). Returns why it ended (TiltResult.ended_by)."""
     run, settings = protocol.run, protocol.run.settings
-    while protocol.theta + protocol.step <= settings.max_angle_deg + 1e-9:
+    while True:
         coarse = settings.adaptive and protocol.step > settings.increment_deg * (1 + 1e-9)
+        if protocol.theta + protocol.step > settings.max_angle_deg + 1e-9:
+            if not coarse:
+                return MAXIMUM_ANGLE
+            protocol.step /= 2
+            continue
         give_up = trial_limit(run, protocol.records, protocol.step, settings) if coarse else None
         outcome, cycles = run.equilibrate(protocol.theta + protocol.step, give_up=give_up)
         if outcome == EQUILIBRIUM:
@@ -119,7 +125,6 @@ def step_up(protocol: TiltProtocol) -> str:
             protocol.undo_trial()
         else:
             return {MAX_CYCLES: NO_EQUILIBRIUM}.get(outcome, outcome)
-    return MAXIMUM_ANGLE
 
 
 def tilt_result(protocol: TiltProtocol, stable: bool | None, ended_by: str, runtime_s: float) -> TiltResult:
