@@ -83,6 +83,12 @@ CASES = {
     "2 x 6 wall, mu 2": lambda: in_plane_wall("bBb\nBB\n" * 3, 2.0),
     "WD1": lambda: load_target("WD1").model,
     "WD6": lambda: load_target("WD6").model,
+    # cohesion and tension: points in tension keep less than c A of shear (c + mu N, N < 0); LA-NA
+    # gave 11.16 against LA-A's 10.80 here when it kept c A at every point in tension
+    "sliding block, cohesion and tension": lambda: stack_model([0.0055], joint=dd.JointMaterial(friction=0.5, cohesion=1e3, tension=1e3),
+                                                               supports=dd.Supports(fix_y=True)),
+    "sliding block in 3D, cohesion and tension": lambda: stack_model([0.0055], joint=dd.JointMaterial(friction=0.5, cohesion=1e3,
+                                                                                                     tension=1e3)),
 }
 
 

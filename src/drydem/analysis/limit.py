@@ -22,7 +22,7 @@ the collapse angle is atan(lambda).
 
 Non-associative (LA-NA): friction without dilatancy, by the iterative scheme of Gilbert,
 Casapulla & Ahmed (2006, Computers & Structures 84, 873-887): solve LA-A; then, repeatedly,
-replace each point's friction limit by a fixed shear capacity mu N_k taken from the previous
+replace each point's friction limit by a fixed shear capacity max(c A_k + mu N_k, 0) taken from the previous
 solution (a "pseudo-cohesion", whose flow rule has no normal dilatancy; in 3D a disc |T_k| <=
 c A_k + mu N_k^prev, a second-order cone with a constant first entry, by Clarabel) and solve again,
 relaxing the normal forces between iterations, until lambda settles. Its limits, as the
@@ -222,7 +222,7 @@ def limit_analysis(model: Model, settings: LimitSettings = LimitSettings(), *,
         for iterations in range(2, settings.max_iterations + 2):
             progress(f"non-associative iteration {iterations - 1} of at most {settings.max_iterations}: "
                      f"solving the {program} with {solver} (lambda {lam:.4f} so far)")
-            capacity = cohesion + friction * np.maximum(normal, 0.0)
+            capacity = np.maximum(cohesion + friction * normal, 0.0)  # Coulomb at the last normal force, a tension lowering it
             lam_new, forces_new, duals_new, status = solve(problem, friction=friction, cohesion=cohesion, tension=tension, capacity=capacity,
                                                            method=NA_METHOD)
             history.append(lam_new)
