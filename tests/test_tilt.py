@@ -57,6 +57,21 @@ def test_no_collapse_below_the_maximum_angle_ends_at_the_last_increment_within_i
         assert (result.ended_by, result.collapse_angle_deg, result.last_equilibrium_deg) == ("maximum angle", None, 20.0)
 
 
+def test_a_brick_on_joints_closing_most_of_its_height_settles_by_w_over_kn_a_and_slides_at_atan_mu():
+    """kn = 2e4 Pa/m, the brick 5.5 mm high: it settles by rho g h / kn = 4.855 mm (W / (kn A)),
+    then slides at atan 0.5 = 26.57 deg. Its critical timestep (17 ms) let it fall through its
+    joint in 2 cycles, before the spring acted, and it was called unable to stand; the free-flight
+    bound (drydem.engine.inertia.free_flight_timestep) keeps each cycle's fall within the tolerance."""
+    kn = 2e4
+    model = stack_model([0.0055], joint=dd.JointMaterial(kn=kn, ks=kn, friction=0.5), supports=dd.Supports(fix_y=True))
+    sim = dd.Simulation(model)
+    assert sim.cycle_to_equilibrium().converged
+    settlement = model.block_centroid[1, 2] - sim.state.position[1, 2]
+    assert settlement == pytest.approx(1800.0 * dd.G * 0.0055 / kn, rel=1e-3)
+    result = tilt_analysis(model, TiltSettings(increment_deg=1.0))
+    assert result.stable_under_gravity and 26.57 - 1.0 <= result.collapse_angle_deg <= 26.57
+
+
 def test_slender_block_topples_at_atan_b_over_h():
     result = tilt_analysis(slender([0.04]), TiltSettings(increment_deg=STEP))
     assert within_one_step_below(result.collapse_angle_deg, math.degrees(math.atan(0.25)))
