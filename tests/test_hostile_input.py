@@ -116,6 +116,19 @@ def test_an_unreadable_checkpoint_is_named(tmp_path, content):
     assert refused(run("tilt", model_file(tmp_path), "--out", out, "--resume"), "checkpoint.npz: not a readable drydem checkpoint")
 
 
+def test_a_checkpoint_resumes_whichever_path_names_the_same_model_file(tmp_path, monkeypatch):
+    """brick.toml from its folder and the absolute path are one model: resumed, not 'another model'."""
+    from drydem.io.target import load_target
+
+    monkeypatch.chdir(tmp_path)
+    model_file(tmp_path)
+    checkpoint = tmp_path / "checkpoint.npz"
+    tilt_analysis(load_target("brick.toml").model, TiltSettings(increment_deg=5.0), checkpoint=checkpoint)
+    result = tilt_analysis(load_target(str(tmp_path / "brick.toml")).model, TiltSettings(increment_deg=5.0), checkpoint=checkpoint,
+                           resume=True)
+    assert result.collapse_angle_deg is not None
+
+
 def test_resuming_with_other_settings_names_each_of_them(tmp_path):
     from drydem.io.target import load_target
 

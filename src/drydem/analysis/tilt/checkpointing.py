@@ -4,8 +4,10 @@ resume itself (:func:`resume`)."""
 
 from __future__ import annotations
 
+import ast
 import hashlib
 import json
+import os
 from dataclasses import asdict
 from pathlib import Path
 
@@ -42,9 +44,20 @@ def check_fingerprint(checkpoint: Path, saved: dict, fingerprint: dict[str, str]
         before = None
     if not isinstance(before, dict):
         raise ModelError(f"{checkpoint}: written by another version of drydem (no settings to compare); start again without --resume")
-    differ = [f"{k}: {before.get(k, 'absent')} in the checkpoint, {v} now" for k, v in fingerprint.items() if before.get(k) != v]
+    differ = [f"{k}: {before.get(k, 'absent')} in the checkpoint, {v} now" for k, v in fingerprint.items()
+              if before.get(k) != v and not (k == "model" and _same_file(before.get(k), v))]
     if differ:
         raise ModelError(f"{checkpoint}: the checkpoint is of another model or protocol ({'; '.join(differ)}); not resuming")
+
+
+def _same_file(before: str | None, now: str) -> bool:
+    """Whether two models' sources (their fingerprints' repr strings) name the same file by two
+    paths (``brick.toml`` and ``/home/me/brick.toml``): the model's blocks and parameters are
+    compared anyway, so the path it was read by is no reason to refuse a resume."""
+    try:
+        return before is not None and os.path.samefile(ast.literal_eval(before), ast.literal_eval(now))
+    except (OSError, ValueError, SyntaxError, TypeError):
+        return False
 
 
 def progress(records: list[Record], run: TiltRun, theta: float, step: float) -> dict:
