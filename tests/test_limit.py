@@ -58,6 +58,19 @@ def test_a_slender_block_and_a_stack_topple_at_lambda_b_over_h(heights):
         assert np.allclose(turn, turn[0]) and abs(turn[0]) > 0
 
 
+def test_a_square_balanced_on_its_corner_has_a_multiplier_of_plus_zero():
+    """A 10 mm square prism turned 45 deg on its corner: its weight acts through the corner, the least
+    push topples it, lambda = 0 (it solved to -0.0, printed as -0.0000, a collapse angle of -0.00 deg)."""
+    r = 0.01 / math.sqrt(2.0)
+    section = [(0.05, 0.0), (0.05 - r, r), (0.05 + r, r), (0.05, 2 * r)]
+    diamond = dd.convex_hull([[x, y, z] for x, z in section for y in (-0.006, 0.006)])
+    base = dd.box([-0.05, -0.006, -0.01], [0.25, 0.006, 0.0])
+    model = dd.build_model([dd.Block(name="base", shape=base, fixed=True), dd.Block(name="diamond", shape=diamond)], density=1800.0,
+                           supports=dd.Supports(fix_y=True))
+    result = limit_analysis(model)
+    assert result.load_multiplier == 0.0 and math.copysign(1.0, result.load_multiplier) == 1.0
+
+
 def test_a_small_running_bond_wall_solved_by_hand():
     """A wall 2 bricks long (B = 50 mm) and 6 courses high (H = 33 mm) in running bond.
 

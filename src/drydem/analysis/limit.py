@@ -233,8 +233,8 @@ def limit_analysis(model: Model, settings: LimitSettings = LimitSettings(), *,
                 converged = True
                 break
     velocity, angular = _mechanism(model, problem, duals)
-    return LimitResult(
-        load_multiplier=lam, method="non-associative" if settings.non_associative else "associative", status=status,
+    return LimitResult(  # lam + 0.0: a balance on a knife edge solves to -0.0, which reads as 0
+        load_multiplier=lam + 0.0, method="non-associative" if settings.non_associative else "associative", status=status,
         iterations=iterations, converged=converged, history=history, velocity=velocity, angular_velocity=angular,
         normal_force=forces * weight,
     )
