@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import signal
+import stat
 import tempfile
 import threading
 import tomllib
@@ -37,7 +38,8 @@ def writable(path: str | Path) -> Path:
         if path.is_dir():
             raise DrydemError(f"{path}: is a folder; give a file name")
         if not folder.exists():
-            raise DrydemError(f"{path}: the folder {folder} does not exist")
+            link = _missing_link(folder)
+            raise DrydemError(f"{path}: the folder {folder} does not exist" + (f" ({link})" if link else ""))
         if not folder.is_dir():
             raise DrydemError(f"{path}: {folder} is not a folder")
     except OSError as exc:
@@ -75,8 +77,21 @@ def writable_folder(folder: str | Path) -> Path:
         with tempfile.TemporaryFile(dir=folder):
             pass
     except OSError as exc:
-        raise DrydemError(f"{folder}: cannot write results there ({exc.strerror or exc})") from None
+        raise DrydemError(f"{folder}: cannot write results there ({_missing_link(folder) or exc.strerror or exc})") from None
     return folder
+
+
+def _missing_link(path: Path) -> str | None:
+    """"LINK is a link to the missing TARGET" where ``path`` or a folder above it is a link to
+    nothing (a dangling symbolic link, of which the system only says "File exists" or "No such
+    file or directory"), else None."""
+    try:
+        for part in (path, *path.parents):
+            if part.is_symlink() and not part.exists():
+                return f"{part} is a link to the missing {os.readlink(part)}"
+    except OSError:  # a name the system refuses (too long): its own reason is said instead
+        pass
+    return None
 
 
 @contextmanager
@@ -119,11 +134,28 @@ def uninterrupted():
         for number in held:
             signal.raise_signal(number)
 
-def read_text(path: Path, expected: str, *, encoding: str = "utf-8") -> str:
-    """The text of ``path`` (UTF-8 unless ``encoding`` says otherwise); ModelError naming the file
-    if it cannot be read, or if it is not text, then saying what was ``expected`` of it."""
+
+def regular_file(path: Path, expected: str) -> Path:
+    """``path`` if it is a regular file (or a link to one), checked before it is opened; else a
+    ModelError naming it, what it is instead, and what was ``expected`` of it: missing, a folder,
+    or a pipe, socket or device (reading a pipe waits for a writer forever, /dev/zero never ends)."""
     try:
-        return path.read_text(encoding=encoding)
+        mode = Path(path).stat().st_mode
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read the file ({_missing_link(Path(path)) or exc.strerror or exc}); {expected}") from None
+    if stat.S_ISDIR(mode):
+        raise ModelError(f"{path}: is a folder, not a file; {expected}")
+    if not stat.S_ISREG(mode):
+        raise ModelError(f"{path}: not a regular file (a pipe, a socket or a device): drydem reads files only; {expected}")
+    return path
+
+
+def read_text(path: Path, expected: str, *, encoding: str = "utf-8") -> str:
+    """The text of ``path`` (UTF-8 unless ``encoding`` says otherwise) once it is a regular file
+    (:func:`regular_file`); ModelError naming the file if it cannot be read, or if it is not text,
+    then saying what was ``expected`` of it."""
+    try:
+        return regular_file(path, expected).read_text(encoding=encoding)
     except OSError as exc:
         raise ModelError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
     except UnicodeDecodeError as exc:

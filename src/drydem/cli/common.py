@@ -89,6 +89,16 @@ def joint_law_options(command):
     return bundled
 
 
+def out_path(ctx, param, value: str | None) -> Path | None:
+    """--out of every command: None where not given, else its Path; a usage error for an empty
+    or blank one, which the system would read as the current folder (Path("") is ".")."""
+    if value is None:
+        return None
+    if not value.strip():
+        raise click.BadParameter(f"{value!r}: an empty path; give a file or folder name (an empty one would mean the current folder)")
+    return Path(value)
+
+
 def given(option: str) -> bool:
     """Whether the current command's parameter ``option`` (its Python name) was given on the
     command line, not left at its default (an option that applies only with another one is

@@ -5,12 +5,11 @@ from __future__ import annotations
 import sys
 import threading
 import time
-from pathlib import Path
 
 import click
 
 from drydem.errors import DrydemError
-from drydem.cli.common import results_folder, resolve_target, main, threads_option, unit_option
+from drydem.cli.common import out_path, results_folder, resolve_target, main, threads_option, unit_option
 
 
 @main.command()
@@ -20,7 +19,7 @@ from drydem.cli.common import results_folder, resolve_target, main, threads_opti
 @click.option("--tilt-axis", type=click.Choice(["y", "x"]), default="y", show_default=True,
               help="Axis the table tilts about: y, the live load along x (in the plane of a wall along x); "
                    "x, the live load along y (out of that plane; not for in-plane models, held in y).")
-@click.option("--out", type=click.Path(path_type=Path), help="Results folder (default: results/TARGET-limit-TIME).")
+@click.option("--out", type=click.Path(), callback=out_path, help="Results folder (default: results/TARGET-limit-TIME).")
 @click.option("--overwrite", is_flag=True, help="Replace the results of an earlier run in --out (they are kept otherwise).")
 @unit_option
 @threads_option

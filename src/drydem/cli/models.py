@@ -12,7 +12,7 @@ import click
 from drydem.masonry import designs
 from drydem.errors import DrydemError
 from drydem.cli.common import (
-    _factor, IMPERFECTION_OPTIONS, imperfection_options, imperfections_from_options, main, resolve_target, unit_option,
+    _factor, IMPERFECTION_OPTIONS, imperfection_options, imperfections_from_options, main, out_path, resolve_target, unit_option,
 )
 
 if TYPE_CHECKING:
@@ -25,16 +25,18 @@ if TYPE_CHECKING:
 @main.command()
 @click.argument("target")
 @click.option("--settle", is_flag=True, help="Also cycle to equilibrium under vertical gravity and report the settlement.")
-@click.option("--strict", is_flag=True, help="Fail if a wall breaks the competition brief.")
+@click.option("--strict", is_flag=True, help="Fail if a wall breaks the competition brief (a wall only).")
 @unit_option
 def check(target: str, settle: bool, strict: bool, unit: str) -> None:
     """Validate TARGET (a built-in wall, a wall or model file, or a .wrl/.obj/.stl/.json) and print
-    its blocks, contacts and timestep."""
+    its blocks, contacts and timestep; warn (stderr) of movable blocks that touch nothing and of
+    a model with no fixed block, which fall under gravity."""
     from drydem.masonry.brief import brief_violations
     from drydem.analysis.support import unsupported
     from drydem.engine.simulation import Simulation
 
     found = resolve_target(target, unit)
+    _strict_needs_a_wall(strict, found)
     model = found.model
     try:
         sim = Simulation(model)
@@ -60,11 +62,23 @@ def check(target: str, settle: bool, strict: bool, unit: str) -> None:
     if floating:
         click.echo(f"unsupported     {len(floating)} movable blocks touch nothing and will fall under gravity: "
                    + ", ".join(repr(name) for name in floating[:10]) + (", ..." if len(floating) > 10 else ""), err=True)
+    if not model.block_fixed[:, 2].any():  # as a floating block above, a warning: tilt says the model cannot stand
+        click.echo("unsupported     no fixed block (none marked fixed nor held vertically by [supports]): nothing holds the model up "
+                   "under gravity (tilt: cannot stand; limit: unstable); mark a support block fixed = true", err=True)
     if settle:
         _settle(sim)
 
 
+def _strict_needs_a_wall(strict: bool, found: Target) -> None:
+    """--strict checks a wall against the competition brief: a usage error for a TARGET that is
+    not a wall (a model file, a building, a mesh), for which it would be silently ignored."""
+    if strict and found.wall is None:
+        raise click.UsageError(f"--strict checks a wall against the competition brief; {found.path} is not a wall "
+                               "(a built-in wall or a wall file) but a model, building or mesh")
+
+
 def _fail_if_strict(strict: bool, violations: list[str], found: Target) -> None:
+    """Exit 1 if ``strict`` and the wall of ``found`` breaks the brief (``violations``)."""
     if strict and violations:
         raise click.ClickException(f"{found.path}: breaks the competition brief ({len(violations)} violations)")
 
@@ -134,25 +148,29 @@ def _imperfect_drawing(found: Target, imperfections: Imperfections, seed: int, f
 
 @main.command()
 @click.argument("target")
-@click.option("--out", "-o", type=click.Path(dir_okay=False, path_type=Path), help="PNG file (default: TARGET.png here).")
-@click.option("--strict", is_flag=True, help="Fail if a wall breaks the competition brief.")
+@click.option("--out", "-o", type=click.Path(dir_okay=False), callback=out_path, help="PNG file (default: TARGET.png here).")
+@click.option("--overwrite", is_flag=True, help="Replace the file if it exists (else an existing file is kept and the command fails).")
+@click.option("--strict", is_flag=True, help="Fail if a wall breaks the competition brief (a wall only).")
 @unit_option
 @imperfection_options
 @click.option("--exaggerate", type=float, default=1.0, show_default=True, metavar="FACTOR", callback=_factor,
               help="Draw the imperfections' deviations FACTOR times larger (the same draws), so that a 0.1 mm scatter shows.")
-def show(target: str, out: Path | None, strict: bool, unit: str, seed: int, height_sd: float | None, height_distribution: str,
+def show(target: str, out: Path | None, overwrite: bool, strict: bool, unit: str, seed: int, height_sd: float | None, height_distribution: str,
          flatness_sd: float | None, misalignment_sd: float | None, exaggerate: float) -> None:
     """Draw TARGET as built (bricks, half bricks, headers, lintel, voids, the monitored block) to
-    a PNG (or another format matplotlib writes, by the suffix), written whole or not at all.
-    With --height-sd, --flatness-sd or --misalignment-sd, draw a wall's bricks imperfect, drawn
-    from --seed (drydem.masonry.imperfections), their deviations --exaggerate times larger."""
+    a PNG (or another format matplotlib writes, by the suffix), written whole or not at all; an
+    existing file is replaced only with --overwrite (checked before drawing). With --height-sd,
+    --flatness-sd or --misalignment-sd, draw a wall's bricks imperfect, drawn from --seed
+    (drydem.masonry.imperfections), their deviations --exaggerate times larger."""
     from drydem.analysis.tilt import monitored_block
     from drydem.masonry.brief import brief_violations
-    from drydem.files import replaced_atomically, writable
-    from drydem.report.plots import figure_path, layout_figure
+    from drydem.files import replaced_atomically
+    from drydem.report.plots import layout_figure
 
     imperfections = imperfections_from_options(height_sd, height_distribution, flatness_sd, misalignment_sd)
     found = resolve_target(target, unit)
+    _strict_needs_a_wall(strict, found)
+    out = _figure_out(out or Path(f"{found.name}.png"), overwrite)
     model, wall = found.model, found.wall
     title = found.name if wall is None else f"{wall.name} {wall.title}: {wall.layout.void_ratio:.1%} voids"
     voids = wall.layout.void_outlines(wall.brick) if wall is not None else []
@@ -160,10 +178,9 @@ def show(target: str, out: Path | None, strict: bool, unit: str, seed: int, heig
         model, note = _imperfect_drawing(found, imperfections, seed, exaggerate)
         title, voids = f"{title}\n{note}", []  # the voids' outlines are the perfect wall's
     monitored = model.block_name[monitored_block(model)]
-    out = out or Path(f"{found.name}.png")
     kinds = wall.layout.kinds() if wall is not None else None
     try:
-        with replaced_atomically(writable(figure_path(out))) as partial:
+        with replaced_atomically(out) as partial:
             layout_figure(model, partial, kinds=kinds, voids=voids, monitored=monitored, title=title)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
@@ -175,10 +192,24 @@ def show(target: str, out: Path | None, strict: bool, unit: str, seed: int, heig
         _fail_if_strict(strict, violations, found)
 
 
+def _figure_out(out: Path, overwrite: bool) -> Path:
+    """``out`` if a figure can be drawn there: a format matplotlib writes (its suffix), and nothing
+    there yet, or a regular file and ``overwrite`` (drydem.files.replaceable); else exit naming it."""
+    from drydem.files import replaceable
+    from drydem.report.plots import figure_path
+
+    try:
+        return replaceable(figure_path(out), overwrite, other="another --out")
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
+
+
 def _file_name(ctx, param, value: str) -> Path:
-    """OUTPUT as a path, or a usage error if it ends with a separator or in ``.`` or ``..``: it
-    then names a folder (``out.json/``, ``out.json/.``), which Path would silently read as the
-    file ``out.json``."""
+    """OUTPUT as a path, or a usage error if it is empty or blank (Path("") is "."), or if it ends
+    with a separator or in ``.`` or ``..``: it then names a folder (``out.json/``, ``out.json/.``),
+    which Path would silently read as the file ``out.json``."""
+    if not value.strip():
+        raise click.BadParameter(f"{value!r}: an empty path; give a file name")
     if value.endswith(("/", os.sep)) or os.path.basename(value) in (".", ".."):
         raise click.BadParameter(f"{value!r} names a folder (it ends with a separator, . or ..); give a file name")
     return Path(value)

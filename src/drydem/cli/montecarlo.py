@@ -9,7 +9,7 @@ import click
 from drydem.masonry import designs
 from drydem.errors import DrydemError
 from drydem.cli.common import (
-    IMPERFECTION_OPTIONS, imperfection_options, imperfections_from_options, main, resolve_target, results_folder,
+    IMPERFECTION_OPTIONS, imperfection_options, imperfections_from_options, main, out_path, resolve_target, results_folder,
     scheduler_option, signals_interrupt, workers_option,
 )
 from drydem.cli.tilting import TiltOptions, tilt_options
@@ -31,7 +31,7 @@ def _samples(ctx, param, value: int) -> int:
                    "only, so more samples extend a run.")
 @imperfection_options
 @tilt_options(adaptive=True)
-@click.option("--out", type=click.Path(path_type=Path), help="Results folder (default: results/TARGET-montecarlo-TIME).")
+@click.option("--out", type=click.Path(), callback=out_path, help="Results folder (default: results/TARGET-montecarlo-TIME).")
 @click.option("--resume", is_flag=True, help="Go on with the run in --out (same TARGET and options; --samples may grow, never below "
                                               "the samples it holds, which would leave some out of its summary): the samples "
                                               "recorded there are kept, the missing and corrupt ones run.")

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import click
 
 from drydem.errors import DrydemError
-from drydem.cli.common import results_folder, signals_interrupt, resolve_target, joint_law_options, main, threads_option, unit_option
+from drydem.cli.common import out_path, results_folder, signals_interrupt, resolve_target, joint_law_options, main, threads_option, unit_option
 from drydem.cli.tilting import _render
 
 if TYPE_CHECKING:
@@ -76,7 +76,7 @@ class _Restitution(click.ParamType):
 @click.option("--density", type=float, help="Density of every block, kg/m3.")
 @joint_law_options
 @click.option("--monitor", help="Block whose response is recorded (default: the top block nearest the middle).")
-@click.option("--out", type=click.Path(path_type=Path), help="Results folder (default: results/TARGET-TIME).")
+@click.option("--out", type=click.Path(), callback=out_path, help="Results folder (default: results/TARGET-TIME).")
 @click.option("--overwrite", is_flag=True, help="Replace the results of an earlier run in --out (they are kept otherwise).")
 @click.option("--vtk", is_flag=True, help="Write a VTK time series for ParaView (OUT/vtk: blocks and sub-contacts, in model time).")
 @click.option("--save-every", type=click.IntRange(min=1), default=1, show_default=True,

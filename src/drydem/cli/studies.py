@@ -7,12 +7,12 @@ from pathlib import Path
 import click
 
 from drydem.errors import DrydemError
-from drydem.cli.common import signals_interrupt, joint_law_options, main, scheduler_option, workers_option
+from drydem.cli.common import out_path, signals_interrupt, joint_law_options, main, scheduler_option, workers_option
 
 
 @main.command()
 @click.argument("study_file")
-@click.option("--out", type=click.Path(path_type=Path), help="Results folder (default: results/STUDY-NAME).")
+@click.option("--out", type=click.Path(), callback=out_path, help="Results folder (default: results/STUDY-NAME).")
 @workers_option
 @scheduler_option
 @click.option("--retry-failed", is_flag=True, help="Run again the runs recorded as failed.")
@@ -75,7 +75,7 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
 
 @main.command()
 @click.argument("results_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), help="Report folder (default: RESULTS_DIR/report).")
+@click.option("--out", type=click.Path(file_okay=False), callback=out_path, help="Report folder (default: RESULTS_DIR/report).")
 def report(results_dir: Path, out: Path | None) -> None:
     """Write the report of the runs in RESULTS_DIR (Markdown, HTML, PNG figures): a sweep's
     records (RESULTS_DIR/runs) and the folders of `drydem tilt` and `drydem limit` runs (RESULTS_DIR
@@ -104,7 +104,7 @@ def report(results_dir: Path, out: Path | None) -> None:
 @click.option("--ks-ratio", type=float, default=1.0, show_default=True, help="ks = ratio x kn.")
 @click.option("--increment", type=float, default=0.1, show_default=True, help="Tilt step of the (adaptive) runs, deg.")
 @joint_law_options
-@click.option("--out", type=click.Path(path_type=Path), help="The calibration's JSON file (default: RESULTS_DIR/calibration.json).")
+@click.option("--out", type=click.Path(), callback=out_path, help="The calibration's JSON file (default: RESULTS_DIR/calibration.json).")
 @click.option("--overwrite", is_flag=True, help="Replace a finished calibration, or one with other settings, in --out (kept otherwise).")
 @workers_option
 @scheduler_option

@@ -11,7 +11,7 @@ import click
 
 from drydem.errors import DrydemError
 from drydem.model.parameters import CRITERIA
-from drydem.cli.common import CHECKPOINT, given, results_folder, signals_interrupt, resolve_target, joint_law_options, main, threads_option, unit_option
+from drydem.cli.common import CHECKPOINT, given, out_path, results_folder, signals_interrupt, resolve_target, joint_law_options, main, threads_option, unit_option
 
 if TYPE_CHECKING:
     from drydem.io.target import Target
@@ -98,7 +98,7 @@ def tilt_options(*, adaptive: bool):
 @main.command()
 @click.argument("target")
 @tilt_options(adaptive=False)
-@click.option("--out", type=click.Path(path_type=Path), help="Results folder (default: results/TARGET-TIME).")
+@click.option("--out", type=click.Path(), callback=out_path, help="Results folder (default: results/TARGET-TIME).")
 @click.option("--resume", is_flag=True, help="Go on from the checkpoint in --out (same TARGET and options).")
 @click.option("--overwrite", is_flag=True, help="Replace the results of an earlier run in --out (they are kept otherwise).")
 @click.option("--vtk", is_flag=True, help="Write a VTK time series for ParaView (OUT/vtk: blocks and sub-contacts).")
@@ -245,7 +245,7 @@ def _fps(ctx, param, value):
 
 @main.command()
 @click.argument("result_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
-@click.option("--out", "-o", type=click.Path(dir_okay=False, path_type=Path), help="Video file, .mp4 or .gif (default: RESULT_DIR/collapse.mp4).")
+@click.option("--out", "-o", type=click.Path(dir_okay=False), callback=out_path, help="Video file, .mp4 or .gif (default: RESULT_DIR/collapse.mp4).")
 @click.option("--fps", type=float, default=8.0, show_default=True, callback=_fps,
               help="Frames per second, 0.1 to 100 (10 s a frame to the fastest a GIF can show: it counts in hundredths of a second).")
 @click.option("--overwrite", is_flag=True, help="Replace the video if it exists (else an existing file is kept and the command fails).")
@@ -258,13 +258,13 @@ def animate(result_dir: Path, out: Path | None, fps: float, overwrite: bool) -> 
 
 def _render(folder: Path, path: Path, *, fps: float, overwrite: bool = True) -> None:
     """Render the series in ``folder`` to ``path`` (drydem.report.animation.render_video) and say
-    where; exit with the message of a DrydemError. ``overwrite`` by default: tilt --video and shake
-    --video render into the results folder they own (new, resumed, or emptied by --overwrite);
-    animate passes its --overwrite."""
+    where, with a note on stderr of frames on disk the series does not list; exit with the message
+    of a DrydemError. ``overwrite`` by default: tilt --video and shake --video render into the
+    results folder they own (new, resumed, or emptied by --overwrite); animate passes its --overwrite."""
     from drydem.report.animation import render_video
 
     try:
-        written = render_video(folder, path, fps=fps, overwrite=overwrite)
+        written = render_video(folder, path, fps=fps, overwrite=overwrite, note=lambda line: click.echo(f"note: {line}", err=True))
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     click.echo(f"video           {written}")

@@ -25,7 +25,7 @@ import numpy as np
 
 from drydem import __version__
 from drydem.errors import DrydemError
-from drydem.files import replaced_atomically, writable_folder
+from drydem.files import replaceable, replaced_atomically, writable_folder
 
 if TYPE_CHECKING:  # annotations only: importing the limit analysis takes scipy.optimize, a third of a second
     from drydem.analysis.limit import LimitResult, LimitSettings
@@ -41,10 +41,11 @@ HISTORY_COLUMNS = ("time_s", "ground_acc_x_m_s2", "ux_m", "uz_m", "rotation_rad"
 class PushoverWriter:
     """Writes ``pushover.csv`` in ``folder`` anew and appends equilibrium states to it as they
     are found (a resumed analysis first hands it those of its checkpoint, so the file always
-    matches the checkpoint, whatever a kill left in it)."""
+    matches the checkpoint, whatever a kill left in it). A DrydemError if a link, a pipe or a
+    device is there (drydem.files.replaceable): a link would be written through, a pipe waited on."""
 
     def __init__(self, folder: Path):
-        self.path = folder / "pushover.csv"
+        self.path = replaceable(folder / "pushover.csv", True, option="--resume")
         with self.path.open("w", newline="") as f:
             csv.writer(f).writerow(PUSHOVER_COLUMNS)
 

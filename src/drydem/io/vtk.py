@@ -18,6 +18,8 @@ Series: :class:`VtkSeries` (a tilting analysis' frames, indexed by frame number 
 from __future__ import annotations
 
 import csv
+import io
+import os
 from itertools import groupby
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
@@ -26,7 +28,7 @@ import numpy as np
 
 from drydem.engine.contacts import SubContacts, world_points
 from drydem.errors import DrydemError
-from drydem.files import replaced_atomically
+from drydem.files import read_text, replaced_atomically
 from drydem.model.assembly import Model
 from drydem.model.parameters import Range
 from drydem.model.rotation import matrices
@@ -85,6 +87,8 @@ def write_contacts_vtu(model: Model, path: str | Path, state: State, sub: SubCon
     return Path(path)
 
 
+#: the kinds of a tilting series' frames in its ``frames.csv`` (drydem.analysis.tilt.Frame)
+FRAME_KINDS = ("equilibrium", "past collapse")
 #: the load's directions in a series' ``frames.csv``, by index (0: x, 1: y)
 LOAD_AXES = ("x", "y")
 LOAD_DIRECTION = Range(0, len(LOAD_AXES) - 1, integer=True)
@@ -175,20 +179,30 @@ def _write_indexes(folder: Path, count: int, header: tuple[str, ...], rows: list
         writer.writerows(rows)
 
 
+def frames_csv_rows(index: Path) -> list[dict]:
+    """The rows of a series' ``frames.csv`` (each a dict by column); a DrydemError naming it if it
+    is not a regular file (drydem.files.read_text: a pipe there is not waited on) or not CSV text
+    (with the line)."""
+    reader = csv.DictReader(io.StringIO(read_text(index, "frames.csv of drydem tilt or shake --vtk is CSV text"), newline=""))
+    try:
+        return list(reader)
+    except csv.Error as exc:
+        raise DrydemError(f"{index}: line {reader.line_num}: not CSV ({exc})") from None
+
+
 def _equilibrium_rows(index: Path) -> list[tuple[int, str, float, float]]:
     """The equilibrium frames listed in a series' ``frames.csv`` (none if it is missing);
-    DrydemError naming the file and line if it is not one drydem wrote."""
-    if not index.is_file():
+    DrydemError naming the file and line if it is not one drydem wrote (:func:`frames_csv_rows`)."""
+    if not os.path.lexists(index):
         return []
     rows = []
-    with index.open(newline="") as f:
-        for line, row in enumerate(csv.DictReader(f), start=2):
-            try:
-                frame = (int(row["frame"]), row["kind"], float(row["tilt_deg"]), float(row["ux_m"]))
-            except (KeyError, TypeError, ValueError) as exc:
-                raise DrydemError(f"{index}: line {line}: not a frame of drydem tilt --vtk ({exc!r})") from None
-            if frame[1] == "equilibrium" and frame[0] == len(rows):
-                rows.append(frame)
+    for line, row in enumerate(frames_csv_rows(index), start=2):
+        try:
+            frame = (int(row["frame"]), row["kind"], float(row["tilt_deg"]), float(row["ux_m"]))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise DrydemError(f"{index}: line {line}: not a frame of drydem tilt --vtk ({exc!r})") from None
+        if frame[1] == "equilibrium" and frame[0] == len(rows):
+            rows.append(frame)
     return rows
 
 

@@ -12,22 +12,27 @@ draw_faces_3d), so pictures and videos agree. MP4 through imageio-ffmpeg (the ff
 ships in that package); GIF (Pillow) when MP4 cannot be written or is not asked for. The video file is
 checked before any frame is drawn (an existing one is kept unless it is to be replaced), and written
 whole or not at all (drydem.files). A series is read whole before any drawing: a file that is not one
-drydem writes (not text, a non-finite number, no block left in the analysis) is named, with its line.
+drydem writes (not a regular file, not text, a row of an unknown kind or load direction, a truncated
+frame, a non-finite number, no block left in the analysis, a frame of another model: another block
+count) is named, with its line. Frame files on disk that ``frames.csv`` does not list are left out,
+with a note: not refused, since a run stopped between a frame and its index, or resumed and ended
+sooner, leaves some.
 """
 
 from __future__ import annotations
 
-import csv
-import io
 import math
+import os
+import re
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from drydem.errors import DrydemError
-from drydem.files import read_text, replaceable, replaced_atomically
-from drydem.io.vtk import LOAD_AXES
+from drydem.files import regular_file, replaceable, replaced_atomically
+from drydem.io.vtk import FRAME_KINDS, LOAD_AXES, frames_csv_rows
 from drydem.report.plots import draw_displacements, draw_faces_3d, frame_3d, new_figure, one_deep, xz_outline
 
 #: frame size: 1280 x 720 pixels (a multiple of 16, as H.264 wants)
@@ -45,58 +50,98 @@ FRAME_FIELDS = ("active", "displacement_magnitude", "fixed")
 class VideoFrame:
     """One frame: the blocks still in the analysis (each the world vertices of its faces, m),
     their displacement magnitudes (mm), the caption, which of the blocks may move (not fixed),
-    and the load's direction (0: x, 1: y)."""
+    the load's direction (0: x, 1: y) and how many blocks the frame's file holds, in the analysis
+    or not (every frame of a series holds its model's blocks)."""
 
     blocks: list[list[np.ndarray]]
     magnitude_mm: np.ndarray
     caption: str
     moving: np.ndarray
     load_direction: int = 0
+    n_blocks: int = 0
 
 
-def series_frames(folder: Path) -> list[VideoFrame]:
-    """The frames of the VTK series in ``folder`` (``frames.csv`` and ``blocks_NNNN.vtu``); a
-    DrydemError naming the file (and the line of ``frames.csv``) that is not one drydem writes."""
+#: what a frame's file must be, said when it is not
+VTU_EXPECTED = "a frame of drydem tilt or shake --vtk is a blocks_NNNN.vtu file that frames.csv lists"
+#: a frame's file on disk, listed in frames.csv or not
+FRAME_FILE = re.compile(r"blocks_\d{4,}\.vtu")
+
+
+def series_frames(folder: Path, *, note: Callable[[str], None] | None = None) -> list[VideoFrame]:
+    """The frames of the VTK series in ``folder``: those ``frames.csv`` lists, each from its
+    ``blocks_NNNN.vtu``. A DrydemError names the file (and the line of ``frames.csv``) that is not
+    one drydem writes (each read only once it is a regular file: drydem.files.regular_file), and a
+    frame whose block count differs from the first frame's (a file of another model). Frame files
+    on disk that ``frames.csv`` does not list are left out, said to ``note`` (one line): a run
+    stopped between a frame and its index, or resumed and ended sooner, leaves them."""
     folder = Path(folder)
     index = folder / "frames.csv"
-    if not index.is_file():
+    if not os.path.lexists(index):
         raise DrydemError(f"{folder}: no frames.csv: not a VTK series of drydem tilt or shake --vtk")
-    rows = _index_rows(index)
+    rows = frames_csv_rows(index)
     if not rows:
         raise DrydemError(f"{index}: no frames")
-    frames = []
-    for line, row in enumerate(rows, start=2):
-        try:
-            file = folder / f"blocks_{int(row['frame']):04d}.vtu"
-            load_direction = _load_direction(row)
-            caption = _caption(row, load_direction)
-        except (KeyError, TypeError, ValueError) as exc:
-            raise DrydemError(f"{index}: line {line}: not a frame of drydem tilt or shake --vtk ({exc!r})") from None
-        frames.append(_read_frame(file, caption, load_direction))
+    listed = [_listed_frame(index, line, row) for line, row in enumerate(rows, start=2)]
+    unlisted = _unlisted(folder, listed)
+    if unlisted and note is not None:
+        note(f"{folder}: {len(unlisted)} frames on disk are not listed in frames.csv ({', '.join(unlisted[:3])}"
+             f"{', ...' if len(unlisted) > 3 else ''}): left out of the video")
+    return _same_model([_read_frame(file, caption, load_direction) for file, caption, load_direction in listed], listed)
+
+
+def _unlisted(folder: Path, listed: list[tuple[Path, str, int]]) -> list[str]:
+    """The names of the frame files (:data:`FRAME_FILE`) in ``folder`` that are not ``listed``, sorted."""
+    on_disk = {path.name for path in folder.glob("blocks_*.vtu") if FRAME_FILE.fullmatch(path.name)}
+    return sorted(on_disk - {file.name for file, _, _ in listed})
+
+
+def _listed_frame(index: Path, line: int, row: dict) -> tuple[Path, str, int]:
+    """A row of ``frames.csv`` (at ``line``): its frame's file, caption and load direction; a
+    DrydemError naming the file and line if the row is not one drydem writes."""
+    try:
+        frame = int(row["frame"])
+        if frame < 0:
+            raise ValueError(f"frame {frame}: must be an integer >= 0")
+        load_direction = _load_direction(row)
+        return index.parent / f"blocks_{frame:04d}.vtu", _caption(row, load_direction), load_direction
+    except (KeyError, TypeError, ValueError) as exc:
+        raise DrydemError(f"{index}: line {line}: not a frame of drydem tilt or shake --vtk ({exc!r})") from None
+
+
+def _same_model(frames: list[VideoFrame], listed: list[tuple[Path, str, int]]) -> list[VideoFrame]:
+    """``frames`` if each holds as many blocks as the first; else a DrydemError naming the first
+    frame's file (of ``listed``) that does not: a file of another model."""
+    for frame, (file, _, _) in zip(frames, listed):
+        if frame.n_blocks != frames[0].n_blocks:
+            raise DrydemError(f"{file}: {frame.n_blocks} blocks, but the series' first frame {listed[0][0].name} has "
+                              f"{frames[0].n_blocks}: every frame of a series holds the same model's blocks (a file of another model?)")
     return frames
 
 
-def _index_rows(index: Path) -> list[dict]:
-    """The rows of ``frames.csv``; a DrydemError naming it if it is not CSV text (with the line)."""
-    reader = csv.DictReader(io.StringIO(read_text(index, "frames.csv of drydem tilt or shake --vtk is CSV text"), newline=""))
+def _read_mesh(file: Path):
+    """The meshio mesh in ``file`` once it is a regular file, and its fields of :data:`FRAME_FIELDS`;
+    a DrydemError naming it if it is not a readable VTU file (meshio's reader called directly:
+    meshio.read prints its reason and exits on a file it cannot parse) or lacks a field."""
+    from meshio.vtu import read as read_vtu
+
+    regular_file(file, VTU_EXPECTED)
     try:
-        return list(reader)
-    except csv.Error as exc:
-        raise DrydemError(f"{index}: line {reader.line_num}: not CSV ({exc})") from None
+        mesh = read_vtu(str(file))
+    except Exception as exc:  # ReadError (often without a reason), an XML ParseError, a zlib or base64 error, ...
+        raise DrydemError(f"{file}: not a readable VTU file (truncated, or not a frame drydem writes)"
+                          + (f": {exc}" if str(exc) else "")) from None
+    try:
+        return mesh, {name: np.concatenate(mesh.cell_data[name]) for name in FRAME_FIELDS}
+    except (KeyError, TypeError, ValueError) as exc:  # a foreign file lacks the fields
+        raise DrydemError(f"{file}: cannot read the frame: {exc!r}") from None
 
 
 def _read_frame(file: Path, caption: str, load_direction: int) -> VideoFrame:
-    """The frame in ``file`` (a ``blocks_NNNN.vtu``): its blocks still in the analysis (``active``).
-    A DrydemError naming the file if it cannot be read or lacks a field of :data:`FRAME_FIELDS`,
-    if a point or a displacement magnitude is not a finite number (a magnitude also >= 0), or if no
-    block is left in the analysis (nothing to draw)."""
-    import meshio
-
-    try:
-        mesh = meshio.read(file)
-        fields = {name: np.concatenate(mesh.cell_data[name]) for name in FRAME_FIELDS}
-    except Exception as exc:  # meshio raises many types (ReadError, ...); a foreign file lacks the fields (KeyError)
-        raise DrydemError(f"{file}: cannot read the frame: {exc!r}") from None
+    """The frame in ``file`` (a ``blocks_NNNN.vtu``, :func:`_read_mesh`): its blocks still in the
+    analysis (``active``). A DrydemError naming the file if a point or a displacement magnitude is
+    not a finite number (a magnitude also >= 0), or if no block is left in the analysis (nothing
+    to draw)."""
+    mesh, fields = _read_mesh(file)
     if not np.isfinite(mesh.points).all():
         raise DrydemError(f"{file}: points: not all finite numbers (NaN or inf): not a frame drydem writes")
     magnitude = fields["displacement_magnitude"] * 1e3
@@ -110,7 +155,7 @@ def _read_frame(file: Path, caption: str, load_direction: int) -> VideoFrame:
         blocks = [[mesh.points[face] for face in faces] for faces, on in zip(cells, active, strict=True) if on]
     except (IndexError, ValueError) as exc:  # a face naming a point the file lacks; fields and cells of other lengths
         raise DrydemError(f"{file}: cannot read the frame: {exc!r}") from None
-    return VideoFrame(blocks, magnitude[active], caption, ~fixed[active], load_direction)
+    return VideoFrame(blocks, magnitude[active], caption, ~fixed[active], load_direction, len(cells))
 
 
 def _load_direction(row: dict) -> int:
@@ -125,9 +170,12 @@ def _load_direction(row: dict) -> int:
 def _caption(row: dict, load_direction: int) -> str:
     """A frame's caption from its row of ``frames.csv``: a shaking-table frame (a ``time_s``
     column) gives the model time and the monitored ux, a tilting one its kind, tilt and the
-    monitored displacement along the load (``ux_m``: along y when tilting about x)."""
+    monitored displacement along the load (``ux_m``: along y when tilting about x); a
+    ValueError for a kind not of :data:`drydem.io.vtk.FRAME_KINDS`."""
     if row.get("time_s") is not None:
         return f"t = {_finite(row, 'time_s'):.3f} s, monitored ux {_finite(row, 'ux_m') * 1e3:.2f} mm"
+    if row["kind"] not in FRAME_KINDS:
+        raise ValueError(f"kind {row['kind']!r}: must be one of {', '.join(map(repr, FRAME_KINDS))}")
     along = f"monitored u{LOAD_AXES[load_direction]} {_finite(row, 'ux_m') * 1e3:.2f} mm"
     return f"{row['kind']}: tilt {_finite(row, 'tilt_deg'):.2f} deg, {along}"
 
@@ -161,17 +209,19 @@ def video_path(path: Path, *, overwrite: bool = False) -> Path:
     return replaceable(path, overwrite, other="another --out")
 
 
-def render_video(folder: Path, path: Path, *, fps: float = 8.0, overwrite: bool = False) -> Path:
+def render_video(folder: Path, path: Path, *, fps: float = 8.0, overwrite: bool = False,
+                 note: Callable[[str], None] | None = None) -> Path:
     """Render the VTK series in ``folder`` to ``path`` (.mp4 or .gif) at ``fps`` frames per second
     (:func:`check_fps`); an .mp4 that ffmpeg cannot write falls back to a .gif beside it. An
     existing video (the .gif of the fall-back too) is replaced only if ``overwrite``, else refused
-    (:func:`video_path`; ``path`` before any frame is drawn). Returns the file written."""
+    (:func:`video_path`; ``path`` before any frame is drawn). Frames on disk that the series does
+    not list are said to ``note`` (:func:`series_frames`). Returns the file written."""
     import imageio.v2 as imageio
     from matplotlib.colors import LogNorm
 
     check_fps(fps)
     path = video_path(path, overwrite=overwrite)
-    frames = series_frames(folder)
+    frames = series_frames(folder, note=note)
     largest = max(float(f.magnitude_mm.max(initial=0.0)) for f in frames) or 1.0
     norm = LogNorm(largest * 1e-3, largest)  # equilibria (mm) and collapse (dm) on one scale
     points = np.vstack([face for frame in frames for block in frame.blocks for face in block])

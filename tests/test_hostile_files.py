@@ -1,0 +1,266 @@
+"""Files that are not what drydem expects, and output paths that would lose a file or mean
+another: a pipe where a frame or frames.csv should be (read, it would never end), a series
+mixed with another model's frames or cut short, a truncated frame, an empty or dangling --out,
+show's --overwrite and --strict, and a model with nothing fixed to stand on."""
+
+import os
+import signal
+import stat
+from contextlib import contextmanager
+
+import pytest
+from click.testing import CliRunner
+
+import drydem as dd
+from drydem.cli import main
+from drydem.errors import DrydemError
+from drydem.io.model_file import save_model
+from drydem.io.vtk import write_vtu
+from conftest import layout_blocks
+
+HEADER = "frame,kind,tilt_deg,ux_m,load_direction"
+
+#: two paper bricks stacked, neither fixed: nothing holds them up
+FLOATING = """[joint]
+kn = 3e7
+ks = 3e7
+friction = 0.5
+[supports]
+fix_y = true
+[[block]]
+name = "b1"
+box = { min = [0, -0.006, 0], max = [0.025, 0.006, 0.0055] }
+[[block]]
+name = "b2"
+box = { min = [0, -0.006, 0.0055], max = [0.025, 0.006, 0.011] }
+"""
+
+
+def wall_model(courses: str = "BB\n") -> dd.Model:
+    return dd.build_model(layout_blocks(courses), density=1800.0, supports=dd.Supports(fix_y=True))
+
+
+@pytest.fixture(scope="module")
+def wall() -> dd.Model:
+    return wall_model()
+
+
+def saved(model: dd.Model, path):
+    """``path``, where ``model`` is saved as a model file."""
+    save_model(model, path)
+    return path
+
+
+def series(folder, model, count=3, rows=None):
+    """``folder`` holding a tilting series of ``count`` frames of ``model`` at rest, listed by
+    ``rows`` of frames.csv (default: each frame an equilibrium, 1 deg apart)."""
+    folder.mkdir()
+    for k in range(count):
+        write_vtu(model, folder / f"blocks_{k:04d}.vtu")
+    rows = [f"{k},equilibrium,{k:.6f},0,x" for k in range(count)] if rows is None else rows
+    (folder / "frames.csv").write_text("\n".join([HEADER, *rows]) + "\n")
+    return folder
+
+
+@contextmanager
+def within(seconds: int = 60):
+    """Fail rather than hang if the block runs longer than ``seconds`` (a pipe opened for reading
+    waits for a writer forever)."""
+    def expired(number, frame):
+        raise TimeoutError(f"still running after {seconds} s: waiting on a pipe?")
+
+    previous = signal.signal(signal.SIGALRM, expired)
+    signal.alarm(seconds)
+    try:
+        yield
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def invoke(*args):
+    with within():
+        return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def refused(result, *messages, code=1):
+    """Exit ``code`` through click (no traceback), each of ``messages`` said."""
+    assert result.exit_code == code and isinstance(result.exception, SystemExit), result.output
+    assert "Traceback" not in result.output
+    for message in messages:
+        assert message in result.output, result.output
+    return result
+
+
+def test_animate_refuses_a_frame_file_that_is_a_pipe_without_waiting_on_it(wall, tmp_path):
+    folder = series(tmp_path / "vtk", wall)
+    (folder / "blocks_0001.vtu").unlink()
+    os.mkfifo(folder / "blocks_0001.vtu")
+    refused(invoke("animate", folder, "--out", tmp_path / "v.gif"),
+            f"{folder / 'blocks_0001.vtu'}: not a regular file (a pipe, a socket or a device): drydem reads files only")
+    assert not (tmp_path / "v.gif").exists()
+
+
+def test_animate_refuses_a_frames_csv_that_is_a_pipe_without_waiting_on_it(wall, tmp_path):
+    folder = series(tmp_path / "vtk", wall)
+    (folder / "frames.csv").unlink()
+    os.mkfifo(folder / "frames.csv")
+    refused(invoke("animate", folder, "--out", tmp_path / "v.gif"), f"{folder / 'frames.csv'}: not a regular file")
+
+
+def test_a_resumed_series_refuses_a_frames_csv_that_is_a_pipe(wall, tmp_path):
+    from drydem.io.vtk import VtkSeries
+
+    (tmp_path / "vtk").mkdir()
+    os.mkfifo(tmp_path / "vtk" / "frames.csv")
+    with within(), pytest.raises(DrydemError, match="frames.csv: not a regular file"):
+        VtkSeries(tmp_path / "vtk", wall, resume=True)
+    assert stat.S_ISFIFO(os.lstat(tmp_path / "vtk" / "frames.csv").st_mode)
+
+
+def test_a_resumed_run_refuses_a_pushover_csv_that_is_a_pipe(tmp_path):
+    from drydem.io.results import PushoverWriter
+
+    os.mkfifo(tmp_path / "pushover.csv")
+    with within(), pytest.raises(DrydemError, match=r"pushover.csv: exists and is not a regular file \(a link, a pipe or a device\): "
+                                                    r"--resume replaces files only"):
+        PushoverWriter(tmp_path)
+
+
+@pytest.mark.parametrize("make, reason", [
+    (os.mkfifo, "not a regular file (a pipe, a socket or a device): drydem reads files only"),
+    (os.mkdir, "is a folder, not a file"),
+    (lambda path: None, "cannot read the file (No such file or directory)"),
+    (lambda path: path.symlink_to(path.with_name("gone")), "cannot read the file ({path} is a link to the missing {tmp}/gone)"),
+], ids=["pipe", "folder", "missing", "dangling-link"])
+def test_read_text_reads_only_a_regular_file(tmp_path, make, reason):
+    from drydem.files import read_text
+
+    path = tmp_path / "frames.csv"
+    make(path)
+    with within(), pytest.raises(DrydemError) as refusal:
+        read_text(path, "CSV text")
+    assert str(refusal.value) == f"{path}: {reason.format(path=path, tmp=tmp_path)}; CSV text"
+
+
+def test_animate_refuses_a_frame_of_another_model(wall, tmp_path):
+    folder = series(tmp_path / "vtk", wall)
+    write_vtu(wall_model("BB\nBB\n"), folder / "blocks_0002.vtu")
+    refused(invoke("animate", folder, "--out", tmp_path / "v.gif"),
+            f"{folder / 'blocks_0002.vtu'}: 5 blocks, but the series' first frame blocks_0000.vtu has 3")
+    assert not (tmp_path / "v.gif").exists()
+
+
+@pytest.mark.parametrize("row, message", [
+    ("1,bogus,1.000000,0,x", "ValueError(\"kind 'bogus': must be one of 'equilibrium', 'past collapse'\")"),
+    ("1,equilibrium,1.000000,0,z", "ValueError(\"load_direction 'z': must be one of x, y\")"),
+    ("-1,equilibrium,1.000000,0,x", "ValueError('frame -1: must be an integer >= 0')"),
+], ids=["kind", "load-direction", "frame-number"])
+def test_animate_refuses_a_row_of_frames_csv_not_as_drydem_writes_it(wall, tmp_path, row, message):
+    folder = series(tmp_path / "vtk", wall, count=2, rows=["0,equilibrium,0.000000,0,x", row])
+    refused(invoke("animate", folder, "--out", tmp_path / "v.gif"),
+            f"{folder / 'frames.csv'}: line 3: not a frame of drydem tilt or shake --vtk ({message})")
+
+
+def test_animate_refuses_a_shaking_row_loaded_along_z(wall, tmp_path):
+    folder = tmp_path / "vtk"
+    folder.mkdir()
+    write_vtu(wall, folder / "blocks_0000.vtu")
+    (folder / "frames.csv").write_text("frame,time_s,ux_m,load_direction\n0,0,0,z\n")
+    refused(invoke("animate", folder, "--out", tmp_path / "v.gif"), "line 2: not a frame", "load_direction 'z': must be one of x, y")
+
+
+def test_animate_notes_the_frames_on_disk_that_frames_csv_does_not_list(wall, tmp_path):
+    """A frames.csv cut short is drawn as it stands, with a note naming the frames left out (a
+    run stopped between a frame and its index, or resumed and ending sooner, leaves such files)."""
+    import imageio.v2 as imageio
+
+    folder = series(tmp_path / "vtk", wall, count=6, rows=["0,equilibrium,0.000000,0,x", "1,equilibrium,1.000000,0,x"])
+    result = invoke("animate", folder, "--out", tmp_path / "v.gif")
+    assert result.exit_code == 0, result.output
+    assert (f"note: {folder}: 4 frames on disk are not listed in frames.csv (blocks_0002.vtu, blocks_0003.vtu, "
+            "blocks_0004.vtu, ...): left out of the video") in result.stderr
+    assert len(imageio.mimread(tmp_path / "v.gif")) == 2
+
+
+def test_animate_names_a_truncated_frame_and_prints_nothing_else(wall, tmp_path):
+    folder = series(tmp_path / "vtk", wall)
+    whole = (folder / "blocks_0001.vtu").read_bytes()
+    (folder / "blocks_0001.vtu").write_bytes(whole[:300])
+    result = refused(invoke("animate", folder, "--out", tmp_path / "v.gif"),
+                     f"{folder / 'blocks_0001.vtu'}: not a readable VTU file (truncated, or not a frame drydem writes)")
+    assert result.stdout == ""  # meshio.read would print its reason, an empty line, to stdout
+
+
+def test_show_keeps_an_existing_file_unless_told_to_overwrite_it(wall, tmp_path, monkeypatch):
+    from drydem.report import plots
+
+    target = saved(wall, tmp_path / "wall.toml")
+    drawn, draw = [], plots.layout_figure
+    monkeypatch.setattr(plots, "layout_figure", lambda *args, **kwargs: drawn.append(1) or draw(*args, **kwargs))
+    out = tmp_path / "wall.png"
+    out.write_bytes(b"an earlier figure")
+    refused(invoke("show", target, "-o", out), f"{out}: exists; pass --overwrite to replace it, or another --out")
+    assert out.read_bytes() == b"an earlier figure" and not drawn  # refused before drawing
+    assert invoke("show", target, "-o", out, "--overwrite").exit_code == 0
+    assert out.read_bytes().startswith(b"\x89PNG") and len(drawn) == 1
+    pipe = tmp_path / "pipe.png"
+    os.mkfifo(pipe)
+    refused(invoke("show", target, "-o", pipe), f"{pipe}: exists; pass --overwrite")
+    refused(invoke("show", target, "-o", pipe, "--overwrite"),
+            f"{pipe}: exists and is not a regular file (a link, a pipe or a device): --overwrite replaces files only")
+    assert stat.S_ISFIFO(os.lstat(pipe).st_mode) and len(drawn) == 1
+
+
+@pytest.mark.parametrize("command", ["show", "check"])
+def test_strict_is_refused_for_a_target_that_is_not_a_wall(wall, tmp_path, monkeypatch, command):
+    """--strict checks a wall against the competition brief: on a model file it would be ignored."""
+    monkeypatch.chdir(tmp_path)
+    target = saved(wall, tmp_path / "wall.toml")
+    refused(invoke(command, target, "--strict"), f"--strict checks a wall against the competition brief; {target} is not a wall", code=2)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["wall.toml"]
+    assert invoke(command, "WD2", "--strict", *(["-o", tmp_path / "wd2.png"] if command == "show" else [])).exit_code == 0
+
+
+def commands_with_out() -> list[str]:
+    return sorted(name for name, command in main.commands.items() if any(p.name == "out" for p in command.params))
+
+
+def test_the_commands_with_an_out_option_are_those_expected():
+    assert commands_with_out() == ["animate", "calibrate", "limit", "montecarlo", "report", "shake", "show", "sweep", "tilt"]
+
+
+@pytest.mark.parametrize("command", commands_with_out())
+@pytest.mark.parametrize("blank", ["", " "])
+def test_an_empty_out_is_refused_not_read_as_the_current_folder(tmp_path, monkeypatch, command, blank):
+    monkeypatch.chdir(tmp_path)
+    refused(invoke(command, "--out", blank), "Invalid value for '--out'", f"{blank!r}: an empty path; give a file or folder name", code=2)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_empty_export_output_is_refused(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    refused(invoke("export", "WD1", ""), "Invalid value for 'OUTPUT': '': an empty path; give a file name", code=2)
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("command, out, message", [
+    ("limit", "gone", "{tmp}/gone: cannot write results there ({tmp}/gone is a link to the missing {tmp}/nowhere)"),
+    ("tilt", "gone/run", "{tmp}/gone/run: cannot write results there ({tmp}/gone is a link to the missing {tmp}/nowhere)"),
+    ("show", "gone/wall.png", "{tmp}/gone/wall.png: the folder {tmp}/gone does not exist ({tmp}/gone is a link to the missing {tmp}/nowhere)"),
+])
+def test_an_out_through_a_link_to_a_missing_folder_says_so(wall, tmp_path, command, out, message):
+    target = saved(wall, tmp_path / "wall.toml")
+    (tmp_path / "gone").symlink_to(tmp_path / "nowhere")
+    refused(invoke(command, target, "--out", tmp_path / out), message.format(tmp=tmp_path))
+    assert not (tmp_path / "nowhere").exists()
+
+
+def test_check_warns_of_a_model_with_no_fixed_block(wall, tmp_path):
+    path = tmp_path / "floating.toml"
+    path.write_text(FLOATING)
+    result = invoke("check", path)
+    assert result.exit_code == 0, result.output
+    assert "unsupported     no fixed block" in result.stderr and "nothing holds the model up" in result.stderr
+    result = invoke("check", saved(wall, tmp_path / "wall.toml"))
+    assert result.exit_code == 0 and "no fixed block" not in result.output
