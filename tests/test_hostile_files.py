@@ -264,3 +264,27 @@ def test_check_warns_of_a_model_with_no_fixed_block(wall, tmp_path):
     assert "unsupported     no fixed block" in result.stderr and "nothing holds the model up" in result.stderr
     result = invoke("check", saved(wall, tmp_path / "wall.toml"))
     assert result.exit_code == 0 and "no fixed block" not in result.output
+
+
+def test_report_and_a_resumed_montecarlo_name_a_record_that_is_a_pipe_without_waiting_on_it(tmp_path):
+    """A sweep's record and a Monte Carlo summary that are pipes: named (not regular files), never
+    opened; a folder whose summary.json is a pipe is no run folder (skipped, not waited on)."""
+    from drydem.parametric.montecarlo import MonteCarloError, MonteCarloSettings, check_resumable
+    from drydem.analysis.tilt import TiltSettings
+    from drydem.masonry.imperfections import Imperfections
+    from drydem.io.target import load_target
+
+    (tmp_path / "runs").mkdir()
+    os.mkfifo(tmp_path / "runs" / "x.json")
+    (tmp_path / "run").mkdir()
+    os.mkfifo(tmp_path / "run" / "summary.json")
+    with within():
+        result = CliRunner().invoke(main, ["report", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    assert f"{tmp_path / 'runs' / 'x.json'}: not a regular file (a pipe, a socket or a device)" in result.output
+    (tmp_path / "mc").mkdir()
+    os.mkfifo(tmp_path / "mc" / "summary.json")
+    wall = load_target("WD1").wall
+    with within(), pytest.raises(MonteCarloError, match="not the summary of a drydem montecarlo run"):
+        check_resumable(tmp_path / "mc", MonteCarloSettings(samples=2, seed=0, imperfections=Imperfections(height_sd_mm=0.1),
+                                                            tilt=TiltSettings()), wall)

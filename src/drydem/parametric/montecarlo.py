@@ -47,7 +47,8 @@ import numpy as np
 from drydem import __version__
 from drydem.analysis.drift import DLS_DRIFT
 from drydem.analysis.tilt import TiltSettings, tilt_analysis
-from drydem.errors import DrydemError
+from drydem.errors import DrydemError, ModelError
+from drydem.files import regular_file
 from drydem.io.results import PushoverWriter, tilt_summary, write_summary
 from drydem.masonry.imperfections import Imperfections, imperfect_model
 from drydem.masonry.walls import Wall
@@ -173,7 +174,7 @@ def read_sample(folder: Path, settings: MonteCarloSettings, index: int) -> dict:
     lacks a key, or is not that of this sample (another index, seed or imperfections)."""
     path = sample_folder(folder, index) / "summary.json"
     try:
-        summary = json.loads(path.read_text(encoding="utf-8"))
+        summary = json.loads(regular_file(path, "a sample's record").read_text(encoding="utf-8"))  # a pipe would hang
         sample = summary["sample"]
         expected = {"index": index, "seed": sample_seed(settings.seed, index), "imperfections": asdict(settings.imperfections)}
         wrong = [key for key, value in expected.items() if sample[key] != json.loads(json.dumps(value))]
@@ -182,6 +183,8 @@ def read_sample(folder: Path, settings: MonteCarloSettings, index: int) -> dict:
         if sample["status"] == "ok" and not (path.parent / "pushover.csv").is_file():
             raise MonteCarloError(f"{path.parent}: no pushover.csv")
         return sample_entry(summary)
+    except ModelError as exc:
+        raise MonteCarloError(str(exc)) from None
     except OSError as exc:
         raise MonteCarloError(f"{path}: cannot read the record ({exc.strerror})") from None
     except (ValueError, TypeError, KeyError) as exc:
@@ -244,8 +247,8 @@ def check_resumable(folder: Path, settings: MonteCarloSettings, wall: Wall) -> N
     :func:`check_samples_kept`), naming those that differ."""
     path = Path(folder) / "summary.json"
     try:
-        recorded = json.loads(path.read_text(encoding="utf-8"))["settings"]
-    except (OSError, ValueError, TypeError, KeyError):
+        recorded = json.loads(regular_file(path, "a Monte Carlo summary").read_text(encoding="utf-8"))["settings"]
+    except (ModelError, OSError, ValueError, TypeError, KeyError):
         raise MonteCarloError(f"{path}: not the summary of a drydem montecarlo run; --resume needs the --out of one") from None
     current = settings.identity(wall)
     differ = sorted(key for key in current.keys() | recorded.keys() if current.get(key) != recorded.get(key))

@@ -22,7 +22,8 @@ from pathlib import Path
 from types import SimpleNamespace
 
 from drydem.analysis.tilt.settings import SETTING_RANGES
-from drydem.errors import DrydemError
+from drydem.errors import DrydemError, ModelError
+from drydem.files import regular_file
 from drydem.model.parameters import FLAG, FRICTION, JOINT_RULES, JOINT_STIFFNESS, POINTS, OneOf, Range, Rule, field_problems
 from drydem.parametric.study import ANALYSES, RunSpec, joint_law_text
 
@@ -106,7 +107,9 @@ def read_json(path: Path, what: str):
     cannot be read, is not JSON (a run killed while writing it without the atomic write, a hand
     edit) or is nested deeper than Python's recursion limit (no file drydem writes is)."""
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
+        return json.loads(regular_file(path, f"a drydem {what}").read_text(encoding="utf-8"))  # a pipe would hang
+    except ModelError as exc:
+        raise RecordError(str(exc)) from None
     except OSError as exc:
         raise RecordError(f"{path}: cannot read the {what} ({exc.strerror})") from None
     except ValueError as exc:  # not JSON, or not UTF-8
