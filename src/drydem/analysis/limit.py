@@ -70,7 +70,8 @@ from drydem.engine.contacts import world_points
 from drydem.engine.tracker import ContactTracker
 from drydem.errors import DrydemError
 from drydem.model.assembly import Model
-from drydem.model.parameters import FLAG, G, LOAD_DIRECTION, TILT_AXES, ContactSettings, OneOf, Range, check_fields
+from drydem.model.parameters import (FLAG, G, LOAD_DIRECTION, TILT_AXES, ContactSettings, InstanceOf, OneOf, Range, check_arguments,
+                                     check_fields)
 from drydem.model.state import State
 
 #: sides of the linearised friction pyramid for 3D contacts
@@ -198,6 +199,7 @@ def limit_analysis(model: Model, settings: LimitSettings = LimitSettings(), *,
     nearly all the time is in the LP (a 60 x 60 brick wall, 3,631 blocks, 2 shared cores:
     contacts and assembly ~1 s, the associative LP ~90 s; it took ~15 min in the facet form; the
     3D building SMALL, 1,936 blocks: ~6 s by Clarabel, LARGE, 19,853 blocks: ~4 min)."""
+    check_arguments("limit_analysis", {"model": InstanceOf(Model), "settings": InstanceOf(LimitSettings)}, model=model, settings=settings)
     progress = on_progress or (lambda stage: None)
     problem = _assemble(model, settings.tilt_axis, progress)
     joint, weight = model.joint, problem.weight

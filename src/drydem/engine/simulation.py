@@ -31,15 +31,22 @@ from drydem.engine.threads import threads_for, using_threads
 from drydem.engine.tracker import ContactTracker
 from drydem.errors import DivergenceError, ModelError
 from drydem.model.assembly import Model
-from drydem.model.parameters import DAMPING, MAX_CYCLES, G, Range, check_fields
+from drydem.model.parameters import DAMPING, MAX_CYCLES, G, InstanceOf, Range, check_fields
 from drydem.model.rotation import matrices
-from drydem.model.state import State
+from drydem.model.state import QUATERNION_TOLERANCE, State, block_array, checked_state
 
 #: "numba": compiled, the planar cycle for in-plane models (drydem.engine.cycle_planar), else the
 #: 3D one; "numba-3d": the compiled 3D cycle for every model
 ENGINES = ("numba", "numba-3d")
 #: a damping coefficient or ratio: any finite value >= 0
 NON_NEGATIVE = Range(0.0, None)
+#: a timestep given to a Simulation, s: above 0, and not below a picosecond, which is 50 times
+#: below the critical timestep of any model drydem accepts (the stiffest joint, 1e15 Pa/m, under
+#: the lightest micrometre block, 1 kg/m3: ~5e-11 s); one above the critical timestep is refused
+#: as it is worked out (drydem.engine.inertia.timestep_and_blocks)
+TIMESTEP = Range(1e-12, None, unit="s")
+#: cycles run by one call of Simulation.cycle: none or more, at most an equilibrium's most
+CYCLE_COUNT = Range(0, MAX_CYCLES.high, integer=True)
 #: cycles run in one call of the kernel loop between progress reports
 CHUNK = 5_000
 #: cycles at most in one call of the kernel loop on a shaking table: the divergence test allows
@@ -97,7 +104,11 @@ class Simulation:
 
     ``engine`` is one of ENGINES ("numba", the default, is the fastest) or a function with the
     signature of :func:`drydem.engine.cycle3d.run_cycles` (the tests pass the NumPy oracle).
-    ``timestep`` (s) overrides the automatic one; it must not exceed the critical timestep.
+    ``timestep`` (s) overrides the automatic one: a number in :data:`TIMESTEP`, not above the
+    critical timestep. ``state`` is checked and copied (:func:`~drydem.model.state.checked_state`:
+    float64 arrays of the model's blocks, unit quaternions; an in-plane model cycled by the
+    planar kernel turns about y only). Each argument of the wrong kind or value is a ModelError
+    naming it.
     ``damping`` (:class:`~drydem.engine.damping.Damping`; default: the model's local damping
     alone, for statics) is what the cycles dissipate energy with; viscous damping shortens the
     timestep (:func:`drydem.engine.damping.timestep_factor`).
@@ -113,17 +124,21 @@ class Simulation:
 
     def __init__(self, model: Model, *, state: State | None = None, engine: str | Callable = "numba", timestep: float | None = None,
                  damping: Damping | None = None):
+        InstanceOf(Model).check(model, "Simulation model")
+        if timestep is not None:
+            TIMESTEP.check(timestep, f"{model.source}: Simulation timestep")
         self.model = model
         self.damping = Damping(model.solver.damping) if damping is None else _checked(damping, model)
-        self.state = state.copy() if state is not None else State.at_rest(model.block_centroid)
         self.run_cycles = _cycle_function(model, engine)
+        self._planar = _planar(model, engine)
+        self.state = State.at_rest(model.block_centroid) if state is None else self._checked_state(state)
         self.tracker = ContactTracker(model, self.state)
         self.blocks: BlockConstants | None = None
         self.cycles = 0
         self.time_s = 0.0
         #: m/s: the sum over the cycles run with a ground acceleration of |a_g| dt (:meth:`_table_slack`)
         self.table_impulse_m_s = 0.0
-        self._fixed_timestep = timestep
+        self._fixed_timestep = None if timestep is None else float(timestep)
         self._scaled_timestep: float | None = None
         self._update_inertia()
 
@@ -177,15 +192,30 @@ class Simulation:
             return None
         return (*closing_motion(self.tracker.contacts, self.state, matrices(self.state.quaternion)), self.timestep)
 
+    def _checked_state(self, state: State) -> State:
+        """A checked copy of ``state`` (:func:`~drydem.model.state.checked_state`); for the planar
+        kernel, which reads a quaternion as a turn about y (:mod:`drydem.engine.cycle_planar`),
+        ModelError for a block turned about another axis."""
+        where = f"{self.model.source}: Simulation"
+        state = checked_state(state, self.model.n_blocks, where)
+        if not self._planar:
+            return state
+        tilted = np.flatnonzero(np.abs(state.quaternion[:, [1, 3]]).max(axis=1) > QUATERNION_TOLERANCE)
+        if tilted.size:
+            raise ModelError(f"{where} state.quaternion[{tilted[0]}] = {state.quaternion[tilted[0]].tolist()}: the blocks of an in-plane "
+                             "model turn about y only, (w, 0, y, 0), in its planar cycle (engine='numba-3d' turns them any way)")
+        return state
+
     def use_damping(self, damping: Damping) -> None:
         """Cycle on with ``damping`` (the timestep follows: dashpots shorten it)."""
         self.damping = _checked(damping, self.model)
         self._update_inertia()
 
     def remove_blocks(self, blocks) -> None:
-        """Take blocks out of the analysis (e.g. bricks that fell out of the wall): they stop
-        moving, lose their contacts and no longer count for equilibrium."""
-        self.tracker.remove(blocks)
+        """Take ``blocks`` out of the analysis (e.g. bricks that fell out of the wall): they stop
+        moving, lose their contacts and no longer count for equilibrium. ``blocks``: a block's
+        name or index, or a list or array of them (:meth:`~drydem.model.assembly.Model.block_indices`)."""
+        self.tracker.remove(self.model.block_indices(blocks, "remove_blocks"))
         self.state.velocity[~self.active] = 0.0
         self.state.angular_velocity[~self.active] = 0.0
         self._update_inertia()
@@ -199,8 +229,10 @@ class Simulation:
         )
 
     def restore(self, snapshot: Snapshot) -> None:
-        """Go back to a :meth:`snapshot` (its arrays are copied, so it can be restored again)."""
-        self.state = snapshot.state.copy()
+        """Go back to a :meth:`snapshot` (its arrays are copied, so it can be restored again;
+        its state is checked as :class:`Simulation`'s: a snapshot may come from a file,
+        :mod:`drydem.engine.checkpoint`)."""
+        self.state = self._checked_state(snapshot.state)
         t = self.tracker
         t.contacts, t.neighbours = snapshot.contacts.copy(), snapshot.neighbours.copy()
         t.broad_state, t.active = snapshot.broad_state.copy(), snapshot.active.copy()
@@ -221,9 +253,13 @@ class Simulation:
         next load step (:mod:`drydem.analysis.tilt`): dynamic relaxation then starts near the new
         equilibrium. Fixed degrees of freedom do not move, whatever is asked of them.
         """
+        shape = (self.model.n_blocks, 3)
+        where = f"{self.model.source}: move"
+        displacement = block_array(displacement, shape, f"{where} displacement")
+        rotation = block_array(rotation, shape, f"{where} rotation")
         blocks = self.blocks
-        self.state.velocity[:] = np.asarray(displacement, dtype=float) * blocks.free[:, :3] / self.timestep
-        self.state.angular_velocity[:] = np.asarray(rotation, dtype=float) * blocks.free[:, 3:] / self.timestep
+        self.state.velocity[:] = displacement * blocks.free[:, :3] / self.timestep
+        self.state.angular_velocity[:] = rotation * blocks.free[:, 3:] / self.timestep
         heavy = blocks._replace(
             inv_mass=np.where(blocks.inv_mass > 0, IMMOVABLE_INVERSE_MASS, 0.0), inv_inertia_body=np.zeros_like(blocks.inv_inertia_body)
         )
@@ -239,7 +275,9 @@ class Simulation:
 
         ``ground_acceleration`` (n, 3) m/s2: the table's acceleration at each of the cycles; the
         blocks then move in the frame of the table (:func:`drydem.engine.loop.cycle_loop`), so
-        their positions and velocities are relative to it."""
+        their positions and velocities are relative to it. ModelError for ``n`` not in
+        :data:`CYCLE_COUNT`."""
+        CYCLE_COUNT.check(n, f"{self.model.source}: cycle n")
         if ground_acceleration is not None:
             ground_acceleration = np.ascontiguousarray(ground_acceleration, dtype=float)
             if ground_acceleration.shape != (n, 3) or not np.all(np.isfinite(ground_acceleration)):
@@ -356,8 +394,9 @@ class Simulation:
         return diagnostics.energies(self.model, self.state, self.contacts, self.timestep, np.asarray(gravity, dtype=float))
 
     def reactions(self, block: int) -> np.ndarray:
-        """Total contact force (N, world frame) that the other blocks exert on ``block``."""
-        return diagnostics.reactions(self.state, self.contacts, block)
+        """Total contact force (N, world frame) that the other blocks exert on ``block`` (its
+        index or name)."""
+        return diagnostics.reactions(self.state, self.contacts, self.model.block_number(block, "reactions block"))
 
 
 def _checked(damping: Damping, model: Model) -> Damping:
@@ -374,13 +413,18 @@ def _checked(damping: Damping, model: Model) -> Damping:
     return Damping(*(float(value) for value in damping))
 
 
+def _planar(model: Model, engine: str | Callable) -> bool:
+    """Whether ``engine`` cycles ``model`` with the planar kernel (:mod:`drydem.engine.cycle_planar`)."""
+    return engine == "numba" and model.in_plane
+
+
 def _cycle_function(model: Model, engine: str | Callable) -> Callable:
     """The run_cycles function of ``engine`` for ``model`` (see :class:`Simulation`)."""
     if callable(engine):
         return engine
     if engine not in ENGINES:
         raise ModelError(f"engine = {engine!r}: must be one of {list(ENGINES)} or a run_cycles function")
-    if engine == "numba" and model.in_plane:  # imported here: a run loads only the kernels of its own cycle
+    if _planar(model, engine):  # imported here: a run loads only the kernels of its own cycle
         from drydem.engine import cycle_planar
 
         return cycle_planar.run_cycles

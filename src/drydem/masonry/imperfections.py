@@ -52,7 +52,7 @@ from drydem.masonry.layout import BrickSize, unit_box
 from drydem.masonry.walls import Wall
 from drydem.model.assembly import Block, Model, base_under, build_model
 from drydem.model.geometry import convex_hull
-from drydem.model.parameters import OneOf, Range, check_fields, refuse
+from drydem.model.parameters import InstanceOf, OneOf, Range, check_arguments, check_fields, refuse
 from drydem.model.tables import errors_naming
 
 #: amplitudes are given in millimetres; geometry is in metres
@@ -155,7 +155,9 @@ class Placement:
 def imperfect_blocks(wall: Wall, imperfections: Imperfections, seed: int) -> list[Block]:
     """The wall's blocks drawn with ``imperfections`` from ``seed`` (module docstring): the fixed
     base first, then the bricks, named and ordered as :meth:`Layout.blocks`. ModelError naming
-    the wall for an amplitude too large for its brick, or a bad seed."""
+    the wall for an amplitude too large for its brick, or a bad seed, or an argument of the wrong
+    kind (:data:`ARGUMENT_RULES`)."""
+    check_arguments("imperfect_blocks", ARGUMENT_RULES, wall=wall, imperfections=imperfections)
     with errors_naming(wall.source):
         imperfections.check_for(wall.brick, wall.source)
         return _blocks(wall, placement(wall, imperfections, seed), seed)
@@ -163,6 +165,7 @@ def imperfect_blocks(wall: Wall, imperfections: Imperfections, seed: int) -> lis
 
 def imperfect_model(wall: Wall, imperfections: Imperfections, seed: int) -> Model:
     """:meth:`Wall.model` with the blocks of :func:`imperfect_blocks`."""
+    check_arguments("imperfect_model", ARGUMENT_RULES, wall=wall, imperfections=imperfections)
     return _model(wall, imperfect_blocks(wall, imperfections, seed))
 
 
@@ -172,6 +175,7 @@ def exaggerated_model(wall: Wall, imperfections: Imperfections, seed: int, facto
     is checked against the brick as given; the factor is lowered, where it has to be, so that
     every brick keeps at least :data:`DRAWN_THICKNESS_FRACTION` of its height (thickness is linear
     in the factor): a picture, not a model to analyse."""
+    check_arguments("exaggerated_model", ARGUMENT_RULES, wall=wall, imperfections=imperfections)
     with errors_naming(wall.source):
         imperfections.check_for(wall.brick, wall.source)
         Range(0.0, None, low_open=True).check(factor, "exaggeration factor")
@@ -181,6 +185,12 @@ def exaggerated_model(wall: Wall, imperfections: Imperfections, seed: int, facto
         drawn = imperfections.scaled(factor)
         blocks = _blocks(wall, placement(wall, drawn, seed), seed)
     return _model(wall, blocks), factor
+
+
+#: the kind of each argument of :func:`imperfect_model`, :func:`imperfect_blocks` and
+#: :func:`exaggerated_model`: a wall as drydem.masonry.walls.load_wall reads it (not its Model,
+#: whose blocks have lost their layout) and its amplitudes
+ARGUMENT_RULES = {"wall": InstanceOf(Wall), "imperfections": InstanceOf(Imperfections)}
 
 
 def standard_draws(n: int, distribution: str, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -8,8 +8,9 @@ a run lives in :class:`drydem.model.state.State` and the engine's contacts (:mod
 from __future__ import annotations
 
 import dataclasses
+import inspect
 from collections import Counter
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -18,7 +19,10 @@ import numpy as np
 from drydem.errors import ModelError
 from drydem.model.boxes import bounds, overlapping_pairs
 from drydem.model.geometry import PARALLEL_SINE, ConvexPolyhedron, FlatGeometry, box
-from drydem.model.parameters import DENSITY, ContactDensity, ContactSettings, JointMaterial, SolverSettings, Supports
+from drydem.model.parameters import (
+    DENSITY, FLAG, TEXT, ContactDensity, ContactSettings, InstanceOf, JointMaterial, SolverSettings, Supports, check_arguments,
+    check_fields, is_integer, shown,
+)
 from drydem.model.rotation import matrices
 
 #: default contact tolerance as a fraction of the thinnest movable block (m/m)
@@ -45,6 +49,15 @@ class Block:
     shape: ConvexPolyhedron
     density: float | None = None
     fixed: bool = False
+
+    def __post_init__(self):
+        check_fields(self, BLOCK_RULES, f"block {shown(self.name)}", optional=("density",))
+
+
+#: the rule of each field of :class:`Block` (a model file's [[block]] is held to the same): a name
+#: that messages can show, a polyhedron (drydem.box, drydem.convex_hull), the density in its range
+#: (None: the model's), fixed a switch ("no" is not False)
+BLOCK_RULES = {"name": TEXT, "shape": InstanceOf(ConvexPolyhedron), "density": DENSITY, "fixed": FLAG}
 
 
 def base_under(blocks: list[Block], *, overhang_m: float = 0.05, depth_m: float = 0.01) -> Block:
@@ -138,6 +151,28 @@ class Model:
         except ValueError:
             raise ModelError(f"{self.source}: no block named {name!r}") from None
 
+    def block_indices(self, blocks, where: str) -> np.ndarray:
+        """(k,) int64 the indices of ``blocks``: a block's name or index (0 to nb - 1; not
+        negative, which would count from the end), or a list or array of them; ModelError
+        naming ``where`` and the first entry that is neither (a boolean is no index)."""
+        if isinstance(blocks, np.ndarray):
+            blocks = blocks.tolist()  # NumPy's integers and texts as Python's
+        if isinstance(blocks, str) or is_integer(blocks):
+            blocks = [blocks]
+        elif not isinstance(blocks, (list, tuple)):
+            raise ModelError(f"{self.source}: {where} = {shown(blocks)}: must be a block name or index, or a list of them")
+        return np.array([self.block_number(entry, where) for entry in blocks], dtype=np.int64)
+
+    def block_number(self, block, where: str) -> int:
+        """The index of ``block``, a block's name or index (0 to nb - 1); ModelError naming
+        ``where`` and ``block`` if it is neither."""
+        if isinstance(block, str):
+            return self.block_index(block)
+        if is_integer(block) and 0 <= block < self.n_blocks:
+            return int(block)
+        raise ModelError(f"{self.source}: {where}: {shown(block)} is no block: must be a block name or an index in "
+                         f"[0, {self.n_blocks - 1}]")
+
     def world_vertices(self, block: int, position: np.ndarray, quaternion: np.ndarray) -> np.ndarray:
         """The vertices of ``block`` at centroid ``position`` (3,) m and orientation
         ``quaternion`` (4,) (body -> world, drydem.model.state): x = R(q) (v - c0) + position."""
@@ -161,17 +196,16 @@ class Model:
 
     def overridden(self, *, density: float | None = None, **values) -> Model:
         """The model with the given values changed (those of :meth:`parameter_changes`, and one
-        ``density`` in kg/m3 for every block); itself if none is given."""
+        ``density`` in kg/m3 for every block); itself if none is given. ModelError naming a key
+        that is none of those, and the allowed ones."""
+        _refuse_unknown(f"{self.source}: Model.overridden", values, ["density", *inspect.signature(self.parameter_changes).parameters])
         changes = self.parameter_changes(**values)
         return self.replace(density=density, **changes) if changes or density is not None else self
 
     def replace(self, *, density: float | None = None, **changes) -> Model:
         """A copy with some parameters changed: joint, contacts, supports, solver, or one
         ``density`` (kg/m3) for every block."""
-        allowed = {"joint", "contacts", "supports", "solver"}
-        unknown = set(changes) - allowed
-        if unknown:
-            raise TypeError(f"Model.replace accepts density and {sorted(allowed)}, not {sorted(unknown)}")
+        _refuse_unknown(f"{self.source}: Model.replace", changes, ["density", "joint", "contacts", "supports", "solver"])
         blocks = [
             Block(name=n, shape=s, fixed=bool(f.all()), density=None if density is not None else float(rho))
             for n, s, f, rho in zip(self.block_name, self.block_shape, self.block_fixed, self.block_density)
@@ -179,6 +213,13 @@ class Model:
         params = dict(joint=self.joint, contacts=self.contacts, supports=self.supports, solver=self.solver) | changes
         common = density if density is not None else float(self.block_density.max())
         return build_model(blocks, density=common, source=self.source, **params)
+
+
+def _refuse_unknown(where: str, given: Mapping, allowed: list[str]) -> None:
+    """ModelError naming ``where``, the keys of ``given`` not ``allowed``, and the allowed ones."""
+    unknown = sorted(set(given) - set(allowed))
+    if unknown:
+        raise ModelError(f"{where}: unknown key(s) {unknown}; allowed: {allowed}")
 
 
 def build_model(
@@ -193,23 +234,45 @@ def build_model(
 ) -> Model:
     """Validate the blocks and freeze them into a :class:`Model`.
 
-    Raises ModelError for duplicate names, densities out of :data:`drydem.model.parameters.DENSITY`,
-    no movable block, a contact tolerance above half the thinnest movable block, or two blocks
-    overlapping deeper than 1 % of the contact tolerance (naming both and the depth).
+    ``blocks`` is any iterable of :class:`Block` (a generator is read once). Raises ModelError
+    for an argument of the wrong kind (naming it and the kind it must be), duplicate names, a
+    density out of :data:`drydem.model.parameters.DENSITY`, no movable block, a contact tolerance
+    above half the thinnest movable block, or two blocks overlapping deeper than 1 % of the
+    contact tolerance (naming both and the depth).
     """
-    if not blocks:
-        raise ModelError(f"{source}: the model has no blocks")
+    blocks = _checked_arguments(blocks, joint=joint, contacts=contacts, supports=supports, solver=solver, source=source)
     DENSITY.check(density, f"{source}: [material] density")
     duplicates = sorted(name for name, count in Counter(b.name for b in blocks).items() if count > 1)
     if duplicates:
         raise ModelError(f"{source}: duplicate block names {duplicates}")
-    for b in blocks:
-        if b.density is not None:
-            DENSITY.check(b.density, f"{source}: block {b.name!r}: density")
     if all(b.fixed for b in blocks):
         raise ModelError(f"{source}: every block is fixed; nothing can move")
     per_block = np.array([density if b.density is None else b.density for b in blocks], dtype=float)
     return _assemble(blocks, per_block, joint=joint, contacts=contacts, supports=supports, solver=solver, source=source)
+
+
+#: the kind of each argument of :func:`build_model` but the blocks and the density
+ARGUMENT_RULES = {"joint": InstanceOf(JointMaterial), "contacts": InstanceOf(ContactSettings), "supports": InstanceOf(Supports),
+                  "solver": InstanceOf(SolverSettings), "source": TEXT}
+
+
+def _checked_arguments(blocks, **arguments) -> list[Block]:
+    """``blocks`` as a list, after ModelError naming every argument of :func:`build_model` of the
+    wrong kind (:data:`ARGUMENT_RULES`) and every entry of ``blocks`` that is no Block (a
+    polyhedron needs its name: Block(name=..., shape=...)), or saying there are no blocks."""
+    source = arguments["source"] if isinstance(arguments["source"], str) else "<python>"
+    check_arguments(f"{source}: build_model", ARGUMENT_RULES, **arguments)
+    if isinstance(blocks, (str, Mapping)) or not isinstance(blocks, Iterable):
+        raise ModelError(f"{source}: build_model blocks = {shown(blocks)}: must be a list of Block")
+    blocks = list(blocks)
+    wrong = [i for i, b in enumerate(blocks) if not isinstance(b, Block)]
+    if wrong:
+        more = f" (and {len(wrong) - 1} more entries)" if len(wrong) > 1 else ""
+        raise ModelError(f"{source}: build_model blocks[{wrong[0]}] = {shown(blocks[wrong[0]])}: must be a Block "
+                         f"(Block(name=..., shape=...)){more}")
+    if not blocks:
+        raise ModelError(f"{source}: the model has no blocks")
+    return blocks
 
 
 def _assemble(blocks, density, *, joint, contacts, supports, solver, source) -> Model:

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 
 from drydem.errors import GeometryError
+from drydem.model.parameters import is_number, shown
 
 if TYPE_CHECKING:
     from scipy.spatial import ConvexHull
@@ -64,6 +65,11 @@ class ConvexPolyhedron:
     volume: float
     centroid: np.ndarray
     second_moment: np.ndarray = field(repr=False)
+
+    def __post_init__(self):
+        problem = _polyhedron_problem(self)
+        if problem is not None:
+            raise GeometryError(f"ConvexPolyhedron: {problem} (drydem.box and drydem.convex_hull make a block's polyhedron)")
 
     @cached_property
     def size(self) -> float:
@@ -110,6 +116,74 @@ class ConvexPolyhedron:
         )
 
 
+def _polyhedron_problem(p: ConvexPolyhedron) -> str | None:
+    """What breaks the invariants of a :class:`ConvexPolyhedron` (one made by hand: the cycles
+    would divide by its volume and index its vertices by its faces), None if nothing does.
+    Every polyhedron is checked as it is made (:meth:`~ConvexPolyhedron.transformed` makes one
+    per block of a building), so the checks cost a few array passes, no hull: at least 4 finite
+    vertices, (n, 3) floats; at least 4 faces of at least 3 vertex numbers each, in range; as many
+    finite face normals (3,); a volume above 0 and within the vertices' bounding box; a finite
+    centroid (3,) and second moment (3, 3)."""
+    v = p.vertices
+    if not (_floats(v) and v.ndim == 2 and v.shape[0] >= 4 and v.shape[1] == 3):
+        return f"vertices must be an (n >= 4, 3) array of finite floats, m, got {described(v)}"
+    faces = p.faces
+    if not (isinstance(faces, tuple) and len(faces) >= 4 and all(isinstance(f, np.ndarray) and f.dtype.kind in "iu" and f.shape[0] >= 3
+                                                                  and f.ndim == 1 for f in faces)):
+        return "faces must be a tuple of at least 4 integer arrays, each of at least 3 vertex numbers"
+    corners = np.concatenate(faces)
+    if corners.min() < 0 or corners.max() >= len(v):
+        return f"faces must number vertices 0 to {len(v) - 1}, got {corners.min()} to {corners.max()}"
+    if not (_floats(p.face_normals) and p.face_normals.shape == (len(faces), 3)):
+        return f"face_normals must be a ({len(faces)}, 3) array of finite floats, got {described(p.face_normals)}"
+    side = (v.max(0) - v.min(0)).tolist()
+    extent = side[0] * side[1] * side[2]
+    if not (is_number(p.volume) and 0.0 < p.volume <= extent * (1.0 + 1e-9)):
+        return f"volume = {shown(p.volume)}: must be a number above 0 and at most the vertices' bounding box ({extent:.4g} m3)"
+    if not (_floats(p.centroid) and p.centroid.shape == (3,) and _floats(p.second_moment) and p.second_moment.shape == (3, 3)):
+        return (f"centroid must be a (3,) and second_moment a (3, 3) array of finite floats, "
+                f"got {described(p.centroid)}, {described(p.second_moment)}")
+    return None
+
+
+def _floats(value) -> bool:
+    """An array of finite floats."""
+    return isinstance(value, np.ndarray) and value.dtype.kind == "f" and bool(np.isfinite(value).all())
+
+
+def described(value) -> str:
+    """What ``value`` is, for a message: an array's shape and dtype, a list's shape, another
+    value itself (shortened: it may be a megabyte of numbers)."""
+    if isinstance(value, np.ndarray):
+        return f"shape {value.shape} {value.dtype}"
+    if isinstance(value, (list, tuple)):
+        try:
+            return f"a {type(value).__name__} of shape {np.shape(value)}"
+        except ValueError:
+            return f"a ragged {type(value).__name__}"
+    return shown(value)
+
+
+def real_array(value) -> np.ndarray | None:
+    """``value`` (an array, or nested lists of numbers) as a new C-ordered float64 array; None
+    where it is no array of real numbers: texts, booleans (no number here, though NumPy would
+    make True 1.0), complex numbers (NumPy would drop their imaginary parts), objects, ragged lists."""
+    try:
+        array = np.asarray(value)
+    except (TypeError, ValueError):  # ragged lists
+        return None
+    if array.dtype.kind not in "iuf" or _booleans_in(value):
+        return None
+    return np.array(array, dtype=np.float64, order="C")
+
+
+def _booleans_in(value) -> bool:
+    """Whether nested lists hold a boolean (NumPy would turn it into a number)."""
+    if isinstance(value, (list, tuple)):
+        return any(_booleans_in(item) for item in value)
+    return isinstance(value, (bool, np.bool_))
+
+
 def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
     """The convex polyhedron spanned by ``points`` ((n, 3), m).
 
@@ -117,10 +191,9 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
     four, coplanar, collinear) or if a point lies strictly inside the hull of the
     others, i.e. the vertex set does not describe a convex block.
     """
-    try:
-        pts = np.asarray(points, dtype=float)
-    except (TypeError, ValueError):
-        raise GeometryError(f"{name}: vertices must be a list of [x, y, z] numbers") from None
+    pts = real_array(points)
+    if pts is None:
+        raise GeometryError(f"{name}: vertices must be a list of [x, y, z] numbers")
     if pts.ndim != 2 or pts.shape[1] != 3:
         raise GeometryError(f"{name}: vertices must be a list of [x, y, z] points, got shape {pts.shape}")
     if not np.all(np.isfinite(pts)):
@@ -181,10 +254,12 @@ def face_interior_points(points: np.ndarray, shape: ConvexPolyhedron) -> np.ndar
 
 
 def box(lower, upper, *, name: str = "block") -> ConvexPolyhedron:
-    """Axis-aligned box between corners ``lower`` and ``upper`` (m)."""
-    lo, hi = np.asarray(lower, float), np.asarray(upper, float)
-    if lo.shape != (3,) or hi.shape != (3,):
-        raise GeometryError(f"{name}: box min and max must be [x, y, z]")
+    """Axis-aligned box between corners ``lower`` and ``upper`` (m); GeometryError naming ``name``
+    and the corner (min, max) that is not [x, y, z], three finite numbers."""
+    lo, hi = real_array(lower), real_array(upper)
+    for corner, given, key in ((lo, lower, "min"), (hi, upper, "max")):
+        if corner is None or corner.shape != (3,) or not np.isfinite(corner).all():
+            raise GeometryError(f"{name}: box {key} = {shown(given)}: must be [x, y, z], three finite numbers (m)")
     if np.any(hi <= lo):
         raise GeometryError(f"{name}: box max {hi.tolist()} must exceed min {lo.tolist()} in every coordinate")
     corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])

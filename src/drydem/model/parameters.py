@@ -18,9 +18,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 import sys
 from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, fields
+from types import SimpleNamespace
 
 from drydem.errors import ModelError
 
@@ -33,16 +35,27 @@ LOAD_DIRECTION = {"y": 0, "x": 1}
 
 
 def is_number(value) -> bool:
-    """A finite float, or an int within a float's range, and not a boolean (``True`` is an int in
-    Python, not a number here; an int of 400 digits, which JSON and TOML can hold, is no float)."""
-    if isinstance(value, float):
-        return math.isfinite(value)
-    return isinstance(value, int) and not isinstance(value, bool) and abs(value) <= sys.float_info.max
+    """A finite real number: a float, or an integer within a float's range, NumPy's scalars of
+    both kinds too (``np.int64(3)`` is a number as ``3`` is); not a boolean (``True`` is an int
+    in Python and ``np.True_`` no number to NumPy, neither a number here), nor an int of 400
+    digits (JSON and TOML hold one; it is no float)."""
+    if isinstance(value, numbers.Integral):
+        return not isinstance(value, bool) and abs(int(value)) <= sys.float_info.max
+    return isinstance(value, numbers.Real) and math.isfinite(value)
 
 
 def is_integer(value) -> bool:
-    """An int, and not a boolean."""
-    return isinstance(value, int) and not isinstance(value, bool)
+    """An integer (an int or a NumPy integer scalar), and not a boolean."""
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+
+
+def plain(value):
+    """A NumPy number as the Python int or float it equals (JSON and TOML writers take those, a
+    Python int does not overflow, and messages show ``0.5``, not ``np.float64(0.5)``); any other
+    value as it is."""
+    if type(value) in (bool, int, float) or not isinstance(value, numbers.Real):
+        return value
+    return int(value) if isinstance(value, numbers.Integral) else float(value)
 
 
 #: the longest value a message shows whole, characters (a value from a file may be a 400-digit
@@ -106,6 +119,42 @@ class OneOf(Rule):
 
 
 @dataclass(frozen=True)
+class InstanceOf(Rule):
+    """An instance of ``kind`` (a model's joint a JointMaterial, not a dict of its keys nor None:
+    the wrong object would only fail, by an AttributeError, where it is first used)."""
+
+    kind: type
+
+    def __contains__(self, value) -> bool:
+        return isinstance(value, self.kind)
+
+    def problem(self, value, where: str) -> str | None:
+        """As :meth:`Rule.problem`; for a dict given for a dataclass, how to make one of it."""
+        found = super().problem(value, where)
+        if found is not None and isinstance(value, Mapping) and dataclasses.is_dataclass(self.kind):
+            found += f" (make one of the dict: {self.kind.__name__}(**values))"
+        return found
+
+    def __str__(self) -> str:
+        name = self.kind.__name__
+        return f"must be {'an' if name[0] in 'AEIOU' else 'a'} {name}"
+
+
+class Text(Rule):
+    """A text with a character other than white space (a name that messages and results show)."""
+
+    def __contains__(self, value) -> bool:
+        return isinstance(value, str) and bool(value.strip())
+
+    def __str__(self) -> str:
+        return "must be a non-empty text"
+
+
+#: the rule of every name
+TEXT = Text()
+
+
+@dataclass(frozen=True)
 class Range(Rule):
     """An interval of allowed values: ``low`` and ``high`` (None: unbounded), each end open or
     closed; ``integer`` for counts; ``unit`` for messages. A boolean is never in a range
@@ -155,8 +204,22 @@ def refuse(problems: list[str]) -> None:
 def check_fields(settings, rules: Mapping[str, Rule], where: str, *, optional: Collection[str] = ()) -> None:
     """Check the fields of ``settings`` named in ``rules`` (:func:`field_problems`): one
     ModelError naming, for every field that breaks its rule, ``WHERE FIELD``, its value and
-    the rule (``[joint] kn = True: must be a number in [1e+04, 1e+15] Pa/m``)."""
+    the rule (``[joint] kn = True: must be a number in [1e+04, 1e+15] Pa/m``). A dataclass (one
+    checking itself in ``__post_init__``, frozen or not) then holds each NumPy number of those
+    fields as the Python number it equals (:func:`plain`): its settings are written to JSON."""
     refuse(field_problems(settings, rules, lambda field: f"{where} {field}", optional=optional))
+    if dataclasses.is_dataclass(settings):
+        for field in rules:
+            value = getattr(settings, field)
+            if plain(value) is not value:
+                object.__setattr__(settings, field, plain(value))
+
+
+def check_arguments(where: str, rules: Mapping[str, Rule], **arguments) -> None:
+    """One ModelError naming, for every argument of ``where`` (a function) that breaks its rule,
+    ``WHERE NAME``, its value and the rule: ``tilt_analysis settings = None: must be a
+    TiltSettings`` (with :class:`InstanceOf`), before a wrong object fails where it is first used."""
+    refuse(field_problems(SimpleNamespace(**arguments), rules, f"{where} {{}}".format))
 
 
 #: joint stiffness, Pa/m: below 1e4 the own weight of a 1 m masonry wall (~2e4 Pa) would close

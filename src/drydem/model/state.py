@@ -6,6 +6,17 @@ from typing import NamedTuple
 
 import numpy as np
 
+from drydem.errors import ModelError
+from drydem.model.geometry import described, real_array
+from drydem.model.parameters import shown
+
+#: a given quaternion's norm may differ from 1 by this much (it is then normalised): a rotation
+#: written with 7 digits; one farther off, or zero, is no rotation (or another convention)
+QUATERNION_TOLERANCE = 1e-6
+#: norms within this of 1 are left as they are (the cycles keep them so, to round-off), so that a
+#: state handed back (a snapshot restored) goes on bit for bit
+ROUND_OFF = 1e-12
+
 
 class State(NamedTuple):
     """Block kinematics; the arrays are updated in place by the kernels.
@@ -32,3 +43,41 @@ class State(NamedTuple):
 
     def copy(self) -> State:
         return State(*(a.copy() for a in self))
+
+
+def block_array(value, shape: tuple[int, int], where: str) -> np.ndarray:
+    """``value`` as a new C-ordered float64 array, the type the compiled cycles are built for
+    (an int or float32 array converted); ModelError naming ``where`` unless it is an array (or
+    nested lists) of ``shape``, finite real numbers: another shape would be read out of bounds or
+    fail deep in the kernels, and texts, booleans, complex numbers and objects are no coordinates."""
+    array = real_array(value)
+    if array is None or array.shape != shape or not np.isfinite(array).all():
+        raise ModelError(f"{where} must be a {shape} array of finite numbers, got {described(value)}")
+    return array
+
+
+def checked_state(state, n_blocks: int, where: str) -> State:
+    """A copy of ``state`` fit for the cycles of ``n_blocks`` blocks: each array as
+    :func:`block_array` makes it, (nb, 3) and the quaternions (nb, 4), these of unit norm within
+    :data:`QUATERNION_TOLERANCE` (normalised; one farther off is refused). ModelError naming
+    ``where`` and the field (``state.quaternion``)."""
+    if not isinstance(state, State):
+        raise ModelError(f"{where} state = {shown(state)}: must be a State (State.at_rest(positions) makes one)")
+    arrays = [block_array(value, (n_blocks, 4 if field == "quaternion" else 3), f"{where} state.{field}")
+              for field, value in zip(State._fields, state)]
+    return State(arrays[0], _unit(arrays[1], f"{where} state.quaternion"), *arrays[2:])
+
+
+def _unit(quaternion: np.ndarray, where: str) -> np.ndarray:
+    """``quaternion`` (nb, 4) with the rows whose norm is off 1 by more than :data:`ROUND_OFF`
+    normalised; ModelError naming the first row off by more than :data:`QUATERNION_TOLERANCE`."""
+    norm = np.linalg.norm(quaternion, axis=1)
+    off = np.abs(norm - 1.0)
+    bad = np.flatnonzero(off > QUATERNION_TOLERANCE)
+    if bad.size:
+        more = f" ({bad.size} rows are off)" if bad.size > 1 else ""
+        raise ModelError(f"{where}[{bad[0]}] = {quaternion[bad[0]].tolist()}: must be a unit quaternion (w, x, y, z), its norm "
+                         f"1 within {QUATERNION_TOLERANCE:g}, not {norm[bad[0]]:.6g}{more}")
+    rows = off > ROUND_OFF
+    quaternion[rows] /= norm[rows, None]
+    return quaternion

@@ -20,6 +20,7 @@ from drydem.analysis.tilt.settings import (
     UNSTABLE_UNDER_GRAVITY, Frame, Record, TiltResult, TiltSettings,
 )
 from drydem.model.assembly import Model
+from drydem.model.parameters import InstanceOf, check_arguments
 
 #: states past collapse are sampled this many times per chunk_cycles (drydem tilt --vtk)
 FRAME_SAMPLING = 10
@@ -182,6 +183,7 @@ def tilt_analysis(
     settings that differ if it is of another model or protocol), and ``on_record`` is first
     called for the equilibria the checkpoint holds.
     """
+    check_arguments("tilt_analysis", {"model": InstanceOf(Model), "settings": InstanceOf(TiltSettings)}, model=model, settings=settings)
     start = time.perf_counter()
     run = TiltRun(model, settings, on_progress)
     fingerprint = checkpointing.fingerprint(model, settings)

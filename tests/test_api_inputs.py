@@ -1,0 +1,398 @@
+"""Hostile inputs to the Python API (drydem.Simulation, Block, build_model, ConvexPolyhedron, box,
+the parameters, imperfect walls): each is refused with a drydem error naming the argument or field
+and the rule, never an IndexError or AttributeError from deep inside, a numba typing error, a NaN
+result or silent acceptance; and what is meant (a NumPy number, a list of floats) is taken.
+(Model files and the command line: test_hostile_input.py.)"""
+
+import dataclasses
+import json
+import re
+
+import numpy as np
+import pytest
+from conftest import BRICK, stack_model
+
+import drydem as dd
+from drydem.analysis.limit import limit_analysis
+from drydem.analysis.tilt import TiltSettings, tilt_analysis
+from drydem.errors import ModelError
+from drydem.masonry.imperfections import Imperfections, exaggerated_model, imperfect_blocks, imperfect_model
+from drydem.model.parameters import InstanceOf, check_arguments, is_integer, is_number
+
+
+@pytest.fixture(scope="module")
+def model():
+    """A base and one brick (3D: the blocks are not held in y)."""
+    return stack_model([BRICK[2]])
+
+
+@pytest.fixture(scope="module")
+def in_plane():
+    """A brick on a base of the same width, held in y: an in-plane model (the planar cycle)."""
+    base = dd.box([-0.05, 0.0, -0.01], [0.1, BRICK[1], 0.0], name="base")
+    brick = dd.box([0.0, 0.0, 0.0], BRICK, name="brick")
+    found = dd.build_model([dd.Block(name="base", shape=base, fixed=True), dd.Block(name="brick", shape=brick)], density=1800.0,
+                           supports=dd.Supports(fix_y=True))
+    assert found.in_plane
+    return found
+
+
+def state_with(model, **arrays) -> dd.State:
+    """The model's state at rest with some of its arrays replaced."""
+    return dd.State.at_rest(model.block_centroid)._replace(**arrays)
+
+
+def refused(error, *fragments, call):
+    """``call()`` raises ``error`` whose message holds every fragment."""
+    with pytest.raises(error) as raised:
+        call()
+    for fragment in fragments:
+        assert fragment in str(raised.value), str(raised.value)
+
+
+# -- Simulation: its state ------------------------------------------------------------------
+
+@pytest.mark.parametrize("field, value, words", [
+    ("position", np.zeros((3, 3)), "state.position must be a (2, 3) array of finite numbers, got shape (3, 3)"),
+    ("position", np.zeros((2, 2)), "state.position must be a (2, 3) array"),
+    ("quaternion", np.zeros((2, 3)), "state.quaternion must be a (2, 4) array"),
+    ("velocity", np.zeros(2), "state.velocity must be a (2, 3) array"),
+    ("angular_velocity", np.zeros((3, 2)), "state.angular_velocity must be a (2, 3) array"),
+    ("position", np.zeros((2, 3), dtype=object), "got shape (2, 3) object"),
+    ("position", np.array([[0.0, 0.0, 0.0], [np.nan, 0.0, 0.0]]), "state.position must be a (2, 3) array of finite numbers"),
+    ("velocity", np.array([[0.0, 0.0, 0.0], [np.inf, 0.0, 0.0]]), "state.velocity must be a (2, 3) array of finite numbers"),
+    ("velocity", np.zeros((2, 3), dtype=bool), "state.velocity"),
+    ("velocity", [[0.0, 0.0, True], [0.0, 0.0, 0.0]], "state.velocity"),
+    ("velocity", np.zeros((2, 3), dtype=complex), "state.velocity"),
+    ("position", [["a", "b", "c"]] * 2, "state.position"),
+    ("position", [[0.0, 0.0], [0.0, 0.0, 0.0]], "a ragged list"),
+    ("position", None, "state.position must be a (2, 3) array"),
+])
+def test_a_state_of_the_wrong_shape_or_kind_is_refused_naming_the_field(model, field, value, words):
+    refused(dd.ModelError, words, call=lambda: dd.Simulation(model, state=state_with(model, **{field: value})))
+
+
+@pytest.mark.parametrize("state", [(1, 2, 3, 4), {"position": np.zeros((2, 3))}, "at rest"])
+def test_a_state_that_is_no_State_is_refused(model, state):
+    refused(dd.ModelError, "Simulation state = ", "must be a State", call=lambda: dd.Simulation(model, state=state))
+
+
+@pytest.mark.parametrize("quaternion, words", [
+    (np.zeros((2, 4)), "state.quaternion[0] = [0.0, 0.0, 0.0, 0.0]: must be a unit quaternion"),
+    (np.array([[1.0, 0.0, 0.0, 0.0], [2.0, 0.0, 0.0, 0.0]]), "state.quaternion[1] = [2.0, 0.0, 0.0, 0.0]: must be a unit quaternion"),
+    (np.array([[1.0, 0.0, 0.0, 0.0], [1.001, 0.0, 0.0, 0.0]]), "its norm 1 within 1e-06, not 1.001"),
+])
+def test_a_quaternion_that_is_no_rotation_is_refused(model, quaternion, words):
+    refused(dd.ModelError, words, call=lambda: dd.Simulation(model, state=state_with(model, quaternion=quaternion)))
+
+
+def test_a_quaternion_a_little_off_unit_is_normalised_and_one_off_by_round_off_kept():
+    model = stack_model([BRICK[2]])
+    quaternion = np.array([[1.0 + 1e-14, 0.0, 0.0, 0.0], [0.6 * (1 + 1e-8), 0.8 * (1 + 1e-8), 0.0, 0.0]])
+    sim = dd.Simulation(model, state=state_with(model, quaternion=quaternion))
+    assert sim.state.quaternion[0, 0] == 1.0 + 1e-14  # a state handed back goes on bit for bit
+    assert np.linalg.norm(sim.state.quaternion[1]) == pytest.approx(1.0, abs=1e-15)
+
+
+def test_a_state_of_lists_ints_or_float32_runs_as_float64_copies(model):
+    """Converted, not failing in numba nor cycling float32: the run is the one of the float64
+    arrays, and the caller's arrays are left alone."""
+    rest = dd.State.at_rest(model.block_centroid)
+    given = rest._replace(position=model.block_centroid.tolist(), quaternion=rest.quaternion.astype(int),
+                          velocity=rest.velocity.astype(np.float32))
+    runs = [dd.Simulation(model, state=state) for state in (rest, given)]
+    for sim in runs:
+        sim.cycle(50)
+        assert all(a.dtype == np.float64 and a.flags.c_contiguous for a in sim.state)
+    assert np.array_equal(runs[0].state.position, runs[1].state.position)
+    assert given.quaternion.dtype.kind == "i" and np.array_equal(rest.position, model.block_centroid)
+
+
+def test_an_in_plane_model_turned_about_another_axis_than_y_is_refused_by_the_planar_cycle(in_plane):
+    turned_x = np.array([[1.0, 0.0, 0.0, 0.0], [np.cos(0.05), np.sin(0.05), 0.0, 0.0]])
+    state = state_with(in_plane, quaternion=turned_x)
+    refused(dd.ModelError, "state.quaternion[1]", "turn about y only", call=lambda: dd.Simulation(in_plane, state=state))
+    dd.Simulation(in_plane, state=state, engine="numba-3d")  # the 3D cycle turns them any way
+    turned_y = np.array([[1.0, 0.0, 0.0, 0.0], [np.cos(0.001), 0.0, np.sin(0.001), 0.0]])
+    dd.Simulation(in_plane, state=state_with(in_plane, quaternion=turned_y))
+
+
+def test_a_restored_snapshot_state_is_checked(model):
+    sim = dd.Simulation(model)
+    snapshot = sim.snapshot()
+    broken = dataclasses.replace(snapshot, state=snapshot.state._replace(position=np.zeros((3, 3))))
+    refused(dd.ModelError, "state.position must be a (2, 3) array", call=lambda: sim.restore(broken))
+    sim.restore(snapshot)
+
+
+# -- Simulation: its other arguments ----------------------------------------------------------
+
+@pytest.mark.parametrize("model_given", [None, "brick.toml", {"blocks": []}])
+def test_a_simulation_of_no_model_is_refused(model_given):
+    refused(dd.ModelError, "Simulation model = ", "must be a Model", call=lambda: dd.Simulation(model_given))
+
+
+@pytest.mark.parametrize("timestep", [-1e-4, 0.0, float("nan"), float("inf"), "1e-5", True, 1e-30])
+def test_a_timestep_that_is_no_positive_number_is_refused(model, timestep):
+    refused(dd.ModelError, "Simulation timestep = ", "must be a number in [1e-12, inf) s",
+            call=lambda: dd.Simulation(model, timestep=timestep))
+
+
+def test_a_timestep_above_the_critical_one_is_refused_and_a_numpy_one_taken(model):
+    refused(dd.ModelError, "exceeds the critical timestep", call=lambda: dd.Simulation(model, timestep=1.0))
+    assert type(dd.Simulation(model, timestep=np.float32(1e-5)).timestep) is float
+
+
+@pytest.mark.parametrize("cycles", [2.5, -5, True, "10", None])
+def test_a_cycle_count_that_is_no_whole_number_is_refused(model, cycles):
+    refused(dd.ModelError, "cycle n = ", "must be an integer in [0, 1e+10]", call=lambda: dd.Simulation(model).cycle(cycles))
+
+
+def test_a_cycle_count_of_zero_or_a_numpy_integer_is_taken(model):
+    sim = dd.Simulation(model)
+    assert sim.cycle(0).cycles == 0 and sim.cycle(np.int64(3)).cycles == 3
+
+
+@pytest.mark.parametrize("displacement, rotation, words", [
+    (np.zeros((3, 3)), np.zeros((2, 3)), "move displacement must be a (2, 3) array of finite numbers, got shape (3, 3)"),
+    (np.zeros((2, 3)), np.zeros(3), "move rotation must be a (2, 3) array"),
+    (np.full((2, 3), np.nan), np.zeros((2, 3)), "move displacement must be a (2, 3) array of finite numbers"),
+    (np.zeros((2, 3)), "none", "move rotation"),
+])
+def test_a_move_of_the_wrong_shape_is_refused_naming_it(model, displacement, rotation, words):
+    sim = dd.Simulation(model)
+    before = sim.state.copy()
+    refused(dd.ModelError, words, call=lambda: sim.move(displacement, rotation))
+    assert all(np.array_equal(a, b) for a, b in zip(before, sim.state))
+
+
+@pytest.mark.parametrize("blocks", [["block0"], [1], "block0", 1, np.array([1]), np.int64(1), ("block0",)])
+def test_blocks_are_removed_by_name_or_index(model, blocks):
+    sim = dd.Simulation(model)
+    sim.remove_blocks(blocks)
+    assert sim.active.tolist() == [True, False]
+
+
+@pytest.mark.parametrize("blocks, words", [
+    ([5], "remove_blocks: 5 is no block: must be a block name or an index in [0, 1]"),
+    ([-1], "remove_blocks: -1 is no block"),
+    ([True], "remove_blocks: True is no block"),
+    ([1.0], "remove_blocks: 1.0 is no block"),
+    (["nope"], "no block named 'nope'"),
+    (None, "remove_blocks = None: must be a block name or index, or a list of them"),
+    ({1}, "remove_blocks = {1}: must be"),
+])
+def test_removing_what_is_no_block_is_refused_naming_the_entry(model, blocks, words):
+    sim = dd.Simulation(model)
+    refused(dd.ModelError, words, call=lambda: sim.remove_blocks(blocks))
+    assert sim.active.all()
+
+
+def test_reactions_take_a_block_name_or_index_and_refuse_anything_else(model):
+    sim = dd.Simulation(model)
+    sim.cycle_to_equilibrium()
+    assert np.array_equal(sim.reactions("block0"), sim.reactions(1))
+    refused(dd.ModelError, "reactions block: 2 is no block", call=lambda: sim.reactions(2))
+
+
+# -- blocks and models -------------------------------------------------------------------------
+
+@pytest.mark.parametrize("change, words", [
+    (dict(name=""), "block '' name = '': must be a non-empty text"),
+    (dict(name=5), "block 5 name = 5: must be a non-empty text"),
+    (dict(name=None), "name = None: must be a non-empty text"),
+    (dict(shape=None), "block 'brick' shape = None: must be a ConvexPolyhedron"),
+    (dict(shape=np.zeros((8, 3))), "shape = array("),
+    (dict(fixed="no"), "block 'brick' fixed = 'no': must be true or false"),
+    (dict(fixed=1), "fixed = 1: must be true or false"),
+    (dict(fixed=None), "fixed = None: must be true or false"),
+    (dict(density=-5), "block 'brick' density = -5: must be a number in [1, 2.5e+04] kg/m3"),
+    (dict(density=float("nan")), "density = nan: must be a number"),
+    (dict(density="1800"), "density = '1800': must be a number"),
+    (dict(density=True), "density = True: must be a number"),
+])
+def test_a_block_of_the_wrong_kind_is_refused_naming_the_field(change, words):
+    given = dict(name="brick", shape=dd.box([0, 0, 0], BRICK)) | change
+    refused(dd.ModelError, words, call=lambda: dd.Block(**given))
+
+
+def bricks():
+    return [dd.Block(name="base", shape=dd.box([-0.05, 0, -0.01], [0.1, BRICK[1], 0]), fixed=True),
+            dd.Block(name="brick", shape=dd.box([0, 0, 0], BRICK))]
+
+
+@pytest.mark.parametrize("change, words", [
+    (dict(blocks=None), "build_model blocks = None: must be a list of Block"),
+    (dict(blocks="brick"), "build_model blocks = 'brick': must be a list of Block"),
+    (dict(blocks={"name": "brick"}), "build_model blocks = {'name': 'brick'}: must be a list of Block"),
+    (dict(blocks=[b.shape for b in bricks()]), "build_model blocks[0] = ConvexPolyhedron("),
+    (dict(blocks=[{"name": "a"}]), "build_model blocks[0] = {'name': 'a'}: must be a Block (Block(name=..., shape=...))"),
+    (dict(blocks=[]), "the model has no blocks"),
+    (dict(joint=None), "build_model joint = None: must be a JointMaterial"),
+    (dict(joint={"kn": 1e7}), "joint = {'kn': 10000000.0}: must be a JointMaterial (make one of the dict: JointMaterial(**values))"),
+    (dict(supports={"fix_y": True}), "build_model supports = {'fix_y': True}: must be a Supports"),
+    (dict(contacts=4), "build_model contacts = 4: must be a ContactSettings"),
+    (dict(solver=None), "build_model solver = None: must be a SolverSettings"),
+    (dict(source=5), "build_model source = 5: must be a non-empty text"),
+    (dict(density="1800"), "[material] density = '1800': must be a number"),
+])
+def test_build_model_refuses_arguments_of_the_wrong_kind_naming_them(change, words):
+    given = dict(blocks=bricks(), density=1800.0) | change
+    refused(dd.ModelError, words, call=lambda: dd.build_model(**given))
+
+
+def test_build_model_reads_a_generator_of_blocks_once():
+    assert dd.build_model((b for b in bricks()), density=1800.0).block_name == ("base", "brick")
+
+
+def test_a_model_replaced_with_a_wrong_table_is_refused_naming_it(model):
+    refused(dd.ModelError, "build_model joint = None: must be a JointMaterial", call=lambda: model.replace(joint=None))
+
+
+@pytest.mark.parametrize("method, words", [
+    ("overridden", "Model.overridden: unknown key(s) ['foo']; allowed: ['density', 'kn', 'ks', 'friction', 'points', 'criterion', "
+                   "'joint_law']"),
+    ("replace", "Model.replace: unknown key(s) ['foo']; allowed: ['density', 'joint', 'contacts', 'supports', 'solver']"),
+])
+def test_an_unknown_override_is_refused_naming_it_and_the_allowed_ones(model, method, words):
+    refused(dd.ModelError, words, call=lambda: getattr(model, method)(foo=1))
+
+
+# -- geometry ----------------------------------------------------------------------------------
+
+def hand_made(**change):
+    """A polyhedron made by hand from a box's parts, some changed."""
+    shape = dd.box([0, 0, 0], [1, 1, 1])
+    parts = {f.name: getattr(shape, f.name) for f in dataclasses.fields(shape)} | change
+    return dd.ConvexPolyhedron(**parts)
+
+
+@pytest.mark.parametrize("change, words", [
+    (dict(volume=-1.0), "volume = -1.0: must be a number above 0 and at most the vertices' bounding box (1 m3)"),
+    (dict(volume=float("nan")), "volume = nan"),
+    (dict(volume=True), "volume = True"),
+    (dict(volume=2.0), "volume = 2.0"),
+    (dict(vertices=np.zeros((8, 3))), "volume = 1.0: must be a number above 0 and at most the vertices' bounding box (0 m3)"),
+    (dict(vertices=np.zeros((3, 3))), "vertices must be an (n >= 4, 3) array of finite floats, m, got shape (3, 3) float64"),
+    (dict(vertices=np.full((8, 3), np.nan)), "vertices must be an (n >= 4, 3) array of finite floats"),
+    (dict(vertices=[[0.0, 0.0, 0.0]] * 8), "got a list of shape (8, 3)"),
+    (dict(faces=(np.array([0, 1, 2]),)), "faces must be a tuple of at least 4 integer arrays"),
+    (dict(faces=tuple(np.array([0, 1, 2, 9]) for _ in range(6))), "faces must number vertices 0 to 7, got 0 to 9"),
+    (dict(face_normals=np.zeros((1, 3))), "face_normals must be a (6, 3) array of finite floats"),
+    (dict(centroid=None), "centroid must be a (3,) and second_moment a (3, 3) array of finite floats, got None"),
+])
+def test_a_hand_made_polyhedron_breaking_its_invariants_is_refused(change, words):
+    refused(dd.GeometryError, "ConvexPolyhedron: ", words, call=lambda: hand_made(**change))
+
+
+def test_a_polyhedron_moved_rigidly_keeps_its_invariants():
+    shape = dd.box([0, 0, 0], [1, 2, 3]).transformed(np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]), np.array([5.0, 0, 0]))
+    assert shape.volume == pytest.approx(6.0)
+
+
+@pytest.mark.parametrize("lower, upper, words", [
+    ("abc", "def", "box min = 'abc': must be [x, y, z], three finite numbers (m)"),
+    ([0, 0, 0], [np.nan, 1, 1], "box max = [nan, 1, 1]: must be [x, y, z]"),
+    ([True, 0, 0], [1, 1, 1], "box min = [True, 0, 0]"),
+    ([0, 0], [1, 1], "box min = [0, 0]"),
+    ([0, 0, 0], None, "box max = None"),
+    ([0, 0, 0], [1 + 1j, 1, 1], "box max = [(1+1j), 1, 1]"),
+])
+def test_box_corners_that_are_no_points_are_refused_naming_min_or_max(lower, upper, words):
+    refused(dd.GeometryError, "brick: ", words, call=lambda: dd.box(lower, upper, name="brick"))
+
+
+def test_hull_points_that_are_no_real_numbers_are_refused():
+    corners = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    for points in (corners + 1j, [[True, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]):
+        refused(dd.GeometryError, "vertices must be a list of [x, y, z] numbers", call=lambda: dd.convex_hull(points))
+
+
+# -- numbers -----------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("make, field, expected", [
+    (lambda: dd.JointMaterial(kn=np.int64(30_000_000)), "kn", 30_000_000),
+    (lambda: dd.JointMaterial(friction=np.float64(0.5)), "friction", 0.5),
+    (lambda: dd.JointMaterial(friction=np.float32(0.5)), "friction", 0.5),
+    (lambda: dd.ContactSettings(points_per_length=np.int64(4)), "points_per_length", 4),
+    (lambda: dd.SolverSettings(max_cycles=np.uint32(100)), "max_cycles", 100),
+    (lambda: Imperfections(height_sd_mm=np.float64(0.1)), "height_sd_mm", 0.1),
+])
+def test_numpy_numbers_are_numbers_and_kept_as_python_numbers(make, field, expected):
+    """Taken as the numbers they are, and held as Python's: the settings are written to JSON."""
+    settings = make()
+    value = getattr(settings, field)
+    assert value == expected and type(value) is type(expected)
+    json.dumps(dataclasses.asdict(settings))
+
+
+@pytest.mark.parametrize("value, number, integer", [
+    (np.int64(3), True, True), (np.uint8(3), True, True), (np.float64(0.5), True, False), (np.float32(0.5), True, False),
+    (True, False, False), (np.True_, False, False), (np.float64("nan"), False, False), (np.float32("inf"), False, False),
+    (10**400, False, True), ("1", False, False), (1 + 0j, False, False), (np.array(1.0), False, False), (None, False, False),
+])
+def test_numpy_scalars_are_numbers_but_booleans_and_huge_integers_are_not(value, number, integer):
+    assert is_number(value) is number and is_integer(value) is integer
+
+
+@pytest.mark.parametrize("make, words", [
+    (lambda: dd.JointMaterial(kn=np.True_), "[joint] kn = np.True_: must be a number in [1e+04, 1e+15] Pa/m"),
+    (lambda: dd.JointMaterial(kn=np.int64(1)), "[joint] kn = np.int64(1): must be a number in [1e+04, 1e+15] Pa/m"),
+    (lambda: dd.ContactSettings(points_per_length=np.float64(4.0)), "points_per_length = np.float64(4.0): must be an integer"),
+])
+def test_numpy_values_out_of_their_rule_are_still_refused(make, words):
+    refused(dd.ModelError, words, call=make)
+
+
+def test_an_argument_of_the_wrong_kind_is_named_with_its_function():
+    """drydem.model.parameters.check_arguments: the check an analysis makes of its arguments."""
+    rules = {"model": InstanceOf(dd.Model), "settings": InstanceOf(dd.SolverSettings)}
+    refused(dd.ModelError, "an_analysis model = None: must be a Model; an_analysis settings = {}: must be a SolverSettings "
+            "(make one of the dict: SolverSettings(**values))", call=lambda: check_arguments("an_analysis", rules, model=None, settings={}))
+
+
+# -- imperfect walls -------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def wall():
+    from drydem.io.target import load_target
+    return load_target("WD3").wall
+
+
+@pytest.mark.parametrize("function", [imperfect_model, imperfect_blocks])
+@pytest.mark.parametrize("wall_given, imperfections, words", [
+    ("model", Imperfections(), "wall = Model("),
+    ("WD3", Imperfections(), "wall = 'WD3': must be a Wall"),
+    (None, None, "imperfections = None: must be an Imperfections"),
+    ("wall", {"height_sd_mm": 0.1}, "imperfections = {'height_sd_mm': 0.1}: must be an Imperfections (make one of the dict"),
+])
+def test_an_imperfect_wall_of_arguments_of_the_wrong_kind_is_refused_naming_them(wall, function, wall_given, imperfections, words):
+    given = {"model": wall.model(), "wall": wall}.get(wall_given, wall_given)
+    refused(dd.ModelError, f"{function.__name__} ", words, call=lambda: function(given, imperfections, 1))
+
+
+def test_an_exaggerated_wall_of_no_imperfections_is_refused(wall):
+    refused(dd.ModelError, "exaggerated_model imperfections = None: must be an Imperfections",
+            call=lambda: exaggerated_model(wall, None, 1, 10.0))
+
+
+def test_messages_name_the_rule_not_a_python_error():
+    """The messages above are drydem's own, one line each."""
+    with pytest.raises(dd.DrydemError) as raised:
+        dd.Block(name="brick", shape=None, fixed="no")
+    assert re.fullmatch(r"block 'brick' shape = None: must be a ConvexPolyhedron; block 'brick' fixed = 'no': must be true or false",
+                        str(raised.value))
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda m: tilt_analysis(m, None), "tilt_analysis settings = None: must be a TiltSettings"),
+    (lambda m: tilt_analysis(m, {"increment_deg": 1.0}), "must be a TiltSettings (make one of the dict: TiltSettings(**values))"),
+    (lambda m: tilt_analysis("WD1", TiltSettings()), "tilt_analysis model = 'WD1': must be a Model"),
+    (lambda m: limit_analysis(None), "limit_analysis model = None: must be a Model"),
+    (lambda m: limit_analysis(m, None), "limit_analysis settings = None: must be a LimitSettings"),
+], ids=["tilt no settings", "tilt settings dict", "tilt model name", "limit no model", "limit no settings"])
+def test_an_analysis_of_arguments_of_the_wrong_kind_is_refused_naming_them(call, message):
+    model = stack_model([0.0055])
+    with pytest.raises(ModelError) as refused:
+        call(model)
+    assert message in str(refused.value)
