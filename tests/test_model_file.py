@@ -75,8 +75,10 @@ def test_save_and_load_round_trip(tmp_path):
          r"#1 \('brick'\) vertex 8 \[0.0125, -0.006, 0.00275\] lies inside a face .* non-convex shape"),
         # the same a hair (1e-10 m) off its face: Qhull keeps it as a vertex, which dented the face (volume wrong)
         (("[0, 0.006, 0.0055]]", "[0, 0.006, 0.0055], [0.0125, -0.0060000001, 0.00275]]"), r"vertex 8 .* lies inside a face"),
-        (('name = "brick"', 'name = ""'), r"\[\[block\]\] #1 name = '': must be a non-empty text"),
-        (('name = "brick"', "name = 5"), r"\[\[block\]\] #1 name = 5: must be a non-empty text"),
+        (('name = "brick"', 'name = ""'), r"\[\[block\]\] #1 \(''\) name = '': must be a non-empty text"),
+        (('name = "brick"', "name = 5"), r"\[\[block\]\] #1 \(5\) name = 5: must be a non-empty text"),
+        (('name = "brick"', 'name = "brick"\nfixed = "no"'), r"\[\[block\]\] #1 \('brick'\) fixed = 'no': must be true or false"),
+        (('name = "brick"', 'name = "brick"\ndensity = -5.0'), r"\[\[block\]\] #1 \('brick'\) density = -5.0: must be a number in"),
         (("[0, -0.006, 0.0055], [0.025, -0.006, 0.0055], [0.025, 0.006, 0.0055], [0, 0.006, 0.0055]]",
           "[0, -0.006, 0.0], [0.025, -0.006, 0.0], [0.025, 0.006, 0.0], [0, 0.006, 0.0]]"), r"block 'brick': degenerate"),
         (('name = "brick"\nvertices', 'name = "brick"\nbox = { min = [0, 0, 0], max = [1, 1, 1] }\nvertices'), r"#1 \('brick'\) needs exactly one of"),

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 from dataclasses import asdict
 from pathlib import Path
+from types import SimpleNamespace
 
 import json
 
@@ -42,8 +43,8 @@ import numpy as np
 from drydem.errors import ModelError
 from drydem.files import read_toml
 from drydem.model.geometry import ConvexPolyhedron, box, convex_hull, face_interior_points
-from drydem.model.assembly import Block, Model, build_model
-from drydem.model.parameters import DENSITY, is_number, shown
+from drydem.model.assembly import BLOCK_RULES, Block, Model, build_model
+from drydem.model.parameters import field_problems, is_number, refuse, shown
 from drydem.model.tables import SECTIONS, errors_naming, no_unknown, parameters_from_dict
 
 BLOCK_KEYS = {"name", "fixed", "density", "box", "vertices"}
@@ -71,9 +72,9 @@ def _block(entry: dict, index: int, source: str) -> Block:
     name = entry.get("name", f"block{index}") if isinstance(entry, dict) else f"block{index}"
     where = f"[[block]] #{index} ({shown(name)})"
     no_unknown(entry, BLOCK_KEYS, source, where)
-    if not (isinstance(name, str) and name.strip()):
-        raise ModelError(f"{source}: [[block]] #{index} name = {shown(name)}: must be a non-empty text in quotes "
-                         "(messages and results name the block by it)")
+    fields = SimpleNamespace(name=name, fixed=entry.get("fixed", False), density=entry.get("density"))
+    refuse(field_problems(fields, {key: BLOCK_RULES[key] for key in vars(fields)}, lambda key: f"{source}: {where} {key}",
+                          optional=("density",)))  # Block's rules, said before its geometry is built, naming the file
     if ("box" in entry) == ("vertices" in entry):
         raise ModelError(f"{source}: {where} needs exactly one of 'box' or 'vertices'")
     if "box" in entry:
@@ -90,13 +91,7 @@ def _block(entry: dict, index: int, source: str) -> Block:
         points = [_point(v, f"{source}: {where} vertex {k}") for k, v in enumerate(vertices)]
         shape = convex_hull(points, name=f"block {name!r}")
         _refuse_face_interior_points(points, shape, f"{source}: {where}")
-    fixed = entry.get("fixed", False)
-    if not isinstance(fixed, bool):
-        raise ModelError(f"{source}: {where} fixed = {fixed!r}: must be true or false")
-    density = entry.get("density")
-    if density is not None:
-        DENSITY.check(density, f"{source}: {where} density")
-    return Block(name=name, shape=shape, density=density, fixed=fixed)
+    return Block(name=name, shape=shape, density=fields.density, fixed=fields.fixed)
 
 
 def _refuse_face_interior_points(points: list, shape: ConvexPolyhedron, where: str) -> None:
