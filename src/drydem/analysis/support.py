@@ -52,6 +52,12 @@ def unsupported(model, contacts: SubContacts) -> np.ndarray:
     return np.flatnonzero(model.block_movable & ~model.block_fixed[:, 2] & ~touching)
 
 
+def lost_drops(model, lost_drop_heights: float) -> np.ndarray:
+    """(nb,) m: the drop past which each block has fallen out of the model, ``lost_drop_heights``
+    of its own height (:func:`dropped_out`)."""
+    return lost_drop_heights * np.array([np.ptp(shape.vertices[:, 2]) for shape in model.block_shape])
+
+
 def dropped_out(model, state, contacts: SubContacts, active: np.ndarray, lost_drop: np.ndarray) -> np.ndarray:
     """(nb,) bool: the block, still in the analysis (``active``), has a rigid-body drop beyond its
     ``lost_drop`` (nb,) m: its centroid is lower than where it was drawn by more than that plus

@@ -46,7 +46,7 @@ import numpy as np
 from drydem.analysis.shake.motion import DIRECTIONS, GroundMotion
 from drydem.analysis.shake.restitution import RockingBlock, calibrated_damping_ratio, housner_restitution
 from drydem.analysis.shake.settings import DURATION, HOUSNER, MONITOR_FELL, History, ShakeFrame, ShakeResult, ShakeSettings
-from drydem.analysis.support import dropped_out
+from drydem.analysis.support import dropped_out, lost_drops
 from drydem.analysis.tilt.settings import monitor_index
 from drydem.engine.damping import Damping
 from drydem.engine.simulation import Simulation
@@ -102,12 +102,6 @@ def check_held_axes(model: Model, motion: GroundMotion, given_by: Callable[[str]
                          f"blocks free in {axis} ([supports] fix_{axis} = false)")
     return [f"{given(axis)} (peak {peak:.4g} m/s2) moves nothing: the blocks are held in {axis} ([supports] fix_{axis} = true); "
             f"the motion along {' and '.join(free)} is analysed" for axis, peak in held]
-
-
-def lost_drops(model: Model, lost_drop_heights: float) -> np.ndarray:
-    """(nb,) m: the drop past which each block has fallen out of the model, ``lost_drop_heights``
-    of its own height."""
-    return lost_drop_heights * np.array([np.ptp(shape.vertices[:, 2]) for shape in model.block_shape])
 
 
 def settle(sim: Simulation, lost_drop_heights: float) -> None:

@@ -9,7 +9,7 @@ from functools import partial
 
 import numpy as np
 
-from drydem.analysis.support import dropped_out
+from drydem.analysis.support import dropped_out, lost_drops
 from drydem.analysis.tilt.settings import (
     EQUILIBRIUM, FELL, GAVE_UP, MAX_CYCLES, MONITOR_FELL, STOP_DISPLACEMENT, Frame, Record, TiltSettings, check_loading,
     monitor_index, wall_height,
@@ -59,8 +59,7 @@ class TiltRun:
         self.monitor = monitor_index(model, settings.monitor, settings.tilt_axis)
         self.height = wall_height(model)
         self.lost: list[tuple[str, float]] = []
-        heights = np.array([np.ptp(shape.vertices[:, 2]) for shape in model.block_shape])
-        self.lost_drop = settings.lost_drop_heights * heights
+        self.lost_drop = lost_drops(model, settings.lost_drop_heights)
         #: the last three equilibria, (tilt in deg, State), oldest first, and the trends
         #: (displacement m/deg, rotation rad/deg, largest point motion m/deg) between them
         self.equilibria: list[tuple[float, State]] = []
