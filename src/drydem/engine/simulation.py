@@ -315,7 +315,8 @@ class Simulation:
         if g.shape != (3,) or not np.all(np.isfinite(g)):
             raise ModelError(f"gravity must be a finite [gx, gy, gz] in m/s2, got {gravity!r}")
         moving = m.block_movable & self.active
-        weight = float(np.linalg.norm(g)) * float(m.block_mass[moving].sum()) / max(int(moving.sum()), 1)
+        moving_mass = float(m.block_mass[moving].sum())
+        weight = float(np.linalg.norm(g)) * moving_mass / max(int(moving.sum()), 1)
         if criterion_name == "ratio" and weight == 0.0:
             raise ModelError("the 'ratio' criterion needs gravity (it divides by the mean weight); use 'velocity'")
         joint = kernel_joint(m.joint)
@@ -326,7 +327,7 @@ class Simulation:
         while done < max_cycles:
             chunk = min(CHUNK if ground is None else TABLE_CHUNK, max_cycles - done)
             table = AT_REST if ground is None else ground[done:done + chunk]
-            slack = travel_slack + self._table_slack(g, table, float(m.block_mass[moving].sum()))
+            slack = travel_slack + self._table_slack(g, table, moving_mass)
             settings = loop.LoopSettings(
                 g, self.timestep, self.damping, chunk, criterion, limit, max(weight, 1e-300), slack, self.tracker.absolute_limit,
                 table, self.closure_limit, self._first_velocity_dt,
