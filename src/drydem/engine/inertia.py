@@ -48,7 +48,8 @@ class BlockConstants(NamedTuple):
     the motion (scaled or true). inertia_body, inv_inertia_body : (nb, 3, 3) kg m2 and its
     inverse, about the centroid in the body frame. free : (nb, 6) 1.0 where the degree of
     freedom (x, y, z, rx, ry, rz) moves, 0.0 where fixed. radius : (nb,) m, largest
-    distance from the centroid to a vertex. origin : (nb, 3) m, the centroids in the model file.
+    distance from the centroid to a vertex. origin : (nb, 3) m, the centroids where the cycling
+    started (the divergence test's travel is measured from them).
     """
 
     mass: np.ndarray
@@ -237,11 +238,12 @@ class Inertia(NamedTuple):
 
 def timestep_and_blocks(
     model: Model, contacts: SubContacts, active: np.ndarray, *, fixed_timestep: float | None, scaled_timestep: float | None,
-    damping: Damping, closing: tuple[np.ndarray, np.ndarray, float] | None = None,
+    damping: Damping, origin: np.ndarray, closing: tuple[np.ndarray, np.ndarray, float] | None = None,
 ) -> Inertia:
     """The timestep (s), the blocks' constants with ``contacts``, blocks not ``active`` held, and
     the closure limit of a stress-dependent joint (:func:`stiffness_bound`, with ``closing``: each
     sub-contact's closure, m, and closing speed, m/s, and the timestep they were taken at, s).
+    ``origin`` (nb, 3) m: the centroids where the cycling started (:class:`BlockConstants`).
 
     The timestep is ``fixed_timestep`` (ModelError if above the critical one), else
     ``solver.timestep_safety`` times the critical one (:func:`critical_timestep`, reduced for
@@ -287,7 +289,7 @@ def timestep_and_blocks(
         inv_inertia_body=np.linalg.inv(inertia) if solver.mass_scaling else model.block_inertia_inverse,
         free=(~model.block_fixed & movable[:, None]).astype(float),
         radius=model.block_radius,
-        origin=model.block_centroid,
+        origin=origin,
     ), bound.closure_limit)
 
 

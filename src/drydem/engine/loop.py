@@ -197,8 +197,8 @@ class LoopSettings(NamedTuple):
 
     gravity : (3,) m/s2. dt : timestep, s. damping : a :class:`~drydem.engine.damping.Damping`.
     max_cycles : cycles at most. criterion, limit : RATIO (max unbalanced force / force_scale <
-    limit) or VELOCITY (max block point speed < limit, m/s). force_scale : N. travel_slack :
-    kg m, of the divergence test. absolute_limit : m, of :func:`detection_slack`.
+    limit) or VELOCITY (max block point speed < limit, m/s). force_scale : N. energy_slack_j :
+    J, of the divergence test. absolute_limit : m, of :func:`detection_slack`.
     ground_acceleration : (n, 3) m/s2, the table's acceleration a_g at each cycle (the body
     force of cycle k is m (g - a_g[k]): the blocks move in the frame of the table; the call
     ends after n cycles if n < max_cycles), or (0, 3) for a table at rest. closure_limit : (ns,)
@@ -217,7 +217,7 @@ class LoopSettings(NamedTuple):
     criterion: int
     limit: float
     force_scale: float
-    travel_slack: float
+    energy_slack_j: float
     absolute_limit: float
     ground_acceleration: np.ndarray
     closure_limit: np.ndarray
@@ -243,8 +243,10 @@ def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neig
 
     Divergence: a NaN, or more kinetic energy than the body forces can have supplied. Damping
     only removes energy, so the kinetic energy stays below their work, at most
-    g_max sum m |x - x_origin| with g_max = |g| + max |a_g|; above DIVERGENCE_FACTOR times that
-    (plus ``travel_slack``, kg m, for the settling at the start) the integration has blown up.
+    g_max sum m |x - x_origin| (x_origin where the cycling started) with g_max = |g| + max |a_g|;
+    above DIVERGENCE_FACTOR times that plus ``energy_slack_j`` (J: the energy the cycling started
+    with, the settling at the start, the farthest travel so far and the table's work:
+    :meth:`drydem.engine.simulation.Simulation._energy_slack_j`) the integration has blown up.
     A block falling freely for any time does not trigger it. The energies are measured every ENERGY_CHECK_EVERY cycles
     (they cost a third of the motion update); a blow-up takes far longer to matter.
 
@@ -279,7 +281,7 @@ def cycle_loop(step_function, state, blocks, sub, joint, loop, broad_state, neig
         unbalanced, speed, kinetic, travel, stiffer = step_function(state, blocks, sub, joint, loop.closure_limit, body, dt, velocity_dt,
                                                                     damping, rot, force, moment, measure, work)
         ratio = unbalanced / loop.force_scale
-        if not (speed < np.inf and (not measure or kinetic <= DIVERGENCE_FACTOR * g * (travel + loop.travel_slack))):
+        if not (speed < np.inf and (not measure or kinetic <= DIVERGENCE_FACTOR * (g * travel + loop.energy_slack_j))):
             return cycle + 1, DIVERGED, ratio, speed
         if (criterion == RATIO and ratio < limit) or (criterion == VELOCITY and speed < limit):
             return cycle + 1, CONVERGED, ratio, speed

@@ -50,7 +50,7 @@ CYCLE_COUNT = Range(0, MAX_CYCLES.high, integer=True)
 #: cycles run in one call of the kernel loop between progress reports
 CHUNK = 5_000
 #: cycles at most in one call of the kernel loop on a shaking table: the divergence test allows
-#: for the table's work up to the call's end (Simulation._table_slack), so a call is kept short
+#: for the table's work up to the call's end (Simulation._energy_slack_j), so a call is kept short
 #: that the allowance does not run far ahead of the cycles it is tested at
 TABLE_CHUNK = 256
 #: 1/kg: blocks this heavy keep their velocities through a cycle's forces (Simulation.move)
@@ -133,14 +133,25 @@ class Simulation:
         self._planar = _planar(model, engine)
         self.state = State.at_rest(model.block_centroid) if state is None else self._checked_state(state)
         self.tracker = ContactTracker(model, self.state)
+        #: (nb, 3) m: the centroids the cycling started from, the divergence test's origin: a block
+        #: released above its base has fallen that far when it lands (:func:`drydem.engine.loop.cycle_loop`)
+        self._origin = self.state.position.copy()
+        #: kg m: the largest sum m |x - x_origin| over the moving blocks at the end of a call of the
+        #: kernel loop, part of the divergence test's allowance (:meth:`_energy_slack_j`)
+        self._farthest_travel_kg_m = 0.0
         self.blocks: BlockConstants | None = None
         self.cycles = 0
         self.time_s = 0.0
-        #: m/s: the sum over the cycles run with a ground acceleration of |a_g| dt (:meth:`_table_slack`)
+        #: m/s: the sum over the cycles run with a ground acceleration of |a_g| dt (:meth:`_energy_slack_j`)
         self.table_impulse_m_s = 0.0
         self._fixed_timestep = None if timestep is None else float(timestep)
         self._scaled_timestep: float | None = None
         self._update_inertia()
+        #: J: the kinetic and elastic energy of the state the cycling started from, part of the
+        #: divergence test's allowance (:meth:`_energy_slack_j`): a block given a speed, or
+        #: released overlapping another, may turn it into motion without gravity's help
+        energy = self.energy(gravity=np.zeros(3))
+        self._start_energy_j = energy["kinetic"] + energy["elastic"]
 
     @property
     def contacts(self) -> SubContacts:
@@ -173,7 +184,7 @@ class Simulation:
         old = self.timestep if self.blocks is not None else None
         dt, blocks, self.closure_limit = timestep_and_blocks(
             self.model, self.tracker.contacts, self.tracker.active, fixed_timestep=self._fixed_timestep, scaled_timestep=self._scaled_timestep,
-            damping=self.damping, closing=self._closing(),
+            damping=self.damping, origin=self._origin, closing=self._closing(),
         )
         if self.model.solver.mass_scaling:
             self._scaled_timestep = dt
@@ -264,7 +275,7 @@ class Simulation:
             inv_mass=np.where(blocks.inv_mass > 0, IMMOVABLE_INVERSE_MASS, 0.0), inv_inertia_body=np.zeros_like(blocks.inv_inertia_body)
         )
         # its kinetic energy is not the dynamics', so not a divergence (a NaN still is)
-        self._run(gravity, 1, criterion=loop.RATIO, limit=-1.0, criterion_name="none", travel_slack=np.inf, blocks=heavy)
+        self._run(gravity, 1, criterion=loop.RATIO, limit=-1.0, criterion_name="none", energy_slack_j=np.inf, blocks=heavy)
         self.state.velocity[:] = 0.0
         self.state.angular_velocity[:] = 0.0
 
@@ -307,7 +318,7 @@ class Simulation:
 
     def _run(
         self, gravity, max_cycles: int, *, criterion: int, limit: float, criterion_name: str, progress=None,
-        travel_slack: float | None = None, blocks: BlockConstants | None = None, stop: Callable[[], bool] | None = None,
+        energy_slack_j: float | None = None, blocks: BlockConstants | None = None, stop: Callable[[], bool] | None = None,
         ground: np.ndarray | None = None,
     ) -> EquilibriumResult:
         m = self.model
@@ -320,14 +331,12 @@ class Simulation:
         if criterion_name == "ratio" and weight == 0.0:
             raise ModelError("the 'ratio' criterion needs gravity (it divides by the mean weight); use 'velocity'")
         joint = kernel_joint(m.joint)
-        if travel_slack is None:
-            travel_slack = m.total_mass * m.contact_tolerance
         done, detections = 0, 0
         code, stats = loop.RUNNING, StepStats(np.inf, np.inf)
         while done < max_cycles:
             chunk = min(CHUNK if ground is None else TABLE_CHUNK, max_cycles - done)
             table = AT_REST if ground is None else ground[done:done + chunk]
-            slack = travel_slack + self._table_slack(g, table, moving_mass)
+            slack = self._energy_slack_j(g, table, moving_mass) if energy_slack_j is None else energy_slack_j
             settings = loop.LoopSettings(
                 g, self.timestep, self.damping, chunk, criterion, limit, max(weight, 1e-300), slack, self.tracker.absolute_limit,
                 table, self.closure_limit, self._first_velocity_dt,
@@ -337,6 +346,7 @@ class Simulation:
                 n, code, ratio, speed = self.run_cycles(self.state, blocks or self.blocks, tracker.contacts, joint, settings,
                                                         tracker.broad_state, tracker.neighbours)
             stats = StepStats(ratio, speed)
+            self._farthest_travel_kg_m = max(self._farthest_travel_kg_m, self._travel_kg_m(moving))
             self._first_velocity_dt = self.timestep
             self.table_impulse_m_s += float(np.linalg.norm(table[:n], axis=1).sum()) * self.timestep
             done += n
@@ -363,10 +373,23 @@ class Simulation:
                 break
         return EquilibriumResult(code == loop.CONVERGED, done, criterion_name, float(stats.ratio), float(stats.max_speed), detections)
 
-    def _table_slack(self, gravity: np.ndarray, table: np.ndarray, moving_mass: float) -> float:
-        """kg m: the travel slack of the divergence test (:func:`drydem.engine.loop.cycle_loop`)
-        that allows for the kinetic energy the shaking table can have given the blocks by the end
-        of a call cycling ``table`` (its acceleration at each cycle, m/s2; none: 0).
+    def _travel_kg_m(self, moving: np.ndarray) -> float:
+        """kg m: sum m |x - x_origin| over the ``moving`` blocks (nb,) bool. The divergence test
+        (:func:`drydem.engine.loop.cycle_loop`) bounds the kinetic energy by the work gravity can
+        have done, |g| sum m |x - x_origin|; the test also allows the farthest travel so far, as
+        the bound on that work over the past does (:meth:`_energy_slack_j`): without it, a block
+        bouncing back up to where it was released, with the few per cent of energy an impact of a
+        few cycles gains, has travelled about nothing and was called diverged."""
+        m = self.model
+        return float(m.block_mass[moving] @ np.linalg.norm(self.state.position[moving] - self._origin[moving], axis=1))
+
+    def _energy_slack_j(self, gravity: np.ndarray, table: np.ndarray, moving_mass: float) -> float:
+        """J: what the divergence test (:func:`drydem.engine.loop.cycle_loop`) allows beyond
+        DIVERGENCE_FACTOR g_max sum m |x - x0| in a call cycling ``table`` (the table's
+        acceleration at each cycle, m/s2; none: (0, 3)), before the same factor: the energy the
+        cycling started with (:attr:`_start_energy_j`), g_max times the total mass times the
+        contact tolerance (the settling at the start) and times the farthest travel so far
+        (:meth:`_travel_kg_m`), and the work of the table.
 
         The test bounds the kinetic energy by the work of the body forces, g_max sum m |x - x0|:
         true of gravity, which is conservative, but not of the table frame's inertial force
@@ -376,18 +399,15 @@ class Simulation:
         dU/dt = -a_g . sum m v - dissipation <= |a_g| sqrt(2 M K) (Cauchy-Schwarz, M the moving
         mass, K the kinetic energy), and K <= U + G*, G* = |g| max over the past of
         sum m |x - x0|; so (Bihari's inequality) sqrt(K) <= sqrt(U0 + G*) + sqrt(M / 2) V with
-        V = integral of |a_g| dt, and K <= 2 (U0 + G*) + M V^2. The test allows
-        DIVERGENCE_FACTOR (10) times g_max (travel + slack); the slack here adds M V^2 / 2
-        / g_max, V summed to the call's end (:attr:`table_impulse_m_s` before it; a call is at
-        most TABLE_CHUNK cycles), so the allowance of the table's work, 10 M V^2 / 2, is 5 times
-        the bound. A blow-up grows exponentially and soon passes it (and a NaN is caught at
-        every cycle)."""
-        if table.shape[0] == 0:
-            return 0.0
+        V = integral of |a_g| dt, and K <= 2 (U0 + G*) + M V^2. The table's part is M V^2 / 2,
+        V summed to the call's end (:attr:`table_impulse_m_s` before it; a call is at most
+        TABLE_CHUNK cycles), so the allowance of its work, 10 M V^2 / 2, is 5 times the bound. A
+        blow-up grows exponentially and soon passes it (and a NaN is caught at every cycle)."""
         magnitude = np.linalg.norm(table, axis=1)
+        g_max = float(np.linalg.norm(gravity)) + float(magnitude.max(initial=0.0))  # the loop's g_max for this call
         speed = self.table_impulse_m_s + float(magnitude.sum()) * self.timestep
-        g_max = float(np.linalg.norm(gravity)) + float(magnitude.max())  # the loop's g_max for this call
-        return 0.0 if speed == 0.0 or g_max == 0.0 else 0.5 * moving_mass * speed**2 / g_max
+        settling = self.model.total_mass * self.model.contact_tolerance
+        return self._start_energy_j + g_max * (settling + self._farthest_travel_kg_m) + 0.5 * moving_mass * speed**2
 
     # -- diagnostics ----------------------------------------------------------------------
     def energy(self, *, gravity=(0.0, 0.0, -G)) -> dict[str, float]:
