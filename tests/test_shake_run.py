@@ -97,6 +97,16 @@ def test_a_floating_block_is_refused_as_a_model_that_cannot_stand():
     assert "it was not run" in str(error.value)
 
 
+def test_a_brick_on_joints_too_soft_to_carry_it_is_refused_with_the_reason():
+    """kn = 1e4 Pa/m closes a 5.5 mm brick's bed by rho g h / kn = 9.71 mm under its own weight:
+    it sinks through its base while settling, and the refusal says the joints are why."""
+    model = stack_model([0.0055], joint=dd.JointMaterial(kn=1e4, ks=1e4, friction=0.5), supports=dd.Supports(fix_y=True), points=2)
+    settings = ShakeSettings(motion=pulse("one-sine", amplitude_m_s2=2.0, frequency_hz=FREQUENCY_HZ), contact_damping_ratio=0.05)
+    with pytest.raises(DrydemError, match="'block0' fell while it settled") as error:
+        shake_analysis(model, settings)
+    assert "the joints are too soft to carry it: under its own weight alone, 'block0' closes its joint by 9.71 mm" in str(error.value)
+
+
 def test_a_brick_drawn_a_hair_above_its_base_settles_and_is_shaken():
     """The same rule as the tilting analysis's: a drop within two of its heights is a settling,
     not a fall (0.1 mm here, against 11 mm)."""

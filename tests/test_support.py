@@ -3,11 +3,13 @@ fall criterion built on them: a tall or soft wall settles, it does not fall."""
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
 import drydem as dd
+from drydem.analysis.support import elastic_settlement, load_paths, own_weight_closures, too_soft_joints
 from drydem.analysis.tilt import NO_EQUILIBRIUM_UNDER_GRAVITY, TiltSettings, tilt_analysis
+from drydem.cli import main
 from drydem.model.rotation import matrices
-from drydem.analysis.support import elastic_settlement, load_paths
 from conftest import BRICK, stack_model
 
 
@@ -90,6 +92,41 @@ def test_a_block_floating_above_the_wall_is_named_as_falling():
     result = tilt_analysis(model, TiltSettings(monitor="brick"))
     assert result.stable_under_gravity is False and result.ended_by == "unstable under gravity"
     assert [name for name, _ in result.lost_blocks] == ["floater"]
+
+
+@pytest.mark.parametrize("kn, sinks", [(1e4, True), (2e4, False)])
+def test_a_brick_sinks_through_joints_closing_more_than_its_thickness_under_its_own_weight(kn, sinks):
+    # W / (kn A) = rho g h / kn on its bed: 9.71 mm at kn = 1e4 Pa/m, more than the 5.5 mm
+    # brick; 4.86 mm at 2e4, less (it stands and slides at atan mu: test_tilt). A box closes
+    # the same fraction rho g / kn of its width on each face (its ends: 44 mm of 25 mm at 1e4)
+    model = stack_model([0.0055], joint=dd.JointMaterial(kn=kn, ks=kn, friction=0.5), supports=dd.Supports(fix_y=True))
+    closure, width, area = own_weight_closures(model, 1)
+    assert model.in_plane and len(closure) == 4  # bed, top and ends: the faces across y do not bear
+    assert closure / width == pytest.approx(np.full(4, 1800.0 * dd.G / kn), rel=1e-9)
+    assert closure[np.argmax(area)] == pytest.approx(1800.0 * dd.G * 0.0055 / kn, rel=1e-9)
+    assert ("closes its joint by 9.71 mm on its largest face" in too_soft_joints(model, [1])) is sinks
+
+
+def test_a_stiffening_joint_law_carries_a_brick_a_soft_constant_one_lets_sink():
+    # affine law kn + b sigma: u(sigma) = ln(1 + b sigma / kn) / b (drydem.engine.joints), at the
+    # brick's bed stress rho g h = 97.1 Pa with kn = 1e4 Pa/m and b = 1e3 /m: 4.23 mm < 5.5 mm
+    law = dd.JointMaterial(kn=1e4, ks=1e4, friction=0.5, model="affine", kn_per_stress=1e3)
+    model = stack_model([0.0055], joint=law, supports=dd.Supports(fix_y=True))
+    closure, width, area = own_weight_closures(model, 1)
+    sigma = 1800.0 * dd.G * 0.0055
+    assert closure[np.argmax(area)] == pytest.approx(np.log1p(1e3 * sigma / 1e4) / 1e3, rel=1e-9)
+    assert too_soft_joints(model, [1]) == ""
+
+
+def test_tilting_a_brick_on_joints_too_soft_to_carry_it_says_why_it_cannot_stand(tmp_path):
+    path = tmp_path / "soft.toml"
+    path.write_text("[material]\ndensity = 1800.0\n[joint]\nkn = 1e4\nks = 1e4\nfriction = 0.5\n[supports]\nfix_y = true\n"
+                    "[[block]]\nname = \"base\"\nfixed = true\nbox = { min = [-0.05, -0.006, -0.01], max = [0.25, 0.006, 0.0] }\n"
+                    "[[block]]\nname = \"brick\"\nbox = { min = [0.0, -0.006, 0.0], max = [0.025, 0.006, 0.0055] }\n")
+    result = CliRunner().invoke(main, ["tilt", str(path), "--out", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    assert "the model cannot stand under its own weight: 'brick' fell" in result.output
+    assert "'brick' closes its joint by 9.71 mm on its largest face (u(W / A) of the joint law), more than the 5.5 mm" in result.output
 
 
 @pytest.mark.parametrize("solver", [dict(max_cycles=10), dict(damping=0.0, max_cycles=5_000)])

@@ -213,13 +213,15 @@ def _tilt_outputs(found: Target, model: Model, result, folder: Path, series) -> 
 
 def _tilt_verdict(result, model: Model) -> list[str]:
     """What the analysis found, in words that claim no more than it showed."""
+    from drydem.analysis.support import too_soft_joints
     from drydem.analysis.tilt import MAXIMUM_ANGLE, NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY
 
     fell = ", ".join(repr(name) for name, _ in result.lost_blocks[:5]) + (", ..." if len(result.lost_blocks) > 5 else "")
     if result.stable_under_gravity is False:
         what = f"{fell} fell" if fell else (f"the monitored block {result.monitored_block!r} moved "
                                            f"{result.settings.stop_displacement_m:g} m (the stop displacement)")
-        return [f"the model cannot stand under its own weight: {what} (state in mechanism.png)"]
+        soft = too_soft_joints(model, [model.block_index(name) for name, _ in result.lost_blocks] or [model.block_index(result.monitored_block)])
+        return [f"the model cannot stand under its own weight: {what} (state in mechanism.png)" + (f"; {soft}" if soft else "")]
     if result.ended_by == NO_EQUILIBRIUM_UNDER_GRAVITY:
         return [f"no equilibrium under gravity within [solver] max_cycles = {model.solver.max_cycles}: no verdict on whether it "
                 "stands; raise max_cycles (or check damping) and run again"]

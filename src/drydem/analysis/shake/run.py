@@ -46,7 +46,7 @@ import numpy as np
 from drydem.analysis.shake.motion import DIRECTIONS, GroundMotion
 from drydem.analysis.shake.restitution import RockingBlock, calibrated_damping_ratio, housner_restitution
 from drydem.analysis.shake.settings import DURATION, HOUSNER, MONITOR_FELL, History, ShakeFrame, ShakeResult, ShakeSettings
-from drydem.analysis.support import dropped_out, lost_drops
+from drydem.analysis.support import dropped_out, lost_drops, too_soft_joints
 from drydem.analysis.tilt.settings import monitor_index
 from drydem.engine.damping import Damping
 from drydem.engine.simulation import Simulation
@@ -118,13 +118,14 @@ def settle(sim: Simulation, lost_drop_heights: float) -> None:
         return np.flatnonzero(dropped_out(model, sim.state, sim.contacts, sim.active, lost_drop) & model.block_movable)
 
     settled = sim.cycle_to_equilibrium(stop=lambda: fallen().size > 0)
-    fell = [model.block_name[b] for b in fallen()]
-    if fell:
-        names = ", ".join(map(repr, fell[:10])) + (f" and {len(fell) - 10} more" if len(fell) > 10 else "")
+    fell = fallen()
+    if fell.size:
+        names = ", ".join(repr(model.block_name[b]) for b in fell[:10]) + (f" and {fell.size - 10} more" if fell.size > 10 else "")
+        soft = too_soft_joints(model, fell)
         raise DrydemError(f"{model.source}: the model cannot stand under its own weight: {names} fell while it settled under "
                           f"gravity (dropped more than {lost_drop_heights:g} of its heights below where it is drawn, beyond its joints' "
-                          "elastic settlement; drydem check names the blocks that touch nothing): the shaking starts from rest, so it "
-                          "was not run")
+                          "elastic settlement; " + (soft if soft else "drydem check names the blocks that touch nothing")
+                          + "): the shaking starts from rest, so it was not run")
     if not settled.converged:
         raise DrydemError(f"{model.source}: no equilibrium under gravity within {settled.cycles} cycles: the shaking starts "
                           "from rest, so it was not run (raise [solver] max_cycles)")
