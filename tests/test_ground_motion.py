@@ -323,9 +323,17 @@ def test_velocity_and_displacement_integrate_a_constant_acceleration_exactly():
     ([0.0, 1.0], np.zeros((2, 2)), "acceleration_m_s2 must have shape (2, 3)"),
     ([0.0, 1.0], [[0, 0, 0], [0, np.nan, 0]], "must be finite numbers"),
     ([0.0, 2e6], np.zeros((2, 3)), "the motion lasts 2e+06 s; at most 1e+06 s (the longest analysed time)"),
+    ([0.0, 1.0, 2.0], [[0, 0, 0], [0, 0, -1e300], [0, 0, 0]], "the acceleration reaches -1e+300 m/s2 (z at t = 1 s); at most 1000 m/s2"),
 ])
 def test_a_motion_with_bad_samples_is_refused_naming_it(time, acceleration, message):
     refused(lambda: GroundMotion(time, acceleration, "my record"), "my record: ", message)
+
+
+def test_accelerations_up_to_about_100_g_are_a_motion_and_beyond_are_refused_however_made():
+    # MAX_ACCELERATION_M_S2 = 1000: a record of 1e300 m/s2 overflowed the cycles and was called diverged
+    assert motion([0.0, 1.0], [1000.0, -1000.0]).peaks_m_s2[0] == 1000.0
+    refused(lambda: motion([0.0, 1.0], [1.0, 2.0]).scaled(600.0), "test record x 600: the acceleration reaches 1200 m/s2 (x at t = 1 s)")
+    refused(lambda: pulse("sine", amplitude_m_s2=1e4, frequency_hz=2.0), "the acceleration reaches", "at most 1000 m/s2")
 
 
 def test_the_samples_of_a_motion_cannot_be_changed():

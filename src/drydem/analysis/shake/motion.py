@@ -46,6 +46,10 @@ REAL = Range(None, None)
 MIN_SAMPLE_STEP_S = 1e-6
 #: s: the longest motion: the longest analysed time (ShakeSettings duration_s), 11.6 days
 MAX_DURATION_S = 1e6
+#: m/s2: the largest acceleration of a motion, about 100 g: past any earthquake record (the
+#: largest recorded peaks are about 4 g) and shaking table (about 10 g); a record of 1e300
+#: m/s2 overflowed the integration, which was then called diverged
+MAX_ACCELERATION_M_S2 = 1000.0
 #: the least timesteps of the analysis in a pulse's period 1/f, or in a record's duration: the
 #: same least sampling as a pulse's own (PULSE_RULES samples_per_period), below which a peak
 #: is missed by more than 1 - cos(pi / 20) = 1.2 %
@@ -278,6 +282,11 @@ def _samples_problem(time: np.ndarray, acceleration: np.ndarray) -> str | None:
         return f"time_s must increase strictly; sample {i} (t = {time[i]:g} s) is not after sample {i - 1} (t = {time[i - 1]:g} s)"
     if time[-1] > MAX_DURATION_S:
         return f"the motion lasts {time[-1]:g} s; at most {MAX_DURATION_S:g} s (the longest analysed time)"
+    peak = np.abs(acceleration)
+    if peak.max() > MAX_ACCELERATION_M_S2:
+        i, k = np.unravel_index(int(np.argmax(peak)), peak.shape)
+        return (f"the acceleration reaches {acceleration[i, k]:g} m/s2 ({'xyz'[k]} at t = {time[i]:g} s); at most "
+                f"{MAX_ACCELERATION_M_S2:g} m/s2 in magnitude (about 100 g, past any earthquake record or shaking table)")
     return None
 
 
