@@ -44,6 +44,24 @@ def small_wall_file(tmp_path):
     return path
 
 
+def test_a_tilt_that_fails_before_its_first_equilibrium_leaves_nothing_and_the_same_out_takes_the_next(tmp_path, monkeypatch):
+    # a timestep 20x the critical one (the divergence test of test_solver) blows the settlement
+    # up: pushover.csv's header and the empty VTK series were left, and the corrected
+    # command on the same --out was refused as "another run" without --overwrite
+    import drydem.engine.inertia
+
+    real = drydem.engine.inertia.critical_timestep
+    monkeypatch.setattr(drydem.engine.inertia, "critical_timestep", lambda *args: 20.0 * real(*args))
+    monkeypatch.setattr(drydem.engine.inertia, "free_flight_timestep", lambda tolerance: float("inf"))
+    path, out = small_wall_file(tmp_path), tmp_path / "run"
+    result = CliRunner().invoke(main, ["tilt", str(path), "--increment", "1.0", "--vtk", "--out", str(out)])
+    assert result.exit_code == 1 and "diverged" in result.output
+    assert list(out.iterdir()) == []
+    monkeypatch.undo()
+    result = CliRunner().invoke(main, ["tilt", str(path), "--increment", "1.0", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+
+
 def test_tilt_end_to_end_writes_summary_curve_and_plots(tmp_path):
     import csv
     import json

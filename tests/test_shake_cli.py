@@ -232,11 +232,17 @@ def test_a_pulse_the_timestep_cannot_follow_is_refused_at_the_run_start(files, t
     it has settled and its damping is set): the period must span 20 of them."""
     out = tmp_path / "fast"
     result = shake(files["block"], "--pulse", "one-sine", "--amplitude", "2", "--frequency", "1e12", "--damping-ratio", "0.05",
-                   "--out", out)
+                   "--vtk", "--out", out)
     assert result.exit_code == 1
     assert "one-sine pulse 2 m/s2, 1e+12 Hz along x: its period, 1e-12 s, spans" in result.output
     assert "the analysis follows a motion only over at least 20 timesteps: give a frequency of at most" in result.output
     assert "(--frequency;" in result.output and not (out / "summary.json").exists()
+    # nothing of the refused run is left (a header-only history.csv made the next run on the
+    # same --out ask for --overwrite), so the same --out takes the corrected command
+    assert sorted(p.name for p in out.iterdir()) == []
+    result = shake(files["block"], "--pulse", "one-sine", "--amplitude", "2", "--frequency", "5", "--duration", "0.05",
+                   "--damping-ratio", "0.05", "--vtk", "--out", out)
+    assert result.exit_code == 0, result.output
 
 
 def test_a_record_starting_late_is_run_from_zero_with_a_note(files, tmp_path):

@@ -9,6 +9,7 @@ from __future__ import annotations
 import functools
 import itertools
 import math
+import shutil
 import signal
 from contextlib import contextmanager
 from datetime import datetime
@@ -158,6 +159,16 @@ def results_folder(out: Path | None, name: str, *, resume: bool | None = False, 
                 break
             out = Path("results") / f"{stem}-{k}"
     return prepare_folder(out, RUN_OUTPUTS, resume=resume, overwrite=overwrite)
+
+
+def discard_unstarted(table: Path, series) -> None:
+    """Remove what a run refused before its first result wrote: ``table`` (pushover.csv or
+    history.csv, its header only) and the folder of ``series`` (a VTK series with no state;
+    None: none). The run's folder held neither before (:func:`results_folder`); left there, they
+    made the same --out refuse the corrected command without --overwrite."""
+    table.unlink(missing_ok=True)
+    if series is not None and not series.rows:
+        shutil.rmtree(series.folder, ignore_errors=True)
 
 
 class _Received:

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import click
 
 from drydem.errors import DrydemError
-from drydem.cli.common import out_path, results_folder, signals_interrupt, resolve_target, joint_law_options, main, threads_option, unit_option
+from drydem.cli.common import discard_unstarted, out_path, results_folder, signals_interrupt, resolve_target, joint_law_options, main, threads_option, unit_option
 from drydem.cli.tilting import _render
 
 if TYPE_CHECKING:
@@ -142,6 +142,8 @@ def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequenc
         try:
             result = shake_analysis(model, settings, on_progress=progress, on_frame=live)
         except DrydemError as exc:
+            if not live.writer.rows:
+                discard_unstarted(live.writer.path, live.series)
             raise click.ClickException(str(exc)) from None
         except OSError as exc:
             raise click.ClickException(f"{exc.filename or folder}: cannot write results ({exc.strerror or exc})") from None

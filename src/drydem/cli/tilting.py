@@ -11,7 +11,7 @@ import click
 
 from drydem.errors import DrydemError
 from drydem.model.parameters import CRITERIA
-from drydem.cli.common import CHECKPOINT, given, out_path, results_folder, signals_interrupt, resolve_target, joint_law_options, main, threads_option, unit_option
+from drydem.cli.common import CHECKPOINT, discard_unstarted, given, out_path, results_folder, signals_interrupt, resolve_target, joint_law_options, main, threads_option, unit_option
 
 if TYPE_CHECKING:
     from drydem.io.target import Target
@@ -162,14 +162,18 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
             bar.update(cycles - bar.n)
             bar.set_postfix_str(f"{theta:.2f} deg, u{'xy'[settings.load_direction]} {ux * 1e3:.2f} mm")
 
+        series = writer = None
         try:
             series = (VtkSeries(folder / "vtk", model, every=save_every, resume=resume, load_direction=settings.load_direction)
                       if vtk or video else None)
+            writer = PushoverWriter(folder)
             result = tilt_analysis(
-                model, settings, on_record=PushoverWriter(folder), on_progress=progress, on_frame=series,
+                model, settings, on_record=writer, on_progress=progress, on_frame=series,
                 checkpoint=folder / CHECKPOINT, resume=resume,
             )
         except DrydemError as exc:
+            if writer is not None and not writer.rows and not resume:
+                discard_unstarted(writer.path, series)
             raise click.ClickException(str(exc)) from None
         except OSError as exc:
             raise click.ClickException(f"{exc.filename or folder}: cannot write results ({exc.strerror or exc})") from None

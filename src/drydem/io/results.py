@@ -46,6 +46,7 @@ class PushoverWriter:
 
     def __init__(self, folder: Path):
         self.path = replaceable(folder / "pushover.csv", True, option="--resume")
+        self.rows = 0
         with self.path.open("w", newline="") as f:
             csv.writer(f).writerow(PUSHOVER_COLUMNS)
 
@@ -55,6 +56,7 @@ class PushoverWriter:
                 [f"{record.tilt_deg:.6f}", f"{record.load_multiplier:.8g}", f"{record.ux_m:.8g}", f"{record.uz_m:.8g}",
                  f"{record.drift:.8g}", record.cycles]
             )
+        self.rows += 1
 
 
 def _history_cells(time_s: float, ground: Sequence[float | None], displacement: Sequence[float | None],
