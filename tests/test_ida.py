@@ -190,6 +190,21 @@ def test_every_problem_of_a_shake_study_is_named_at_once(folder):
         assert fragment in text, text
 
 
+def test_a_shake_study_prints_the_notes_on_its_motions_once_as_drydem_shake_does(folder, tmp_path):
+    # a record starting late is shifted to 0, and a y component on a model held in y moves
+    # nothing: drydem shake says both; a sweep ran them silently
+    (folder / "records" / "late_xy.csv").write_text("time_s,acc_x_m_s2,acc_y_m_s2\n0.5,0,0\n0.525,2,0.5\n0.55,0,0\n")
+    study = folder / "noted.toml"
+    study.write_text(STUDY.replace('"pulse:one-sine:2"', '"records/late_xy.csv"').replace("duration_s = 2.0", "duration_s = 0.02"))
+    notes = load_study(study).notes
+    assert len(notes) == 2, notes
+    assert "late_xy.csv: the record starts at t = 0.5 s; it was shifted by" in notes[0]
+    assert "late_xy.csv, baseline-corrected: its y component (peak" in notes[1] and "moves nothing: the blocks are held in y" in notes[1]
+    result = CliRunner().invoke(main, ["sweep", str(study), "--out", str(tmp_path / "out"), "--workers", "1"])
+    assert result.exit_code == 0, result.output
+    assert [line for line in result.output.splitlines() if line.startswith("note: ")] == [f"note: {note}" for note in notes]
+
+
 def test_shake_settings_may_come_from_the_defaults_and_a_grid_s_own_replace_them(folder):
     study = folder / "defaults.toml"
     study.write_text(STUDY.replace("increment_deg = 2.0", "increment_deg = 2.0\nduration_s = 1.5\nrestitution = 0.8")

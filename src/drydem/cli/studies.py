@@ -41,6 +41,8 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
         out = writable_folder(out or Path("results") / study.name)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
+    for note in study.notes:
+        click.echo(f"note: {note}", err=True)
     plan = pending(study.runs, out, retry_failed=retry_failed)
     click.echo(f"{study.name}: {len(study.runs)} runs, {plan.recorded} already recorded in {out}")
     for corrupt in plan.corrupt:

@@ -224,10 +224,15 @@ def motion_label(motion: str, *, compact: bool = False) -> str:
 
 @dataclass(frozen=True)
 class Study:
+    """A checked study file: its runs, and the notes on its motions that drydem shake prints
+    for one run (a record shifted to start at 0, a component along an axis the supports hold:
+    :func:`_motion_notes`)."""
+
     name: str
     description: str
     runs: list[RunSpec]
     source: str
+    notes: tuple[str, ...] = ()
 
 
 def load_study(path: str | Path) -> Study:
@@ -245,11 +250,11 @@ def load_study(path: str | Path) -> Study:
         raise ModelError(f"{source}: no [[grid]] entries")
     name, description = meta.get("name", path.stem), meta.get("description", "")
     problems = _texts_problems(name, description, source)
-    runs = _runs(grids, defaults, path, problems)
+    runs, notes = _runs(grids, defaults, path, problems)
     if problems:
         unique = list(dict.fromkeys(problems))
         raise ModelError(unique[0] if len(unique) == 1 else f"{source}: {len(unique)} problems, nothing run:\n  " + "\n  ".join(unique))
-    return Study(name, description, runs, source)
+    return Study(name, description, runs, source, notes)
 
 
 def _texts_problems(name, description, source: str) -> list[str]:
@@ -261,10 +266,11 @@ def _texts_problems(name, description, source: str) -> list[str]:
     return problems + ([] if problem is None else [f"{source}: [study] name = {name!r}: {problem}"])
 
 
-def _runs(grids: list, defaults: dict, path: Path, problems: list[str]) -> list[RunSpec]:
-    """The runs of every grid, each once, each checked on its target; a problem found is
-    appended to ``problems``. Once the runs exceed :data:`MAX_RUNS` the grids after are not
-    expanded: the study is refused, naming each grid's count."""
+def _runs(grids: list, defaults: dict, path: Path, problems: list[str]) -> tuple[list[RunSpec], tuple[str, ...]]:
+    """The runs of every grid, each once, each checked on its target, and the notes on their
+    motions (:func:`_motion_notes`); a problem found is appended to ``problems``. Once the runs
+    exceed :data:`MAX_RUNS` the grids after are not expanded: the study is refused, naming each
+    grid's count."""
     source = str(path)
     runs: dict[RunSpec, None] = {}
     counts: list[str] = []
@@ -287,7 +293,21 @@ def _runs(grids: list, defaults: dict, path: Path, problems: list[str]) -> list[
             problems.append(f"{source}: {'at least ' if k + 1 < len(grids) else ''}{len(runs)} runs (grids {', '.join(counts)}; a run "
                             f"several grids share counted once): {_too_many()}")
             break
-    return list(runs)
+    return list(runs), () if problems else _motion_notes(runs, models, motions)
+
+
+def _motion_notes(runs, models: dict, motions: dict) -> tuple[str, ...]:
+    """Each once, the notes drydem shake prints for the shaking runs of ``runs`` (their
+    targets' models and unscaled motions read in ``models`` and ``motions``): what reading a
+    motion changed (its ``notes``) and the components of a motion along an axis its target's
+    supports hold (:func:`~drydem.analysis.shake.run.check_held_axes`)."""
+    from drydem.analysis.shake.run import check_held_axes
+
+    notes: dict[str, None] = {}
+    for target, motion in dict.fromkeys((spec.target, spec.motion) for spec in runs if spec.motion is not None):
+        notes |= dict.fromkeys(motions[motion].notes)
+        notes |= dict.fromkeys(check_held_axes(models[target], motions[motion]))
+    return tuple(notes)
 
 
 def _too_many() -> str:
