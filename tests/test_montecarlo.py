@@ -282,6 +282,26 @@ def test_an_earlier_run_is_kept_unless_overwrite_and_a_resume_must_have_the_same
     assert [s["index"] for s in json.loads((out / "summary.json").read_text())["samples"]] == [0]
 
 
+def test_a_resumed_command_reads_each_recorded_sample_once_and_names_the_corrupt_one(tall_brick, tmp_path, monkeypatch):
+    # the command read every sample's record to print what was recorded, then monte_carlo read
+    # them all again under its hold on the folder (1e5 samples: twice the reading)
+    import drydem.parametric.montecarlo as montecarlo
+
+    out = tmp_path / "run"
+    options = ["--seed", 1, "--height-sd", 1.0, "--increment", 1.0, "--stop-displacement", 0.02, "--workers", 1, "--out", out]
+    assert run(tall_brick, "--samples", 2, *options).exit_code == 0
+    (out / "samples" / "0001" / "summary.json").write_text("{")  # cut short
+    reads = []
+    real = montecarlo.read_sample
+    monkeypatch.setattr(montecarlo, "read_sample", lambda *args: reads.append(args[2]) or real(*args))
+    resumed = run(tall_brick, "--samples", 3, *options, "--resume")
+    assert resumed.exit_code == 0, resumed.output
+    assert sorted(reads) == [0, 1]
+    assert "1 already recorded; running 2 on" in resumed.output
+    assert resumed.output.count("corrupt sample, run again: ") == 1
+    assert "2 samples run, 1 recorded before" in resumed.output
+
+
 @pytest.mark.parametrize("args, message", [
     (["--samples", 0], "Invalid value for '--samples': 0 is not in the range x>=1"),
     (["--samples", "true"], "Invalid value for '--samples': 'true' is not a valid integer"),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import click
@@ -51,7 +52,7 @@ def montecarlo(target, samples, seed, height_sd, height_distribution, flatness_s
     when interrupted (--resume goes on)."""
     from tqdm import tqdm
 
-    from drydem.parametric.montecarlo import MonteCarloSettings, check_resumable, experiment, monte_carlo, pending_samples, sample_model
+    from drydem.parametric.montecarlo import MonteCarloSettings, check_resumable, experiment, monte_carlo, sample_model
     from drydem.analysis.tilt import monitor_index
     from drydem.parametric.workers import open_workers
 
@@ -81,15 +82,16 @@ def montecarlo(target, samples, seed, height_sd, height_distribution, flatness_s
     measured = experiment(found.name) if designs.find(target) is not None else None
     about = {"name": found.name, "path": str(found.path), "experiment": measured}
     protocol = f"{'adaptive' if tilt.adaptive else 'fixed'} {tilt.increment:g} deg"
-    plan = pending_samples(folder, settings)
-    click.echo(f"{found.name} ({found.path}): {samples} samples ({imperfections}), seed {settings.seed}, {protocol}; "
-               f"{len(plan.recorded)} already recorded in {folder}")
-    for corrupt in plan.corrupt:
-        click.echo(f"corrupt sample, run again: {corrupt}", err=True)
+    click.echo(f"{found.name} ({found.path}): {samples} samples ({imperfections}), seed {settings.seed}, {protocol}; in {folder}")
     try:
         with open_workers(workers, scheduler) as pool, signals_interrupt() as received, \
-                tqdm(total=len(plan.todo), desc="samples", unit=" sample") as bar:
-            bar.write(f"running on {pool.where}")
+                tqdm(total=samples, desc="samples", unit=" sample") as bar:
+
+            def planned(plan):  # read once the folder is held (monte_carlo)
+                bar.write(f"{len(plan.recorded)} already recorded; running {len(plan.todo)} on {pool.where}")
+                for corrupt in plan.corrupt:
+                    bar.write(f"corrupt sample, run again: {corrupt}", file=sys.stderr)
+                bar.reset(total=len(plan.todo))
 
             def done(entry):
                 bar.update(1)
@@ -97,7 +99,8 @@ def montecarlo(target, samples, seed, height_sd, height_distribution, flatness_s
                 bar.set_postfix_str(f"sample {entry['index']}: " + (f"{angle:.2f} deg" if angle is not None else entry["ended_by"] or "failed"))
 
             try:
-                outcome = monte_carlo(found.wall, settings, folder, pool.executor, target=about, in_flight=pool.slots, on_sample=done)
+                outcome = monte_carlo(found.wall, settings, folder, pool.executor, target=about, in_flight=pool.slots, on_sample=done,
+                                      on_plan=planned)
             except KeyboardInterrupt:
                 click.echo(f"\ninterrupted ({received.name}); the finished samples are recorded in {folder}; go on with the same "
                            f"command plus {'' if out is not None else f'--out {folder} '}--resume", err=True)

@@ -356,9 +356,11 @@ def samples_dataframe(summary: dict):
 
 
 def monte_carlo(wall: Wall, settings: MonteCarloSettings, folder: Path, executor: Executor, *, target: dict,
-                in_flight: int | None = None, on_sample: Callable[[dict], None] | None = None) -> MonteCarloOutcome:
+                in_flight: int | None = None, on_sample: Callable[[dict], None] | None = None,
+                on_plan: Callable[[PendingSamples], None] | None = None) -> MonteCarloOutcome:
     """Run on ``executor`` the samples of ``settings`` not validly recorded in ``folder``
-    (:func:`pending_samples`), at most ``in_flight`` at a time (default: all), writing each
+    (:func:`pending_samples`, handed to ``on_plan`` before the first runs: the samples' records
+    are read once), at most ``in_flight`` at a time (default: all), writing each
     sample's record as it comes and the top summary (:func:`run_summary`, ``target`` in it)
     before the first, as they come (:class:`SummaryWriter`) and at the end, however it ends;
     ``on_sample(entry)`` for each sample finished here. MonteCarloError if another run holds
@@ -370,6 +372,8 @@ def monte_carlo(wall: Wall, settings: MonteCarloSettings, folder: Path, executor
     with hold_folder(folder):
         check_samples_kept(folder, settings)
         plan = pending_samples(folder, settings)
+        if on_plan is not None:
+            on_plan(plan)
         entries = dict(plan.recorded)
         summaries = SummaryWriter(folder, lambda: run_summary(target, wall, settings, entries))
         try:
