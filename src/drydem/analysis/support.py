@@ -100,9 +100,9 @@ def own_weight_closures(model, block: int) -> tuple[np.ndarray, np.ndarray, np.n
 
     Joints that close by more than a block's width on every face cannot carry it: penalty
     contacts let it sink through its base, and its fall is the joints' doing, not the
-    structure's. For a constant kn, A_f w_f >= V (the prism on f holds the block), so the
-    closure is at most rho g / kn of the width on every face, equal for a box: a 5.5 mm brick
-    on kn = 1e4 Pa/m closes 9.7 mm, while on 2e4 it closes 4.86 mm and stands."""
+    structure's. For a constant kn and a box, the closure is rho g / kn of the width on every
+    face (A_f w_f = V): a 5.5 mm brick on kn = 1e4 Pa/m closes 9.7 mm, while on 2e4 it closes
+    4.86 mm and stands."""
     shape = model.block_shape[block]
     faces = [f for f in range(len(shape.faces)) if not (model.in_plane and abs(shape.face_normals[f, 1]) > SUPPORT_COSINE)]
     area = np.array([shape.face_area(f) for f in faces])

@@ -286,7 +286,7 @@ def _samples_problem(time: np.ndarray, acceleration: np.ndarray) -> str | None:
     if peak.max() > MAX_ACCELERATION_M_S2:
         i, k = np.unravel_index(int(np.argmax(peak)), peak.shape)
         return (f"the acceleration reaches {acceleration[i, k]:g} m/s2 ({'xyz'[k]} at t = {time[i]:g} s); at most "
-                f"{MAX_ACCELERATION_M_S2:g} m/s2 in magnitude (about 100 g, past any earthquake record or shaking table)")
+                f"{MAX_ACCELERATION_M_S2:g} m/s2 in magnitude along each axis (about 100 g, past any earthquake record or shaking table)")
     return None
 
 

@@ -124,8 +124,8 @@ def settle(sim: Simulation, lost_drop_heights: float) -> None:
         soft = too_soft_joints(model, fell)
         raise DrydemError(f"{model.source}: the model cannot stand under its own weight: {names} fell while it settled under "
                           f"gravity (dropped more than {lost_drop_heights:g} of its heights below where it is drawn, beyond its joints' "
-                          "elastic settlement; " + (soft if soft else "drydem check names the blocks that touch nothing")
-                          + "): the shaking starts from rest, so it was not run")
+                          f"elastic settlement; {soft + '; ' if soft else ''}drydem check names the blocks that touch nothing): the "
+                          "shaking starts from rest, so it was not run")
     if not settled.converged:
         raise DrydemError(f"{model.source}: no equilibrium under gravity within {settled.cycles} cycles: the shaking starts "
                           "from rest, so it was not run (raise [solver] max_cycles)")
