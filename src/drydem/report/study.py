@@ -356,7 +356,7 @@ def _yours(records: list[dict], figures: Path, paper: dict) -> list[str]:
         sections.append(_table(f"{YOURS}: tilting runs", header, rows))
     if limits:
         rows = [[labels[r["spec"]["target"]], _cell(_setting(r, "friction"), "{:g}"), r["summary"]["method"],
-                 _cell(r["summary"]["collapse_angle_deg"]), _cell(r["summary"].get("load_multiplier"), "{:.4f}")] for r in limits]
+                 _cell(r["summary"]["collapse_angle_deg"]), _cell(r["summary"].get("load_multiplier"), "{:.4g}")] for r in limits]
         sections.append(_table(f"{YOURS}: limit analyses",
                                ["target", "friction", "method", "collapse angle (deg)", "load multiplier"], rows))
     for k, target in enumerate(dict.fromkeys(r["spec"]["target"] for r in tilts if r["pushover"])):
