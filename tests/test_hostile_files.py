@@ -288,3 +288,25 @@ def test_report_and_a_resumed_montecarlo_name_a_record_that_is_a_pipe_without_wa
     with within(), pytest.raises(MonteCarloError, match="not the summary of a drydem montecarlo run"):
         check_resumable(tmp_path / "mc", MonteCarloSettings(samples=2, seed=0, imperfections=Imperfections(height_sd_mm=0.1),
                                                             tilt=TiltSettings()), wall)
+
+
+def test_a_link_left_at_the_partial_name_is_not_written_through(tmp_path, monkeypatch):
+    # drydem writes OUTPUT as .STEM.partial.SUFFIX, then renames it: a link planted there made
+    # the export write the model into the link's target and left OUTPUT a link to it
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "important.txt").write_text("keep me")
+    os.symlink("important.txt", tmp_path / ".y.partial.obj")
+    result = invoke("export", "WD1", "y.obj")
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "important.txt").read_text() == "keep me"
+    assert not (tmp_path / "y.obj").is_symlink() and (tmp_path / "y.obj").read_text().startswith("#")
+    assert not os.path.lexists(tmp_path / ".y.partial.obj")
+
+
+def test_an_output_name_of_250_characters_is_written(tmp_path, monkeypatch):
+    # the partial name adds 9 characters: past the system's 255 it was an OSError traceback
+    monkeypatch.chdir(tmp_path)
+    name = "b" * 246 + ".obj"
+    result = invoke("export", "WD1", name)
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / name).is_file() and [p.name for p in tmp_path.iterdir()] == [name]

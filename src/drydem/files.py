@@ -96,20 +96,38 @@ def _missing_link(path: Path) -> str | None:
 
 @contextmanager
 def replaced_atomically(path: str | Path):
-    """Yield a temporary file name beside ``path`` (same suffix: writers that go by it still
-    work) to write to. When the block ends normally the file replaces ``path`` in one step
-    (os.replace); when it raises, the file is removed. So ``path`` is never half-written: it
-    is the old file or the whole new one. An OSError is re-raised as a DrydemError naming
-    ``path`` and the reason."""
+    """Yield a temporary file name beside ``path`` (:func:`partial_name`; same suffix: writers
+    that go by it still work) to write to. When the block ends normally the file replaces
+    ``path`` in one step (os.replace); when it raises, the file is removed. So ``path`` is never
+    half-written: it is the old file or the whole new one. An OSError is re-raised as a
+    DrydemError naming ``path`` and the reason. Whatever a killed run left at the temporary
+    name is removed first, a link included: a writer would write through it to its target."""
     path = Path(path)
-    temporary = path.with_name(f".{path.stem}.partial{path.suffix}")
+    temporary = partial_name(path)
     try:
+        if temporary.is_symlink() or temporary.is_file():
+            temporary.unlink()
         yield temporary
         os.replace(temporary, path)
     except OSError as exc:
         raise DrydemError(f"{path}: cannot write: {exc.strerror or exc}") from None
     finally:
-        temporary.unlink(missing_ok=True)
+        if temporary.is_file() and not temporary.is_symlink():
+            temporary.unlink()
+
+
+#: bytes: the longest file name most file systems take (ext4, APFS, NTFS: 255)
+MAX_NAME_BYTES = 255
+
+
+def partial_name(path: Path) -> Path:
+    """``.STEM.partial.SUFFIX`` beside ``path``: the name drydem reserves for a file being
+    written (:func:`replaced_atomically`), its stem cut so that the name stays within
+    MAX_NAME_BYTES (a legal 250-character name would otherwise give one the system refuses)."""
+    stem = path.stem
+    while stem and len(os.fsencode(f".{stem}.partial{path.suffix}")) > MAX_NAME_BYTES:
+        stem = stem[:-1]
+    return path.with_name(f".{stem}.partial{path.suffix}")
 
 
 
