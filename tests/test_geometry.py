@@ -102,6 +102,27 @@ def test_a_block_in_another_unit_than_metres_is_named(corner, size, message):
     assert dd.box([0.0] * 3, [1e-6] * 3).volume == pytest.approx(1e-18, rel=1e-9)
 
 
+def prism(sides: int, height_m: float = 1.0) -> np.ndarray:
+    """The vertices of a right prism on a regular polygon of ``sides`` inscribed in the unit circle."""
+    t = np.linspace(0.0, 2.0 * np.pi, sides, endpoint=False)
+    ring = np.c_[np.cos(t), np.sin(t)]
+    return np.r_[np.c_[ring, np.zeros(sides)], np.c_[ring, np.full(sides, height_m)]]
+
+
+def test_a_thousand_sided_prism_has_its_sides_and_the_polygon_s_area_times_its_height():
+    # area of a regular n-gon of circumradius 1: n/2 sin(2 pi / n); the hull's coplanar
+    # triangles were grouped by a quadratic Python loop (3.6 s here), now one pass per face
+    shape = dd.convex_hull(prism(1000, 0.5))
+    assert len(shape.faces) == 1002 and len(shape.vertices) == 2000
+    assert shape.volume == pytest.approx(500.0 * np.sin(2.0 * np.pi / 1000) * 0.5, rel=1e-12)
+
+
+def test_a_block_of_more_than_2000_vertices_is_refused_naming_it():
+    # 20,000 vertices asked 24 GB of the hull check; at 5,000 sides the faces merged (7.3 m3, not 3.14)
+    with pytest.raises(dd.GeometryError, match=r"stone: 2002 vertices: a block has at most 2000 \(a scanned surface\?"):
+        dd.convex_hull(prism(1001), name="stone")
+
+
 def test_inverted_box_is_rejected():
     with pytest.raises(dd.GeometryError, match="max .* must exceed min"):
         dd.box([0, 0, 0], [1, -1, 1], name="upside")

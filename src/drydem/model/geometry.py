@@ -39,6 +39,11 @@ MAX_COORDINATE_M = 1e6
 #: the smallest block, m across (its bounding box's diagonal): a micrometre, a thousandth of the
 #: paper's smallest brick dimension; below it a model is in another unit
 MIN_BLOCK_SIZE_M = 1e-6
+#: the most vertices a block is given by: a 1000-sided prism, 0.1 s to build; masonry units
+#: have tens. The hull's check of every vertex against every face is n x 2n numbers (20,000
+#: vertices asked 24 GB), and past ~1000 sides the faces of a round block lie closer than
+#: HULL_TOLERANCE to one plane and merge (a 5000-sided unit prism came out at 7.3 m3, not 3.14)
+MAX_BLOCK_VERTICES = 2000
 
 
 @dataclass(frozen=True, eq=False)
@@ -200,6 +205,9 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
         raise GeometryError(f"{name}: vertices contain NaN or infinite coordinates")
     if len(pts) < 4:
         raise GeometryError(f"{name}: a block needs at least 4 vertices, got {len(pts)}")
+    if len(pts) > MAX_BLOCK_VERTICES:
+        raise GeometryError(f"{name}: {len(pts)} vertices: a block has at most {MAX_BLOCK_VERTICES} (a scanned surface? simplify "
+                            "it into a convex block of fewer vertices)")
     far = float(np.abs(pts).max())
     if far > MAX_COORDINATE_M:
         raise GeometryError(f"{name}: a vertex is {far:.3g} m from the origin: coordinates must be within {MAX_COORDINATE_M:g} m "
@@ -270,12 +278,12 @@ def _merge_coplanar(pts: np.ndarray, hull: ConvexHull, tol: float) -> tuple[list
     """Group hull triangles by plane; order each face's vertices counter-clockwise."""
     faces: list[np.ndarray] = []
     normals: list[np.ndarray] = []
-    unassigned = list(range(len(hull.simplices)))
-    while unassigned:
-        first = unassigned[0]
-        n, d = hull.equations[first, :3], hull.equations[first, 3]
-        group = [s for s in unassigned if np.dot(hull.equations[s, :3], n) > 1 - 1e-9 and abs(hull.equations[s, 3] - d) <= tol]
-        unassigned = [s for s in unassigned if s not in group]
+    equations = hull.equations
+    unassigned = np.ones(len(equations), dtype=bool)
+    while unassigned.any():
+        first = int(np.argmax(unassigned))
+        n, d = equations[first, :3], equations[first, 3]
+        unassigned &= ~((equations[:, :3] @ n > 1 - 1e-9) & (np.abs(equations[:, 3] - d) <= tol))
         on_plane = np.flatnonzero(np.abs(pts @ n + d) <= tol)
         idx = np.intersect1d(on_plane, hull.vertices)
         faces.append(_corners_only(pts, _counter_clockwise(pts, idx, n), n, tol))
