@@ -181,6 +181,8 @@ def test_a_name_a_mesh_cannot_keep_is_refused_before_writing(tmp_path):
 @pytest.mark.parametrize("output, message", [
     ("wall.webm", "wall.webm: cannot draw a figure in the format '.webm'; the suffix must be one of"),
     ("wall", "wall: cannot draw a figure in the format '(no suffix)'"),
+    # matplotlib lists PGF, but writes it only through xelatex: a RuntimeError traceback without LaTeX
+    ("wall.pgf", "wall.pgf: cannot draw a figure in the format '.pgf'; the suffix must be one of .eps, .gif"),
     ("nowhere/wall.png", "nowhere/wall.png: the folder {tmp}/nowhere does not exist"),
 ])
 def test_show_to_a_bad_output_names_it_and_writes_nothing(tmp_path, output, message):

@@ -43,13 +43,17 @@ def new_figure(**options):
     return fig
 
 
+#: matplotlib's formats that need a LaTeX installation (xelatex), which drydem does not require
+NEEDS_LATEX = ("pgf",)
+
+
 def figure_path(path: str | Path) -> Path:
     """``path`` if matplotlib writes the format its suffix names (.png, .pdf, .svg, ...), else
     a DrydemError listing them: checked before drawing, as matplotlib would fail only at the end."""
     from matplotlib.backend_bases import FigureCanvasBase
 
     path = Path(path)
-    formats = FigureCanvasBase.get_supported_filetypes()
+    formats = [f for f in FigureCanvasBase.get_supported_filetypes() if f not in NEEDS_LATEX]
     if path.suffix[1:].lower() not in formats:
         raise DrydemError(f"{path}: cannot draw a figure in the format {path.suffix or '(no suffix)'!r}; "
                           f"the suffix must be one of {', '.join('.' + f for f in formats)}")
