@@ -56,6 +56,19 @@ def test_save_and_load_round_trip(tmp_path):
     assert again.joint == model.joint and again.solver == model.solver and again.supports == model.supports
 
 
+@pytest.mark.parametrize("name", ["brick\U0001f9f1", "a\x7fb", 'quote " back \\ tab \t', "\u00e9t\u00e9"])
+def test_a_block_name_of_any_text_is_saved_and_read_back(tmp_path, name):
+    # a name past U+FFFF was written as JSON's two surrogate escapes, which TOML refuses, and
+    # DEL raw, which TOML forbids: the exported file could not be read back
+    model = load_model(write(tmp_path, GOOD))
+    blocks = [dd.Block(name=n, shape=s, fixed=bool(f.all())) for n, s, f in zip(model.block_name, model.block_shape, model.block_fixed)]
+    blocks[1] = dd.Block(name=name, shape=blocks[1].shape)
+    renamed = dd.build_model(blocks, density=1800.0)
+    path = tmp_path / "named.toml"
+    save_model(renamed, path)
+    assert load_model(path).block_name == renamed.block_name
+
+
 @pytest.mark.parametrize(
     "change, message",
     [
