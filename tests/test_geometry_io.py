@@ -175,6 +175,20 @@ def test_an_open_mesh_names_its_free_edge(tmp_path):
         read_mesh(path)
 
 
+def test_a_mesh_vertex_beyond_a_thousand_kilometres_is_named_as_such(tmp_path):
+    # vertices are merged within a fraction of the model's size: at 1e11 m that swallowed the
+    # unit cube's corners, and the cube was called "not a closed surface"
+    path = tmp_path / "far.obj"
+    corners = [(x, y, z) for z in (0, 1) for y in (0, 1) for x in (0, 1)]
+    faces = ["1 3 4 2", "5 6 8 7", "1 2 6 5", "3 7 8 4", "1 5 7 3", "2 4 8 6"]
+    path.write_text("".join(f"v {1e11 + x} {y} {z}\n" for x, y, z in corners) + "".join(f"f {f}\n" for f in faces))
+    with pytest.raises(ModelError, match=r"far.obj: a vertex is 1e\+11 m from the origin: coordinates must be within 1e\+06 m"):
+        read_mesh(path)
+    near = tmp_path / "near.obj"
+    near.write_text(path.read_text().replace("100000000000.0", "0.0").replace("100000000001.0", "1.0"))
+    assert read_mesh(near)[0][0].shape.volume == pytest.approx(1.0, rel=1e-12)
+
+
 def test_vtk_export_reads_back_with_its_cells_points_and_fields(tmp_path):
     import meshio
 

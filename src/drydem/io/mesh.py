@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from drydem.errors import ModelError
-from drydem.model.geometry import convex_hull
+from drydem.model.geometry import convex_hull, far_vertex_problem
 from drydem.model.assembly import Block, Model
 
 #: vertices closer than this fraction of the mesh's size are one vertex
@@ -81,7 +81,11 @@ def read_mesh(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], li
     points, solids = reader(path, data)
     if not any(s.faces for s in solids):
         raise ModelError(f"{path}: no faces: the file holds no block")
-    points, merged = _merged(np.asarray(points, dtype=float) * unit_m, [face for s in solids for face in s.faces])
+    points = np.asarray(points, dtype=float) * unit_m
+    far = far_vertex_problem(points)  # before merging: a vertex at 1e11 m made the merge radius swallow whole blocks
+    if far is not None:
+        raise ModelError(f"{path}: {far}")
+    points, merged = _merged(points, [face for s in solids for face in s.faces])
     blocks, start, unnamed = [], 0, 0
     for solid in solids:
         faces, start = merged[start:start + len(solid.faces)], start + len(solid.faces)

@@ -189,6 +189,16 @@ def _booleans_in(value) -> bool:
     return isinstance(value, (bool, np.bool_))
 
 
+def far_vertex_problem(points: np.ndarray) -> str | None:
+    """Why ``points`` ((n, 3) finite, m) cannot be a model's vertices: one farther than
+    MAX_COORDINATE_M from the origin (``a vertex is ... m from the origin: ...``); None if none is."""
+    far = float(np.abs(points).max(initial=0.0))
+    if far <= MAX_COORDINATE_M:
+        return None
+    return (f"a vertex is {far:.3g} m from the origin: coordinates must be within {MAX_COORDINATE_M:g} m "
+            "(a model in another unit than metres? a model file is in metres; --unit scales imported geometry)")
+
+
 def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
     """The convex polyhedron spanned by ``points`` ((n, 3), m).
 
@@ -208,10 +218,9 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
     if len(pts) > MAX_BLOCK_VERTICES:
         raise GeometryError(f"{name}: {len(pts)} vertices: a block has at most {MAX_BLOCK_VERTICES} (a scanned surface? simplify "
                             "it into a convex block of fewer vertices)")
-    far = float(np.abs(pts).max())
-    if far > MAX_COORDINATE_M:
-        raise GeometryError(f"{name}: a vertex is {far:.3g} m from the origin: coordinates must be within {MAX_COORDINATE_M:g} m "
-                            "(a model in another unit than metres? a model file is in metres; --unit scales imported geometry)")
+    far = far_vertex_problem(pts)
+    if far is not None:
+        raise GeometryError(f"{name}: {far}")
     scale = float(np.linalg.norm(pts.max(0) - pts.min(0)))
     if scale < MIN_BLOCK_SIZE_M:
         raise GeometryError(f"{name}: {scale:.3g} m across: a block must be at least {MIN_BLOCK_SIZE_M:g} m across "
