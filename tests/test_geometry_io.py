@@ -168,6 +168,17 @@ def test_an_imported_mesh_stands_on_a_fixed_base(tmp_path):
     assert model.block_shape[0].vertices[:, 2].max() == pytest.approx(0.0)
 
 
+def test_a_mesh_block_named_base_stands_on_an_added_base_of_another_name(tmp_path):
+    # the added support was always "base": a file's own block of that name made the model
+    # "duplicate block names ['base']"
+    path = tmp_path / "named.obj"
+    corners = [(x, y, z) for z in (0, 1) for y in (0, 1) for x in (0, 1)]
+    faces = ["1 3 4 2", "5 6 8 7", "1 2 6 5", "3 7 8 4", "1 5 7 3", "2 4 8 6"]
+    path.write_text("o base\n" + "".join(f"v {x} {y} {z}\n" for x, y, z in corners) + "".join(f"f {f}\n" for f in faces))
+    loaded = load_target(str(path))
+    assert loaded.model.block_name == ("base-2", "base") and loaded.model.block_fixed[0].all()
+
+
 def test_an_open_mesh_names_its_free_edge(tmp_path):
     path = tmp_path / "open.obj"
     path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\n")

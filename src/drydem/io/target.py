@@ -97,5 +97,5 @@ def imported_model(path: Path, *, unit_m: float = 1.0) -> tuple[Model, list[str]
         blocks, notes = read_mesh(path, unit_m=unit_m)
     if not any(b.fixed for b in blocks):
         blocks = [base_under(blocks), *blocks]
-        notes.append(f"{path}: no block is marked fixed: the blocks stand on an added fixed block 'base'")
+        notes.append(f"{path}: no block is marked fixed: the blocks stand on an added fixed block {blocks[0].name!r}")
     return build_model(blocks, density=1800.0, source=str(path)), notes

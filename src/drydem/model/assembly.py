@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
+import itertools
 from collections import Counter
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
@@ -61,12 +62,15 @@ BLOCK_RULES = {"name": TEXT, "shape": InstanceOf(ConvexPolyhedron), "density": D
 
 
 def base_under(blocks: list[Block], *, overhang_m: float = 0.05, depth_m: float = 0.01) -> Block:
-    """A fixed block named "base" on which ``blocks`` stand: its top at their lowest point,
-    ``overhang_m`` beyond them at each end along x (the tilt direction), as wide as they are in y."""
+    """A fixed block on which ``blocks`` stand: its top at their lowest point, ``overhang_m``
+    beyond them at each end along x (the tilt direction), as wide as they are in y; named
+    "base", or "base-2", "base-3", ... if one of ``blocks`` has that name."""
     lo = np.min([b.shape.vertices.min(0) for b in blocks], axis=0)
     hi = np.max([b.shape.vertices.max(0) for b in blocks], axis=0)
-    shape = box([lo[0] - overhang_m, lo[1], lo[2] - depth_m], [hi[0] + overhang_m, hi[1], lo[2]], name="base")
-    return Block(name="base", shape=shape, fixed=True)
+    taken = {b.name for b in blocks}
+    name = next(n for n in itertools.chain(["base"], (f"base-{k}" for k in itertools.count(2))) if n not in taken)
+    shape = box([lo[0] - overhang_m, lo[1], lo[2] - depth_m], [hi[0] + overhang_m, hi[1], lo[2]], name=name)
+    return Block(name=name, shape=shape, fixed=True)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
