@@ -214,6 +214,8 @@ def test_show_draws_an_imperfect_wall_exaggerated(tmp_path):
     (["--misalignment-sd", "inf"], "Invalid value for '--misalignment-sd': inf: must be a finite number >= 0 (mm)"),
     (["--height-sd", "0.1", "--exaggerate", "0"], "Invalid value for '--exaggerate': 0.0: must be a finite number > 0"),
     (["--height-sd", "2"], "--height-sd = 2.0: must be at most 0.55 mm, 10% of the brick height (5.5 mm)"),
+    # it drew the perfect wall and said nothing
+    (["--exaggerate", "5"], "--exaggerate scales the imperfections' deviations: give --height-sd, --flatness-sd or --misalignment-sd"),
 ])
 def test_show_refuses_bad_imperfections_naming_the_option(tmp_path, arguments, message):
     result = CliRunner().invoke(main, ["show", "WD3", *arguments, "--out", str(tmp_path / "x.png")])

@@ -168,6 +168,9 @@ def show(target: str, out: Path | None, overwrite: bool, strict: bool, unit: str
     from drydem.report.plots import layout_figure
 
     imperfections = imperfections_from_options(height_sd, height_distribution, flatness_sd, misalignment_sd)
+    if imperfections is None and exaggerate != 1.0:
+        raise click.UsageError("--exaggerate scales the imperfections' deviations: give --height-sd, --flatness-sd or "
+                               "--misalignment-sd too (a perfect wall has none to draw larger)")
     found = resolve_target(target, unit)
     _strict_needs_a_wall(strict, found)
     out = _figure_out(out or Path(f"{found.name}.png"), overwrite)
