@@ -47,7 +47,9 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from dataclasses import dataclass, replace
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -56,6 +58,7 @@ from drydem.errors import ModelError
 from drydem.files import read_text
 from drydem.io.mesh import closed_convex_block
 from drydem.model.assembly import Block, Model
+from drydem.model.parameters import DENSITY
 
 MESH_DTYPE = "compas.datastructures/Mesh"
 MODEL_DTYPE = "compas_model.models/Model"
@@ -66,6 +69,9 @@ TRANSFORMATION_DTYPES = tuple(f"compas.geometry/{kind}" for kind in
                               ("Transformation", "Translation", "Rotation", "Scale", "Reflection", "Projection", "Shear"))
 #: the mesh attribute (and compas_dem element key) that marks a fixed block
 SUPPORT_KEY = "is_support"
+#: the most digits of a JSON integer: Python's own limit on reading one (int() of a longer digit
+#: string is refused, as it takes time quadratic in its length); no number drydem reads is that long
+MAX_INTEGER_DIGITS = sys.int_info.default_max_str_digits
 #: what drydem reads, for messages
 READS = "a compas Mesh, a list or object of Meshes, or a compas_dem BlockModel (as compas.json_dump writes them)"
 
@@ -91,22 +97,32 @@ def read_compas(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], 
     path = Path(path)
     text = read_text(path, f"drydem reads {READS}")
     try:
-        data = json.loads(text)
+        data = json.loads(text, parse_int=partial(_integer, source=str(path)))
     except json.JSONDecodeError as exc:
         raise ModelError(f"{path}: not JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}; drydem reads {READS}") from None
     except RecursionError:
         raise ModelError(f"{path}: its JSON is nested too deeply to read; drydem reads {READS}") from None
-    parts = _parts(data, str(path))
+    with np.errstate(over="ignore", invalid="ignore"):  # a matrix past the float range: the block refuses inf
+        parts = _parts(data, str(path))
     if not parts:
         raise ModelError(f"{path}: no mesh: the file holds no block")
     counts: dict[str, int] = {}
     for part in parts:
         counts[part.name] = counts.get(part.name, 0) + 1
-    blocks = [_block(part, part.name if counts[part.name] == 1 else f"{part.name}-{part.index}", unit_m) for part in parts]
+    with np.errstate(over="ignore", invalid="ignore"):
+        blocks = [_block(part, part.name if counts[part.name] == 1 else f"{part.name}-{part.index}", unit_m) for part in parts]
     shared = [name for name, n in counts.items() if n > 1]
     notes = [f"{path}: {sum(counts[n] for n in shared)} blocks share the names {', '.join(map(repr, shared))}: "
              f"each is named NAME-N after its position in the file (graph node or list index)"] if shared else []
     return blocks, notes
+
+
+def _integer(digits: str, source: str) -> int:
+    """A JSON integer of at most MAX_INTEGER_DIGITS digits."""
+    if len(digits.lstrip("-")) > MAX_INTEGER_DIGITS:
+        raise ModelError(f"{source}: an integer of {len(digits.lstrip('-')):,} digits ({digits[:12]}...): more than the "
+                         f"{MAX_INTEGER_DIGITS:,} digits an integer may have; drydem reads {READS}")
+    return int(digits)
 
 
 def write_compas(model: Model, path: str | Path) -> None:
@@ -190,11 +206,15 @@ def _model_parts(data: dict, source: str) -> list[_Part]:
             raise ModelError(f"{source}: graph edge {edge} has modifiers (cuts of one element by another); "
                              "drydem reads blocks as their meshes are: apply the modifiers in compas first")
     nodes = _object(graph.get("node"), f"{source}: graph nodes")
-    parts = []
+    parts, node_of = [], {}
     for node, attributes in sorted(nodes.items(), key=lambda item: _key(item[0], f"{source}: graph node")):
         guid = _object(attributes, f"{source}: graph node {node}").get("element")
         if not isinstance(guid, str) or guid not in elements:
             raise ModelError(f"{source}: graph node {node}: its element {guid!r} is not in the model's elements")
+        if guid in node_of:
+            raise ModelError(f"{source}: graph nodes {node_of[guid]} and {node} both hold the element {guid}: "
+                             "each element is one block, on one graph node")
+        node_of[guid] = node
         where = f"{source}: element {guid} (graph node {node})"
         element = _element(elements, guid, source)
         matrix = model_matrix
@@ -221,7 +241,8 @@ def _edges(graph: dict, source: str) -> list[tuple[str, object]]:
 
 
 def _parents(tree: dict, elements: dict, source: str) -> dict[str, list[str]]:
-    """Each element's ancestors in the model's tree (compas_model ElementNode children), nearest first."""
+    """Each element's ancestors in the model's tree (compas_model ElementNode children), nearest
+    first; an element is on one tree node (it has one parent, and is not its own ancestor)."""
     parents: dict[str, list[str]] = {}
 
     def walk(node, above: list[str]) -> None:
@@ -229,6 +250,9 @@ def _parents(tree: dict, elements: dict, source: str) -> dict[str, list[str]]:
             guid = _object(child, f"{source}: tree node").get("element")
             if guid is not None and (not isinstance(guid, str) or guid not in elements):
                 raise ModelError(f"{source}: the tree names the element {guid!r}, which is not in the model's elements")
+            if guid in parents:
+                under = "under itself" if guid in above else "twice"
+                raise ModelError(f"{source}: the tree holds the element {guid} {under}: each element is on one tree node")
             if guid is not None:
                 parents[guid] = above
             walk(child, above if guid is None else [guid, *above])
@@ -279,13 +303,18 @@ def _matrix(value, where: str) -> np.ndarray:
 
 
 def _density(material, materials: dict, where: str) -> float | None:
-    """The density (kg/m3) of an element's material, None if it has none (the model's default)."""
+    """The density (kg/m3) of an element's material, None if it has none (the model's default);
+    in a block's range (drydem.model.parameters.DENSITY)."""
     if material is None:
         return None
     if not isinstance(material, str) or material not in materials:
         raise ModelError(f"{where}: its material {material!r} is not in the model's materials")
     density = _object(_object(materials[material], f"{where}: material").get("data"), f"{where}: material data").get("density")
-    return None if density is None else _number(density, f"{where}: material density")
+    if density is None:
+        return None
+    density = _number(density, f"{where}: material density")
+    DENSITY.check(density, f"{where}: material {material}: density")
+    return density
 
 
 def _key(key: str, where: str) -> int:

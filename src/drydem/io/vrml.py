@@ -14,10 +14,16 @@ lights, viewpoints and other nodes that carry no geometry are skipped. ``PROTO``
 
 A block is named after the DEF name of its Shape, else of its nearest named ancestor, else
 ``shape{k}``; repeated names get ``-2``, ``-3``...
+
+Limits, checked while parsing, before any block is built: nodes nest at most :data:`MAX_DEPTH`
+deep, and the scene expands to at most :data:`MAX_BLOCKS` shapes and :data:`MAX_POINTS`
+vertices, a ``USE`` counting as a copy of the node it names (nested DEF/USE doubles a scene at
+each level: a 1 kB file could otherwise expand to millions of blocks).
 """
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,7 +32,9 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from drydem.errors import ModelError
+from drydem.files import read_text
 from drydem.io.mesh import closed_convex_block
+from drydem.masonry.building import MAX_BLOCKS
 from drydem.model.assembly import Block
 
 GROUPING = {"Transform", "Group", "Anchor", "Collision"}
@@ -39,32 +47,42 @@ SKIPPED = {
 }
 GEOMETRY = {"IndexedFaceSet", "Box"}
 UNSUPPORTED = {"PROTO", "EXTERNPROTO", "ROUTE", "Inline", "Switch", "LOD", "Billboard"}
+#: the most levels of nodes (a top-level node is 1 deep), a USE counting the levels it copies in:
+#: exports nest a few (Transform, Group, Shape, geometry), and the reader recurses once a level
+MAX_DEPTH = 200
+#: the most vertices a scene may expand to (USE copies counted): 50 a block at MAX_BLOCKS blocks
+MAX_POINTS = 50 * MAX_BLOCKS
+#: what a VRML file must be, for messages
+EXPECTED = "drydem reads VRML 2.0 / VRML97 files (the header '#VRML V2.0 utf8', UTF-8 text)"
 _TOKEN = re.compile(r'\s+|,|#[^\n]*|"(?:[^"\\]|\\.)*"|[{}\[\]]|[^\s,{}\[\]"#]+')
 
 
 @dataclass
 class Node:
-    """A parsed VRML node: its type, DEF name, fields (name -> list of values) and line."""
+    """A parsed VRML node: its type, DEF name, fields (name -> list of values) and line; and,
+    once parsed, what it expands to (USE copies counted): its shapes, its vertices and its
+    height in levels of nodes (1: no child node)."""
 
     type: str
     name: str | None
     line: int
     fields: dict[str, list] = field(default_factory=dict)
+    shapes: int = 0
+    points: int = 0
+    height: int = 1
 
 
 def read_vrml(path: str | Path, *, unit_m: float = 1.0) -> list[Block]:
     """The blocks of a VRML file, coordinates times ``unit_m``; ModelError naming the file and line."""
     path = Path(path)
-    try:
-        text = path.read_text(errors="replace")
-    except OSError as exc:
-        raise ModelError(f"{path}: cannot read the file ({exc.strerror})") from None
+    text = read_text(path, EXPECTED)
     if not text.startswith("#VRML V2.0"):
         raise ModelError(f"{path}, line 1: not a VRML 2.0 / VRML97 file (the header must be '#VRML V2.0 utf8')")
     nodes = _Parser(text, str(path)).nodes()
     shapes: list[tuple[str | None, np.ndarray, list[list[int]], int]] = []
-    for node in nodes:
-        _collect(node, np.eye(4), None, shapes, str(path))
+    with np.errstate(over="ignore", invalid="ignore"):  # a transform past the float range: the block refuses inf
+        for node in nodes:
+            _collect(node, np.eye(4), None, shapes, str(path))
     if not shapes:
         raise ModelError(f"{path}: no Shape with an IndexedFaceSet or Box")
     blocks, taken = [], {}
@@ -102,6 +120,8 @@ def _geometry(node: Node, source: str) -> tuple[np.ndarray, list[list[int]]]:
     where = f"{source}, line {node.line}"
     if node.type == "Box":
         size = np.asarray(_numbers(node, "size", [2.0, 2.0, 2.0], 3, source))
+        if not (size > 0).all():
+            raise ModelError(f"{where}: Box.size = {size.tolist()}: each side must be a number above 0")
         corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float) * 0.5 * size
         faces = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
         return corners, faces
@@ -114,18 +134,26 @@ def _geometry(node: Node, source: str) -> tuple[np.ndarray, list[list[int]]]:
     if len(values) % 3:
         raise ModelError(f"{source}, line {coord[0].line}: {len(values)} numbers in point, not a multiple of 3")
     points = np.asarray(values, float).reshape(-1, 3)
-    index = [int(i) for i in _numbers(node, "coordIndex", None, None, source)]
+    return points, _faces(_numbers(node, "coordIndex", None, None, source), len(points), where)
+
+
+def _faces(coord_index: list[float], count: int, where: str) -> list[list[int]]:
+    """The faces of an IndexedFaceSet's coordIndex: each entry a whole number, a point's index
+    (0 to ``count`` - 1) or -1 ending a face (the last face may end without it)."""
     faces, face = [], []
-    for i in [*index, -1]:
+    for value in [*coord_index, -1.0]:
+        if not value.is_integer():
+            raise ModelError(f"{where}: coordIndex {value!r} is not a whole number (a point's index from 0, or -1 ending a face)")
+        i = int(value)
         if i == -1:
             if face:
                 faces.append(face)
             face = []
-        elif not 0 <= i < len(points):
-            raise ModelError(f"{where}: coordIndex {i} is out of range (there are {len(points)} points)")
+        elif not 0 <= i < count:
+            raise ModelError(f"{where}: coordIndex {i} is out of range (there are {count} points)")
         else:
             face.append(i)
-    return points, faces
+    return faces
 
 
 def _transform_matrix(node: Node, source: str) -> np.ndarray:
@@ -149,6 +177,9 @@ def _axis_angle(values: list[float]) -> np.ndarray:
 
 
 def _numbers(node: Node, name: str, default, count: int | None, source: str) -> list[float]:
+    """The field ``name`` of ``node`` (``default`` if it is missing; None: it must be there):
+    numbers, ``count`` of them if given, each finite (VRML has no nan or inf; a number past
+    1.8e308 reads as inf)."""
     values = node.fields.get(name)
     if values is None:
         if default is None:
@@ -157,6 +188,10 @@ def _numbers(node: Node, name: str, default, count: int | None, source: str) -> 
     if not all(isinstance(v, float) for v in values) or (count is not None and len(values) != count):
         expected = f"{count} numbers" if count else "numbers"
         raise ModelError(f"{source}, line {node.line}: {node.type}.{name} must be {expected}, got {values!r}")
+    infinite = [v for v in values if not math.isfinite(v)]
+    if infinite:
+        raise ModelError(f"{source}, line {node.line}: {node.type}.{name} holds {infinite[0]!r}: each number must be "
+                         "finite (no nan, inf, or a number past 1.8e308)")
     return values
 
 
@@ -174,12 +209,39 @@ class _Parser:
             line += token.count("\n")
         self.at = 0
         self.defined: dict[str, Node] = {}
+        self.depth = 0  # levels of nodes open around the token at self.at
 
     def nodes(self) -> list[Node]:
-        found = []
+        """The top-level nodes, which together expand to at most MAX_BLOCKS shapes and MAX_POINTS vertices."""
+        found, shapes, points = [], 0, 0
         while self.at < len(self.tokens):
-            found.append(self._node())
+            node = self._node()
+            found.append(node)
+            shapes, points = shapes + node.shapes, points + node.points
+            self._check_expansion(shapes, points, node.line)
         return found
+
+    def _check_expansion(self, shapes: int, points: int, line: int) -> None:
+        """The rule on USE copies: the scene up to ``line`` expands to at most MAX_BLOCKS shapes and MAX_POINTS vertices."""
+        for count, limit, what in ((shapes, MAX_BLOCKS, "shapes"), (points, MAX_POINTS, "vertices")):
+            if count > limit:
+                raise ModelError(f"{self.source}, line {line}: up to this node, the scene expands to more than {limit:,} {what} "
+                                 f"(each USE copies the node it names): drydem reads at most {limit:,}")
+
+    def _tally(self, node: Node) -> None:
+        """What ``node`` expands to, from its child nodes' (parsed already, a USE's included), within the limits."""
+        children = [value for values in node.fields.values() for value in values if isinstance(value, Node)]
+        node.shapes = (node.type == "Shape") + sum(child.shapes for child in children)
+        own_points = {"Box": 8, "Coordinate": len(node.fields.get("point", [])) // 3}.get(node.type, 0)
+        node.points = own_points + sum(child.points for child in children)
+        node.height = 1 + max((child.height for child in children), default=0)
+        self._check_expansion(node.shapes, node.points, node.line)
+
+    def _check_depth(self, levels: int, what: str, line: int) -> None:
+        """The rule on nesting: a node at most MAX_DEPTH levels deep, ``levels`` open here (a USE's copies counted)."""
+        if levels > MAX_DEPTH:
+            raise ModelError(f"{self.source}, line {line}: {what} nests nodes {levels} levels deep: drydem reads "
+                             f"at most {MAX_DEPTH} (a USE counts the levels of the node it copies)")
 
     def _peek(self) -> tuple[str, int]:
         if self.at >= len(self.tokens):
@@ -203,6 +265,7 @@ class _Parser:
             name, line = self._next()
             if name not in self.defined:
                 raise ModelError(f"{self.source}, line {line}: USE {name}: no node was DEFined with that name before")
+            self._check_depth(self.depth + self.defined[name].height, f"USE {name}", line)
             return self.defined[name]
         name = None
         if token == "DEF":
@@ -213,6 +276,8 @@ class _Parser:
         if not re.fullmatch(r"[A-Za-z_][\w-]*", token):
             raise ModelError(f"{self.source}, line {line}: expected a node type, found {token!r}")
         node = Node(token, name, line)
+        self._check_depth(self.depth + 1, token, line)
+        self.depth += 1
         self._expect("{")
         while self._peek()[0] != "}":
             field_name, field_line = self._next()
@@ -220,6 +285,8 @@ class _Parser:
                 raise ModelError(f"{self.source}, line {field_line}: {field_name} is not supported by drydem's VRML reader")
             node.fields[field_name] = self._value()
         self._next()
+        self.depth -= 1
+        self._tally(node)
         if name:
             self.defined[name] = node
         return node

@@ -1,0 +1,225 @@
+"""Hostile VRML and compas JSON files: each is refused with a ModelError naming the file (and the
+line, element or field) and the rule, before it can hang, eat memory or end in a traceback; none
+is read as something it does not say."""
+
+import json
+import re
+import warnings
+
+import pytest
+from click.testing import CliRunner
+
+from drydem.cli import main
+from drydem.errors import DrydemError, ModelError
+from drydem.io import vrml
+from drydem.io.compas_json import MAX_INTEGER_DIGITS, read_compas
+from drydem.io.mesh import read_mesh
+from drydem.io.vrml import MAX_DEPTH, MAX_POINTS, read_vrml
+from drydem.masonry.building import MAX_BLOCKS
+
+HEADER = "#VRML V2.0 utf8\n"
+BOX = "Shape { geometry Box { size 1 1 1 } }"
+CUBE_POINTS = "0 0 0, 1 0 0, 1 1 0, 0 1 0, 0 0 1, 1 0 1, 1 1 1, 0 1 1"
+CUBE_INDEX = "0 3 2 1 -1 4 5 6 7 -1 0 1 5 4 -1 1 2 6 5 -1 2 3 7 6 -1 3 0 4 7 -1"
+
+
+def wrl(tmp_path, body: str, name: str = "scene.wrl"):
+    """A VRML file of ``body`` under the header, at line 2."""
+    path = tmp_path / name
+    path.write_text(HEADER + body + "\n")
+    return path
+
+
+def cube(index: str = CUBE_INDEX) -> str:
+    """A unit cube as an IndexedFaceSet Shape, its coordIndex ``index``."""
+    return f"Shape {{ geometry IndexedFaceSet {{ coord Coordinate {{ point [ {CUBE_POINTS} ] }} coordIndex [ {index} ] }} }}"
+
+
+def doubling(levels: int, first: str = BOX) -> str:
+    """``first`` DEFined as A0, then A1 ... A{levels}, each a Group of two USEs of the one before:
+    the scene expands to 2^(levels + 1) - 1 copies of ``first`` (every DEF is also at the top)."""
+    lines = [f"DEF A0 Group {{ children [ {first} ] }}"]
+    lines += [f"DEF A{k} Group {{ children [ USE A{k - 1} USE A{k - 1} ] }}" for k in range(1, levels + 1)]
+    return "\n".join(lines)
+
+
+def nested(levels: int, inner: str = BOX) -> str:
+    """``inner`` inside ``levels`` Groups."""
+    return "Group { children [ " * levels + inner + " ] }" * levels
+
+
+@pytest.fixture
+def no_block_is_built(monkeypatch):
+    """Building a block fails the test: the refusals below come while the file is parsed."""
+    def build(*args, **kwargs):
+        raise AssertionError("a block was built before the file was refused")
+    monkeypatch.setattr(vrml, "closed_convex_block", build)
+
+
+def test_nested_use_copies_past_the_block_limit_are_refused_while_parsing(tmp_path, no_block_is_built):
+    levels = (MAX_BLOCKS + 1).bit_length() - 1  # 2^(levels + 1) - 1 > MAX_BLOCKS
+    path = wrl(tmp_path, doubling(levels))
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}, line \d+: up to this node, the scene expands to "
+                                         rf"more than {MAX_BLOCKS:,} shapes \(each USE copies the node it names\)"):
+        read_vrml(path)
+
+
+def test_use_copies_of_a_shape_of_many_points_past_the_vertex_limit_are_refused(tmp_path, no_block_is_built):
+    points = 5000  # one shape's; doubled until the copies pass MAX_POINTS, far below MAX_BLOCKS shapes
+    levels = (MAX_POINTS // points).bit_length()
+    shape = f"Shape {{ geometry IndexedFaceSet {{ coord Coordinate {{ point [ {' 0 0 0' * points} ] }} coordIndex [ 0 1 2 ] }} }}"
+    path = wrl(tmp_path, doubling(levels, shape))
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}, line \d+: up to this node, the scene expands to "
+                                         rf"more than {MAX_POINTS:,} vertices"):
+        read_vrml(path)
+
+
+def test_vrml_nesting_is_read_to_the_depth_limit_and_refused_past_it(tmp_path):
+    # a Shape and its Box are two levels of nodes
+    assert len(read_vrml(wrl(tmp_path, nested(MAX_DEPTH - 2), "deepest.wrl"))) == 1
+    path = wrl(tmp_path, nested(330))
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}, line 2: Group nests nodes {MAX_DEPTH + 1} levels deep: "
+                                         rf"drydem reads at most {MAX_DEPTH}"):
+        read_vrml(path)
+
+
+def test_vrml_nesting_hidden_in_use_copies_counts_to_the_depth_limit(tmp_path):
+    # each DEF nests 150 levels, within the limit; a USE copies the previous one's levels in
+    lines = ["DEF L0 " + nested(148)]
+    lines += [f"DEF L{k} " + nested(149, f"USE L{k - 1}") for k in range(1, 8)]
+    path = wrl(tmp_path, "\n".join(lines))
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}, line 3: USE L0 nests nodes \d+ levels deep: "
+                                         rf"drydem reads at most {MAX_DEPTH} \(a USE counts the levels of the node it copies\)"):
+        read_vrml(path)
+
+
+@pytest.mark.parametrize("entry, message", [
+    ("nan", "IndexedFaceSet.coordIndex holds nan: each number must be finite"),
+    ("inf", "IndexedFaceSet.coordIndex holds inf: each number must be finite"),
+    ("0.9", "coordIndex 0.9 is not a whole number (a point's index from 0, or -1 ending a face)"),
+])
+def test_a_coord_index_that_is_not_a_whole_number_is_refused_naming_it(tmp_path, entry, message):
+    path = wrl(tmp_path, cube(CUBE_INDEX.replace("0", entry, 1)))
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}, line 2: {re.escape(message)}"):
+        read_vrml(path)
+
+
+@pytest.mark.parametrize("size", ["-1 1 1", "1 0 1", "1 1 -0.5"])
+def test_a_box_side_of_zero_or_less_is_refused(tmp_path, size):
+    path = wrl(tmp_path, f"Shape {{ geometry Box {{ size {size} }} }}")
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}, line 2: Box.size = \[.*\]: each side must be a number above 0"):
+        read_vrml(path)
+
+
+@pytest.mark.parametrize("body, field, value", [
+    ("Shape { geometry Box { size nan 1 1 } }", "Box.size", "nan"),
+    ("Shape { geometry Box { size 1e400 1 1 } }", "Box.size", "inf"),
+    (f"Transform {{ translation 0 nan 0 children [ {BOX} ] }}", "Transform.translation", "nan"),
+    (f"Transform {{ rotation 0 0 1 inf children [ {BOX} ] }}", "Transform.rotation", "inf"),
+    (cube().replace("0 0 0,", "0 0 -inf,"), "Coordinate.point", "-inf"),
+])
+def test_a_vrml_number_that_is_not_finite_is_refused_naming_its_field(tmp_path, body, field, value):
+    path = wrl(tmp_path, body)
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}, line 2: {field} holds {value}: each number must be finite"):
+        read_vrml(path)
+
+
+def test_vrml_transforms_past_the_float_range_are_refused_without_numpy_warnings(tmp_path):
+    path = wrl(tmp_path, f"Transform {{ scale 1e200 1e200 1e200 children [ Transform {{ scale 1e200 1 1 children [ {BOX} ] }} ] }}")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(DrydemError, match=rf"^{re.escape(str(path))}, line 2: Shape 'shape0': vertices contain NaN or infinite"):
+            read_vrml(path)
+
+
+def test_a_vrml_file_that_is_not_utf8_is_refused_as_an_obj_file_is(tmp_path):
+    bad = b"\xff\xfe"
+    path = tmp_path / "latin.wrl"
+    path.write_bytes(HEADER.encode() + b"DEF " + bad + b" " + BOX.encode() + b"\n")
+    obj = tmp_path / "latin.obj"
+    obj.write_bytes(b"# " * 10 + bad + b"\n")
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(obj))}: not a text file \(byte 20 is not UTF-8\)"):
+        read_mesh(obj)
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}: not a text file \(byte 20 is not UTF-8\); drydem reads VRML"):
+        read_vrml(path)
+
+
+def block_model(tree_children: list, *, nodes: dict | None = None, density=None) -> dict:
+    """A compas_dem BlockModel of one unit cube, element 'g1' (moved 5 m along x), its tree root's
+    ``tree_children``, graph ``nodes`` (one node holding g1 by default), its material of ``density``."""
+    vertices = {str(i): dict(zip("xyz", xyz)) for i, xyz in
+                enumerate([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]])}
+    faces = {str(i): face for i, face in enumerate([[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]])}
+    mesh = {"dtype": "compas.datastructures/Mesh", "name": "M", "data": {"vertex": vertices, "face": faces}}
+    move = {"dtype": "compas.geometry/Translation", "data": {"matrix": [[1, 0, 0, 5], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}}
+    element = {"dtype": "compas_dem.elements/Block", "data": {"name": "B", "geometry": mesh, "transformation": move,
+                                                               "is_support": False, "material": None if density is None else "m1"}}
+    return {"dtype": "compas_dem.models/BlockModel",
+            "data": {"elements": {"g1": element}, "materials": {"m1": {"data": {"density": density}}},
+                     "graph": {"node": nodes or {"0": {"element": "g1"}}, "edge": {}},
+                     "tree": {"root": {"children": tree_children}}, "transformation": None}}
+
+
+def json_file(tmp_path, data, name="model.json"):
+    path = tmp_path / name
+    path.write_text(json.dumps(data))
+    return path
+
+
+def test_a_compas_integer_past_the_digit_limit_is_refused_naming_the_file(tmp_path):
+    path = tmp_path / "long.json"
+    path.write_text('[{"dtype": "compas.datastructures/Mesh", "guid": ' + "1" * (MAX_INTEGER_DIGITS + 1) + "}]")
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}: an integer of {MAX_INTEGER_DIGITS + 1:,} digits "
+                                         rf"\(111111111111\.\.\.\): more than the {MAX_INTEGER_DIGITS:,} digits"):
+        read_compas(path)
+
+
+@pytest.mark.parametrize("tree, message", [
+    ([{"element": "g1", "children": [{"element": "g1", "children": [{"element": "g1", "children": []}]}]}],
+     "the tree holds the element g1 under itself: each element is on one tree node"),
+    ([{"element": "g1", "children": []}, {"element": "g1", "children": []}],
+     "the tree holds the element g1 twice: each element is on one tree node"),
+])
+def test_a_compas_element_on_two_tree_nodes_is_refused_naming_it(tmp_path, tree, message):
+    path = json_file(tmp_path, block_model(tree))
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}: {message}"):
+        read_compas(path)
+
+
+def test_a_compas_element_on_two_graph_nodes_is_refused_naming_it(tmp_path):
+    path = json_file(tmp_path, block_model([], nodes={"0": {"element": "g1"}, "1": {"element": "g1"}}))
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}: graph nodes 0 and 1 both hold the element g1"):
+        read_compas(path)
+
+
+@pytest.mark.parametrize("density", [-1000, 0, 1e-300, 1e299])
+def test_a_compas_material_density_out_of_range_is_refused_naming_the_file_and_element(tmp_path, density):
+    path = json_file(tmp_path, block_model([], density=density))
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}: element g1 \(graph node 0\): material m1: density = "
+                                         rf"{re.escape(repr(float(density)))}: must be a number in \[1, 2.5e\+04\] kg/m3"):
+        read_compas(path)
+
+
+def test_a_compas_matrix_past_the_float_range_is_refused_without_numpy_warnings(tmp_path):
+    data = block_model([])
+    data["data"]["transformation"] = {"dtype": "compas.geometry/Scale",
+                                      "data": {"matrix": [[1e300, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}}
+    data["data"]["elements"]["g1"]["data"]["transformation"]["data"]["matrix"][0][0] = 1e300
+    path = json_file(tmp_path, data)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(DrydemError, match=rf"^{re.escape(str(path))}: element g1 .*vertices contain NaN or infinite"):
+            read_compas(path)
+
+
+@pytest.mark.parametrize("name, content", [
+    ("deep.wrl", HEADER + nested(330)),
+    ("nanindex.wrl", HEADER + cube(CUBE_INDEX.replace("0", "nan", 1))),
+    ("long.json", "[" + "7" * (MAX_INTEGER_DIGITS + 1) + "]"),
+])
+def test_drydem_check_of_a_hostile_file_exits_non_zero_naming_it_without_a_traceback(tmp_path, name, content):
+    path = tmp_path / name
+    path.write_text(content)
+    result = CliRunner().invoke(main, ["check", str(path)])
+    assert result.exit_code != 0 and isinstance(result.exception, SystemExit), result.output
+    assert "Traceback" not in result.output and f"{path}" in result.output
