@@ -245,6 +245,15 @@ def test_build_model_reads_a_generator_of_blocks_once():
     assert dd.build_model((b for b in bricks()), density=1800.0).block_name == ("base", "brick")
 
 
+def test_build_model_refuses_more_blocks_than_a_model_may_have(monkeypatch):
+    # MAX_BLOCKS (200,000) bounds every model, imported or built (a VRML file of nested USE
+    # copies expanded a 1 kB file to millions); lowered here to the two bricks' count
+    import drydem.model.assembly as assembly
+
+    monkeypatch.setattr(assembly, "MAX_BLOCKS", 1)
+    refused(dd.ModelError, "<python>: 2 blocks: a model has at most 1", call=lambda: dd.build_model(bricks(), density=1800.0))
+
+
 def test_a_model_replaced_with_a_wrong_table_is_refused_naming_it(model):
     refused(dd.ModelError, "build_model joint = None: must be a JointMaterial", call=lambda: model.replace(joint=None))
 

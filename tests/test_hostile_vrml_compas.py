@@ -15,7 +15,7 @@ from drydem.io import vrml
 from drydem.io.compas_json import MAX_INTEGER_DIGITS, read_compas
 from drydem.io.mesh import read_mesh
 from drydem.io.vrml import MAX_DEPTH, MAX_POINTS, read_vrml
-from drydem.masonry.building import MAX_BLOCKS
+from drydem.model.assembly import MAX_BLOCKS
 
 HEADER = "#VRML V2.0 utf8\n"
 BOX = "Shape { geometry Box { size 1 1 1 } }"

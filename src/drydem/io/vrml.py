@@ -34,8 +34,7 @@ from scipy.spatial.transform import Rotation
 from drydem.errors import ModelError
 from drydem.files import read_text
 from drydem.io.mesh import closed_convex_block
-from drydem.masonry.building import MAX_BLOCKS
-from drydem.model.assembly import Block
+from drydem.model.assembly import MAX_BLOCKS, Block
 
 GROUPING = {"Transform", "Group", "Anchor", "Collision"}
 #: nodes that carry no geometry: skipped wherever they are

@@ -63,12 +63,10 @@ import numpy as np
 
 from drydem.errors import ModelError
 from drydem.masonry.layout import BRICK_SIZE, BrickSize
-from drydem.model.assembly import Block, Model, build_model
+from drydem.model.assembly import MAX_BLOCKS, Block, Model, build_model
 from drydem.model.geometry import ConvexPolyhedron, box
 from drydem.model.parameters import G, ContactSettings, JointMaterial, Range, SolverSettings, check_fields, refuse
 
-#: the most blocks a building may have: twice the largest DEM masonry models (~10^5 blocks)
-MAX_BLOCKS = 200_000
 #: the narrowest pier, in bricks: room for a lintel's bearing and a bonded brick beside it
 MIN_PIER_BRICKS = 2
 #: a lintel's bearing on each side of its opening, cells (half a brick)

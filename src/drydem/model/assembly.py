@@ -33,6 +33,8 @@ TOLERANCE_FRACTION = 0.05
 MAX_TOLERANCE_FRACTION = 0.5
 #: initial overlaps deeper than this fraction of the contact tolerance are errors
 OVERLAP_FRACTION = 0.01
+#: the most blocks a model may have: twice the largest DEM masonry models (~10^5 blocks)
+MAX_BLOCKS = 200_000
 #: an in-plane model's faces are parallel or normal to y, and its blocks' mid-planes coincide,
 #: to this fraction of the block size (|n_y|; mid-plane offsets)
 IN_PLANE_TOLERANCE = 1e-6
@@ -239,7 +241,8 @@ def build_model(
     """Validate the blocks and freeze them into a :class:`Model`.
 
     ``blocks`` is any iterable of :class:`Block` (a generator is read once). Raises ModelError
-    for an argument of the wrong kind (naming it and the kind it must be), duplicate names, a
+    for an argument of the wrong kind (naming it and the kind it must be), more than
+    :data:`MAX_BLOCKS` blocks, duplicate names, a
     density out of :data:`drydem.model.parameters.DENSITY`, no movable block, a contact tolerance
     above half the thinnest movable block, or two blocks overlapping deeper than 1 % of the
     contact tolerance (naming both and the depth).
@@ -276,6 +279,8 @@ def _checked_arguments(blocks, **arguments) -> list[Block]:
                          f"(Block(name=..., shape=...)){more}")
     if not blocks:
         raise ModelError(f"{source}: the model has no blocks")
+    if len(blocks) > MAX_BLOCKS:
+        raise ModelError(f"{source}: {len(blocks):,} blocks: a model has at most {MAX_BLOCKS:,}")
     return blocks
 
 
