@@ -130,7 +130,6 @@ def partial_name(path: Path) -> Path:
     return path.with_name(f".{stem}.partial{path.suffix}")
 
 
-
 @contextmanager
 def uninterrupted():
     """Hold SIGINT and SIGTERM until the block ends, then deliver them to the handlers in force

@@ -92,7 +92,6 @@ def _longest_paths(lower, upper, closure, n_blocks):
     return settlement
 
 
-
 def own_weight_closures(model, block: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """How far ``block``'s own weight alone closes the joint it rests on, resting on each face f
     (those in the plane of motion only, for an in-plane model): the closure u(W / A_f) of the

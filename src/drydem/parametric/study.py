@@ -305,8 +305,8 @@ def _motion_notes(runs, models: dict, motions: dict) -> tuple[str, ...]:
 
     notes: dict[str, None] = {}
     for target, motion in dict.fromkeys((spec.target, spec.motion) for spec in runs if spec.motion is not None):
-        notes |= dict.fromkeys(motions[motion].notes)
         unscaled = motions[motion]
+        notes |= dict.fromkeys(unscaled.notes)
         notes |= dict.fromkeys(check_held_axes(models[target], unscaled, lambda axis: f"{unscaled.name}, before its scales: its {axis} component"))
     return tuple(notes)
 
