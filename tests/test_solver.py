@@ -158,6 +158,33 @@ def test_restoring_a_snapshot_replays_the_same_path():
     assert first[2] == sim.cycles
 
 
+def test_a_checkpoint_keeps_the_divergence_test_s_farthest_travel(tmp_path):
+    # a run resumed from a file allows what the run it goes on from allowed: the 20 mm fall
+    # (its farthest travel, m x 0.02 kg m, about 6e-5); a file without it (written before)
+    # reads 0, and a file with NaN there is no checkpoint (the test would call any motion diverged)
+    from drydem.engine.checkpoint import load_checkpoint, save_checkpoint
+
+    sim = released_above_its_bed(0.02, damping=0.8)
+    sim.cycle_to_equilibrium()
+    saved = sim.snapshot()
+    assert saved.farthest_travel_kg_m == pytest.approx(sim.model.block_mass[1] * 0.02, rel=0.05)
+    path = tmp_path / "checkpoint.npz"
+    save_checkpoint(path, saved, {})
+    fresh = dd.Simulation(sim.model)
+    fresh.restore(load_checkpoint(path)[0])
+    assert fresh.snapshot().farthest_travel_kg_m == saved.farthest_travel_kg_m
+    with np.load(path) as data:
+        arrays = {key: data[key] for key in data.files}
+    for value, expected in ((None, 0.0), (np.nan, None)):
+        changed = {k: v for k, v in arrays.items() if k != "farthest_travel_kg_m"} | ({} if value is None else {"farthest_travel_kg_m": value})
+        np.savez(path, **changed)
+        if expected is None:
+            with pytest.raises(dd.DrydemError, match="not a readable drydem checkpoint .*farthest_travel_kg_m = nan"):
+                load_checkpoint(path)
+        else:
+            assert load_checkpoint(path)[0].farthest_travel_kg_m == expected
+
+
 def test_removed_blocks_stop_moving_and_let_go_of_the_others():
     # take the middle block of a 3-stack out: it stays where it is, while the top one loses its
     # support, falls one block height through it and comes to rest on the bottom one

@@ -27,7 +27,8 @@ def save_checkpoint(path: Path, snapshot: Snapshot, progress: dict) -> None:
     """Write ``snapshot`` and ``progress`` (name -> array or scalar) to ``path`` atomically."""
     arrays = {f"{part}.{name}": value for part in _PARTS for name, value in getattr(snapshot, part)._asdict().items()}
     arrays |= {"active": snapshot.active, "cycles": snapshot.cycles, "time_s": snapshot.time_s,
-               "scaled_timestep": np.nan if snapshot.scaled_timestep is None else snapshot.scaled_timestep}
+               "scaled_timestep": np.nan if snapshot.scaled_timestep is None else snapshot.scaled_timestep,
+               "farthest_travel_kg_m": snapshot.farthest_travel_kg_m}
     arrays |= {f"progress.{name}": np.asarray(value) for name, value in progress.items()}
     with uninterrupted(), replaced_atomically(path) as partial:
         np.savez(partial, **arrays)
@@ -42,8 +43,12 @@ def load_checkpoint(path: Path) -> tuple[Snapshot, dict]:
             scaled = float(data["scaled_timestep"])
             # checkpoints written before the model time was kept have none: 0 s
             time_s = float(data["time_s"]) if "time_s" in data.files else 0.0
+            # and before the divergence test kept the farthest travel: 0, an allowance that only grows from there
+            farthest = float(data["farthest_travel_kg_m"]) if "farthest_travel_kg_m" in data.files else 0.0
+            if not 0.0 <= farthest < np.inf:
+                raise ValueError(f"farthest_travel_kg_m = {farthest}: must be a finite number >= 0")
             snapshot = Snapshot(**parts, active=data["active"], cycles=int(data["cycles"]), time_s=time_s,
-                                scaled_timestep=None if np.isnan(scaled) else scaled)
+                                scaled_timestep=None if np.isnan(scaled) else scaled, farthest_travel_kg_m=farthest)
             progress = {key.removeprefix("progress."): data[key] for key in data.files if key.startswith("progress.")}
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
         # np.load raises each of these for a missing, empty, truncated or foreign file

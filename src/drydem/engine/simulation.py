@@ -87,7 +87,8 @@ class EquilibriumResult:
 class Snapshot:
     """A saved point of a :class:`Simulation`: state, contacts with their shear history,
     neighbour list, the state at the last broad phase, the blocks still in the analysis, cycles
-    run, model time (s), the timestep kept by mass scaling (s)."""
+    run, model time (s), the timestep kept by mass scaling (s), and the farthest travel so far
+    (kg m, the divergence test's: :meth:`Simulation._travel_kg_m`)."""
 
     state: State
     contacts: SubContacts
@@ -97,6 +98,7 @@ class Snapshot:
     cycles: int
     time_s: float
     scaled_timestep: float | None
+    farthest_travel_kg_m: float = 0.0
 
 
 class Simulation:
@@ -237,6 +239,7 @@ class Simulation:
         return Snapshot(
             state=self.state.copy(), contacts=t.contacts.copy(), neighbours=t.neighbours.copy(), broad_state=t.broad_state.copy(),
             active=t.active.copy(), cycles=self.cycles, time_s=self.time_s, scaled_timestep=self._scaled_timestep,
+            farthest_travel_kg_m=self._farthest_travel_kg_m,
         )
 
     def restore(self, snapshot: Snapshot) -> None:
@@ -248,6 +251,7 @@ class Simulation:
         t.contacts, t.neighbours = snapshot.contacts.copy(), snapshot.neighbours.copy()
         t.broad_state, t.active = snapshot.broad_state.copy(), snapshot.active.copy()
         self.cycles, self.time_s = snapshot.cycles, snapshot.time_s
+        self._farthest_travel_kg_m = snapshot.farthest_travel_kg_m
         self._scaled_timestep = snapshot.scaled_timestep
         self._update_inertia()
         self._first_velocity_dt = self.timestep  # the snapshot's velocities are of its own timestep
