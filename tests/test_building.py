@@ -178,3 +178,19 @@ def test_the_overlap_check_gives_the_pairwise_penetration_depths(small):
     blocks[k] = Block(name=blocks[k].name, shape=blocks[k].shape.transformed(np.eye(3), np.array([0.01, 0.0, 0.0])))
     with pytest.raises(ModelError, match=r"blocks 's0w0c3b2' and 's0w0c3b3' overlap by 0.01 m at the start"):
         build_model(blocks, density=1800.0)
+
+
+@pytest.mark.parametrize("chunk", [1, 7, 1 << 14])
+def test_the_first_overlap_is_named_whichever_chunk_of_candidate_pairs_holds_it(monkeypatch, chunk):
+    # the pairs are checked a chunk at a time, up to the first overlap (coincident blocks were all
+    # paired before one was named): the same first pair, by block numbers, at any chunk size
+    import drydem.model.assembly as assembly
+    from drydem.model.assembly import Block, build_model
+
+    monkeypatch.setattr(assembly, "OVERLAP_PAIRS", chunk)
+    blocks = building_blocks(dataclasses.replace(SMALL, storeys=1, storey_height_courses=12, window_height_courses=4, door_height_courses=0))
+    for name in ("s0w0c3b2", "s0w1c4b1"):
+        k = next(k for k, b in enumerate(blocks) if b.name == name)
+        blocks[k] = Block(name=name, shape=blocks[k].shape.transformed(np.eye(3), np.array([0.01, 0.0, 0.0])))
+    with pytest.raises(ModelError, match=r"blocks 's0w0c3b2' and 's0w0c3b3' overlap by 0.01 m at the start"):
+        build_model(blocks, density=1800.0)
