@@ -245,6 +245,14 @@ def test_build_model_reads_a_generator_of_blocks_once():
     assert dd.build_model((b for b in bricks()), density=1800.0).block_name == ("base", "brick")
 
 
+@pytest.mark.parametrize("held", [dict(fix_x=True, fix_y=True, fix_z=True, fix_rx=True, fix_ry=True, fix_rz=True),
+                                  dict(fix_x=True, fix_y=True, fix_z=True, fix_ry=True)])  # in-plane: rx, rz held too
+def test_build_model_refuses_supports_that_hold_every_degree_of_freedom(held):
+    # the thinnest movable block was the min() of nothing: a ValueError traceback in check, show and limit
+    refused(dd.ModelError, "every degree of freedom of every block is held", "nothing can move",
+            call=lambda: dd.build_model(bricks(), density=1800.0, supports=dd.Supports(**held)))
+
+
 def test_build_model_refuses_more_blocks_than_a_model_may_have(monkeypatch):
     # MAX_BLOCKS (200,000) bounds every model, imported or built (a VRML file of nested USE
     # copies expanded a 1 kB file to millions); lowered here to the two bricks' count

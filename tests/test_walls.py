@@ -99,6 +99,16 @@ def test_a_wall_file_builds_its_model_with_its_options(tmp_path):
     assert model.block_mass[1] == pytest.approx(1800 * 0.025 * 0.012 * 0.0055)  # default density
 
 
+def test_a_kilometre_long_wall_stands_on_a_base_deep_enough_to_be_a_block(tmp_path):
+    # 2000 half-metre bricks: a 1 cm base 1 km long was refused as a degenerate (flat) block,
+    # volume <= 1e-9 size^3; the base is now a thousandth of its length deep (1.1 m here)
+    path = write(tmp_path, "[brick]\nlength_m = 0.5\nheight_m = 0.05\nwidth_m = 0.1\n[layout]\ncourses = \"2000B\"\n")
+    model = load_wall(path).model()
+    base = model.block_shape[model.block_index("base")]
+    assert np.ptp(base.vertices[:, 2]) == pytest.approx(1e-3 * (1000.0 + 0.1), rel=1e-12)
+    assert model.n_blocks == 2001
+
+
 def test_layout_errors_give_the_wall_file_line(tmp_path):
     path = write(tmp_path, WALL_FILE.replace("b_b", "b__b"))
     with pytest.raises(ModelError, match=rf"{path}, line 14: the course is 3 bricks long"):

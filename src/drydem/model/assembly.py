@@ -65,14 +65,22 @@ BLOCK_RULES = {"name": TEXT, "shape": InstanceOf(ConvexPolyhedron), "density": D
 
 def base_under(blocks: list[Block], *, overhang_m: float = 0.05, depth_m: float = 0.01) -> Block:
     """A fixed block on which ``blocks`` stand: its top at their lowest point, ``overhang_m``
-    beyond them at each end along x (the tilt direction), as wide as they are in y; named
-    "base", or "base-2", "base-3", ... if one of ``blocks`` has that name."""
+    beyond them at each end along x (the tilt direction), as wide as they are in y, ``depth_m``
+    deep or BASE_DEPTH_FRACTION of its length if that is more; named "base", or "base-2",
+    "base-3", ... if one of ``blocks`` has that name."""
     lo = np.min([b.shape.vertices.min(0) for b in blocks], axis=0)
     hi = np.max([b.shape.vertices.max(0) for b in blocks], axis=0)
     taken = {b.name for b in blocks}
     name = next(n for n in itertools.chain(["base"], (f"base-{k}" for k in itertools.count(2))) if n not in taken)
+    depth_m = max(depth_m, BASE_DEPTH_FRACTION * (hi[0] - lo[0] + 2.0 * overhang_m))
     shape = box([lo[0] - overhang_m, lo[1], lo[2] - depth_m], [hi[0] + overhang_m, hi[1], lo[2]], name=name)
     return Block(name=name, shape=shape, fixed=True)
+
+
+#: the least depth of :func:`base_under`'s base, as a fraction of its length: a 1 cm slab under a
+#: 1 km wall of 2000 half-metre bricks was refused as a degenerate (flat) block; the paper's walls
+#: keep their 1 cm
+BASE_DEPTH_FRACTION = 1e-3
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -290,6 +298,9 @@ def _assemble(blocks, density, *, joint, contacts, supports, solver, source) -> 
     in_plane = _in_plane(shapes, fixed)
     if in_plane:
         fixed[:, [3, 5]] = True
+    if fixed.all():
+        raise ModelError(f"{source}: every degree of freedom of every block is held ([supports] fix_x ... fix_rz = true, "
+                         "or every block fixed); nothing can move")
     thinnest = min(_thickness(s) for s, f in zip(shapes, fixed) if not f.all())
     tolerance = TOLERANCE_FRACTION * thinnest if contacts.tolerance is None else contacts.tolerance
     if tolerance > MAX_TOLERANCE_FRACTION * thinnest:
