@@ -220,3 +220,20 @@ def test_a_montecarlo_summary_nested_too_deep_or_with_bad_imperfections_is_named
     assert f"- `{deep}: not a Monte Carlo summary: JSON nested deeper than" in text
     assert f"- `{odd}: settings imperfections: imperfections height_sd_mm = -1: must be a number in" in text
     assert GOOD_MONTECARLO_ROW in text
+
+
+@pytest.mark.parametrize("name", ["report.md", "report.html"])
+def test_a_report_file_drydem_did_not_write_is_kept_unless_overwrite(tmp_path, name):
+    # drydem's own earlier report is made again from the records; a file of its name that it
+    # did not write (it does not begin as drydem's does) was silently replaced
+    run_folder(tmp_path, "good", limit_summary())
+    report(tmp_path)
+    report(tmp_path)  # its own report, replaced without asking
+    mine = tmp_path / "report" / name
+    mine.write_text("my notes\n")
+    refused = CliRunner().invoke(main, ["report", str(tmp_path)])
+    assert refused.exit_code == 1 and f"{mine}: exists; pass --overwrite to replace it, or another --out" in refused.output
+    assert mine.read_text() == "my notes\n"
+    replaced = CliRunner().invoke(main, ["report", str(tmp_path), "--overwrite"])
+    assert replaced.exit_code == 0, replaced.output
+    assert mine.read_text() != "my notes\n"

@@ -37,7 +37,7 @@ from drydem.model.parameters import Range
 from drydem.parametric.limits import MAX_SAMPLES
 from drydem.parametric.records import (ANGLE, SUMMARY_FILE, RecordError, Records, load_records, load_run_folders, read_json, run_folders,
                                        table_problems)
-from drydem.files import replaced_atomically
+from drydem.files import replaceable, replaced_atomically, writable_folder
 from drydem.report.joints import joint_law, law_words, relative_error_percent
 from drydem.report.plots import new_figure
 
@@ -178,12 +178,14 @@ class Report:
     corrupt: list[RecordError]
 
 
-def build_report(results: Path, out: Path | None = None) -> Report:
+def build_report(results: Path, out: Path | None = None, *, overwrite: bool = False) -> Report:
     """Write ``report.md``, ``report.html`` and ``figures/*.png`` for the runs in ``results``: a
     sweep's records (``runs/``), the folders of ``drydem tilt`` and ``drydem limit`` runs (itself
     and its sub-folders: :func:`~drydem.parametric.records.load_run_folders`) and Monte Carlo
     runs (:func:`montecarlo_summaries`); ReportError if it holds none of them. The paper's
-    tables and figures only when a run is of one of its walls (:func:`paper_wall`)."""
+    tables and figures only when a run is of one of its walls (:func:`paper_wall`). A report
+    drydem wrote before is replaced (it is made from the records again); another file of its
+    name only with ``overwrite`` (:func:`_report_files`)."""
     import markdown
 
     results = Path(results)
@@ -193,7 +195,8 @@ def build_report(results: Path, out: Path | None = None) -> Report:
                           f"folder of a `drydem tilt`, `drydem limit` or `drydem montecarlo` run (its {SUMMARY_FILE})")
     records = Records(swept.valid + folders.valid, swept.corrupt + folders.corrupt)
     runs = Runs(records.valid)
-    out = Path(out or results / "report")
+    out = writable_folder(out or results / "report")
+    markdown_path, html_path = _report_files(out, overwrite)
     figures = out / "figures"
     figures.mkdir(parents=True, exist_ok=True)
     paper = savalle2022()
@@ -213,12 +216,36 @@ def build_report(results: Path, out: Path | None = None) -> Report:
         *_montecarlo(results, figures, paper),
     ]
     text = "\n\n".join(sections) + "\n"
-    _write(out / "report.md", text)
+    _write(markdown_path, text)
     body = markdown.markdown(text, extensions=["tables"])
-    _write(out / "report.html", f"<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>drydem report</title>"
-                             f"<style>table{{border-collapse:collapse}}td,th{{border:1px solid #999;padding:2px 6px}}</style>"
-                             f"</head><body>\n{body}\n</body></html>\n")
-    return Report(out / "report.md", out / "report.html", records.corrupt)
+    _write(html_path, f"{REPORT_STARTS['report.html']}<style>table{{border-collapse:collapse}}td,th{{border:1px solid #999;padding:2px 6px}}"
+                      f"</style></head><body>\n{body}\n</body></html>\n")
+    return Report(markdown_path, html_path, records.corrupt)
+
+
+#: how the files of a report drydem writes begin: a file there that does not is someone else's
+REPORT_STARTS = {"report.md": "# Report of the study in `",
+                 "report.html": "<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>drydem report</title>"}
+
+
+def _report_files(out: Path, overwrite: bool) -> tuple[Path, Path]:
+    """``out``/report.md and report.html, once each may be written: nothing there, a report
+    drydem wrote (it begins as REPORT_STARTS says), or, with ``overwrite``, another regular file
+    (:func:`~drydem.files.replaceable`; a link or a pipe is never written through); checked
+    before any figure is drawn."""
+    found = []
+    for name, start in REPORT_STARTS.items():
+        path = out / name
+        ours = path.is_file() and not path.is_symlink() and _begins_with(path, start)
+        found.append(path if ours else replaceable(path, overwrite, other="another --out"))
+    return found[0], found[1]
+
+
+def _begins_with(path: Path, start: str) -> bool:
+    """Whether the regular file ``path`` begins with ``start`` (its first bytes only are read)."""
+    head = start.encode()
+    with path.open("rb") as f:
+        return f.read(len(head)) == head
 
 
 def _paper_tables(runs: Runs, paper: dict) -> list[str]:
