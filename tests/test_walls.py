@@ -158,6 +158,9 @@ def test_layout_errors_name_the_file_line_whatever_the_string_quotes(tmp_path, l
     pytest.param((LAYOUT, 'courses = ""'), r"the layout has no courses", id="empty courses"),
     pytest.param(with_courses("# nothing but a comment"), r"the layout has no courses", id="courses only comments"),
     pytest.param(with_courses("__", "._.", "__"), r"lines 13-15: the layout has only voids; a wall needs at least one brick", id="only voids"),
+    # the base rose to the first bricks and the wall stood a course lower than drawn, while check said it cannot be built
+    pytest.param(with_courses("BB", "__"), r"line 14: the bottom course is all voids: the base is drawn under the bottom course",
+                 id="bottom course of voids"),
     pytest.param(with_courses("BB", "bXb", "BB"), r"line 14: unknown token 'X' in 'bXb'", id="unknown token"),
     pytest.param(with_courses("BB", "bB２b"), r"line 14: unknown token '２'", id="non-ASCII digit"),
     pytest.param(with_courses("BB", "0B"), r"line 14: repeat count 0 before 'B' must be at least 1", id="zero repeat"),

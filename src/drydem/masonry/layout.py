@@ -209,6 +209,10 @@ def parse_layout(text: str, brick: BrickSize, *, source: str = "<layout>", first
         last_number = rows[-1][0]
         lines = f"line {first_number}" if last_number == first_number else f"lines {first_number}-{last_number}"
         raise ModelError(f"{source}, {lines}: the layout has only voids; a wall needs at least one brick")
+    bottom_number, bottom = rows[-1]
+    if all(kind == "void" for kind, _, _ in bottom):
+        raise ModelError(f"{source}, line {bottom_number}: the bottom course is all voids: the base is drawn under the bottom "
+                         "course, so the wall would stand on it one course lower than drawn; remove the course")
     width = sum(cells * repeat for _, cells, repeat in first)
     courses = []
     for course, (number, runs) in enumerate(reversed(rows)):
