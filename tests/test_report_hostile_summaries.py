@@ -237,3 +237,11 @@ def test_a_report_file_drydem_did_not_write_is_kept_unless_overwrite(tmp_path, n
     replaced = CliRunner().invoke(main, ["report", str(tmp_path), "--overwrite"])
     assert replaced.exit_code == 0, replaced.output
     assert mine.read_text() != "my notes\n"
+
+
+@pytest.mark.parametrize("text, kind", [("[1, 2]", "list"), ("null", "null"), ('"a string"', "str")])
+def test_a_summary_that_is_not_a_json_object_is_named_corrupt(tmp_path, text, kind):
+    # it was taken for another analysis' summary and skipped: with no other run, "nothing to report"
+    run_folder(tmp_path, "good", limit_summary())
+    bad = run_folder(tmp_path, "bad", text)
+    assert_left_out(tmp_path, bad, f"not a drydem summary: its JSON is {kind}, not an object", GOOD_LIMIT_ROW)

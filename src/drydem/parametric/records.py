@@ -275,7 +275,10 @@ def run_folder_record(folder: Path) -> dict | None:
     if not path.is_file():
         return None
     summary = read_json(path, "summary")
-    keys = set(summary) if isinstance(summary, dict) else set()
+    if not isinstance(summary, dict):
+        raise RecordError(f"{path}: not a drydem summary: its JSON is {type(summary).__name__ if summary is not None else 'null'}, "
+                          "not an object")
+    keys = set(summary)
     analysis = next((a for a in ("tilt", "limit") if SUMMARY_KEYS[a] | {"analysis", "model"} <= keys), None)
     if analysis is None:
         return None
