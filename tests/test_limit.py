@@ -136,12 +136,22 @@ def test_stiff_dem_lands_near_limit_analysis():
     assert associative - 0.5 < dem <= associative
 
 
+def blocks_of(model: dd.Model) -> list[dd.Block]:
+    """The blocks of ``model`` again, as built."""
+    return [dd.Block(name=n, shape=s, fixed=bool(f.all())) for n, s, f in zip(model.block_name, model.block_shape, model.block_fixed)]
+
+
 def test_bad_input_is_a_clear_error():
     floating = dd.build_model(
         [dd.Block(name="base", shape=dd.box([0, 0, -0.01], [0.1, 0.012, 0]), fixed=True),
          dd.Block(name="cloud", shape=dd.box([0, 0, 0.05], [0.025, 0.012, 0.0555]))], density=1800.0)
-    with pytest.raises(LimitAnalysisError, match="no contacts: the blocks do not touch"):
+    with pytest.raises(LimitAnalysisError, match=r"block\(s\) 'cloud' touch no other block: nothing holds them up"):
         limit_analysis(floating)
+    # beside a brick resting on the base, the cloud made the problem infeasible, named nowhere
+    beside = dd.build_model([*blocks_of(floating), dd.Block(name="brick", shape=dd.box([0.05, 0, 0], [0.075, 0.012, 0.0055]))],
+                            density=1800.0)
+    with pytest.raises(LimitAnalysisError, match=r"block\(s\) 'cloud' touch no other block"):
+        limit_analysis(beside)
     # a block whose centroid is beyond the edge of its support: no multiplier holds it
     overhang = dd.build_model(
         [dd.Block(name="base", shape=dd.box([-0.1, 0, -0.01], [0.0, 0.012, 0]), fixed=True),

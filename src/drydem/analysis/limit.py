@@ -257,8 +257,7 @@ def _assemble(model: Model, tilt_axis: str, progress: Callable[[str], None]) -> 
                                                      tolerance=model.contacts.tolerance))
     at_rest = State.at_rest(model.block_centroid)
     sub = ContactTracker(corners, at_rest).contacts
-    if sub.count == 0:
-        raise LimitAnalysisError(f"{model.source}: no contacts: the blocks do not touch")
+    _refuse_untouched(model, sub)
     progress(f"assembling the equilibrium matrix ({sub.count} contact points)")
     rotation = np.repeat(np.eye(3)[None], model.n_blocks, axis=0)
     point, _, normal = world_points(sub, at_rest.position, rotation)
@@ -444,6 +443,18 @@ def _solve_cone(problem: _Problem, *, friction: float, cohesion: np.ndarray, ten
                    f"Clarabel failed: {status} after {solution.iterations} iterations")
     duals = np.asarray(solution.z)[:a_eq.shape[0]]
     return float(x[-1]), x[:n].copy(), duals, f"Clarabel: {status} ({solution.iterations} iterations)"
+
+
+def _refuse_untouched(model: Model, sub) -> None:
+    """LimitAnalysisError naming the movable blocks that touch no other block (floating: nothing
+    can hold them up, and the solver would only say the problem is infeasible)."""
+    touched = np.zeros(model.n_blocks, dtype=bool)
+    touched[sub.block_ref] = touched[sub.block_inc] = True
+    alone = [model.block_name[b] for b in np.flatnonzero(model.block_movable & ~touched)]
+    if alone:
+        more = f" (and {len(alone) - 5} more)" if len(alone) > 5 else ""
+        raise LimitAnalysisError(f"{model.source}: block(s) {', '.join(map(repr, alone[:5]))}{more} touch no other block: nothing "
+                                 "holds them up (drydem check names them too)")
 
 
 #: how a solve ended (:func:`_check_outcome`), and Clarabel's statuses for them (any other: FAILED)
