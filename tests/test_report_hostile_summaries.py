@@ -245,3 +245,13 @@ def test_a_summary_that_is_not_a_json_object_is_named_corrupt(tmp_path, text, ki
     run_folder(tmp_path, "good", limit_summary())
     bad = run_folder(tmp_path, "bad", text)
     assert_left_out(tmp_path, bad, f"not a drydem summary: its JSON is {kind}, not an object", GOOD_LIMIT_ROW)
+
+
+def test_a_report_of_corrupt_records_only_is_written_and_exits_non_zero(tmp_path):
+    # it exited 0 with "0 runs recorded": a script took it for a report
+    bad = run_folder(tmp_path, "bad", limit_summary() | {"load_multiplier": "abc"})
+    result = CliRunner().invoke(main, ["report", str(tmp_path)])
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    assert f"corrupt record left out: {bad}" in result.output
+    assert f"every record of {tmp_path} is corrupt (1, named above and in the report): the report holds no run" in result.output
+    assert "0 runs recorded" in (tmp_path / "report" / "report.md").read_text()

@@ -98,6 +98,9 @@ def report(results_dir: Path, out: Path | None, overwrite: bool) -> None:
     for corrupt in written.corrupt:
         click.echo(f"corrupt record left out: {corrupt}", err=True)
     click.echo(f"report          {written.markdown} and {written.html}")
+    if written.corrupt and not written.reported:
+        raise click.ClickException(f"every record of {results_dir} is corrupt ({len(written.corrupt)}, named above and in the "
+                                   "report): the report holds no run")
 
 
 @main.command()

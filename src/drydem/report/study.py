@@ -171,11 +171,13 @@ class ReportError(DrydemError):
 
 @dataclass(frozen=True)
 class Report:
-    """The report's files, and the errors of the records left out (each naming its file)."""
+    """The report's files, the errors of the records left out (each naming its file), and how
+    many runs it reports (records and Monte Carlo runs)."""
 
     markdown: Path
     html: Path
     corrupt: list[RecordError]
+    reported: int
 
 
 def build_report(results: Path, out: Path | None = None, *, overwrite: bool = False) -> Report:
@@ -189,8 +191,8 @@ def build_report(results: Path, out: Path | None = None, *, overwrite: bool = Fa
     import markdown
 
     results = Path(results)
-    swept, folders = load_records(results), load_run_folders(results)
-    if not ((results / "runs").is_dir() or folders.valid or folders.corrupt or montecarlo_summaries(results)):
+    swept, folders, monte_carlo = load_records(results), load_run_folders(results), montecarlo_summaries(results)
+    if not ((results / "runs").is_dir() or folders.valid or folders.corrupt or monte_carlo):
         raise ReportError(f"{results}: nothing to report: no runs/ folder (`drydem sweep STUDY --out {results}` writes one) and no "
                           f"folder of a `drydem tilt`, `drydem limit` or `drydem montecarlo` run (its {SUMMARY_FILE})")
     records = Records(swept.valid + folders.valid, swept.corrupt + folders.corrupt)
@@ -220,7 +222,7 @@ def build_report(results: Path, out: Path | None = None, *, overwrite: bool = Fa
     body = markdown.markdown(text, extensions=["tables"])
     _write(html_path, f"{REPORT_STARTS['report.html']}<style>table{{border-collapse:collapse}}td,th{{border:1px solid #999;padding:2px 6px}}"
                       f"</style></head><body>\n{body}\n</body></html>\n")
-    return Report(markdown_path, html_path, records.corrupt)
+    return Report(markdown_path, html_path, records.corrupt, len(records.valid) + len(monte_carlo))
 
 
 #: how the files of a report drydem writes begin: a file there that does not is someone else's
