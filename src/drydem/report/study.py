@@ -191,12 +191,12 @@ def build_report(results: Path, out: Path | None = None, *, overwrite: bool = Fa
     import markdown
 
     results = Path(results)
-    swept, folders, monte_carlo = load_records(results), load_run_folders(results), montecarlo_summaries(results)
-    if not ((results / "runs").is_dir() or folders.valid or folders.corrupt or monte_carlo):
+    swept, folders, summaries = load_records(results), load_run_folders(results), montecarlo_summaries(results)
+    if not ((results / "runs").is_dir() or folders.valid or folders.corrupt or summaries):
         raise ReportError(f"{results}: nothing to report: no runs/ folder (`drydem sweep STUDY --out {results}` writes one) and no "
                           f"folder of a `drydem tilt`, `drydem limit` or `drydem montecarlo` run (its {SUMMARY_FILE})")
     records = Records(swept.valid + folders.valid, swept.corrupt + folders.corrupt)
-    runs = Runs(records.valid)
+    runs, (monte_carlo, unreadable) = Runs(records.valid), montecarlo_runs(summaries)
     out = writable_folder(out or results / "report")
     markdown_path, html_path = _report_files(out, overwrite)
     figures = out / "figures"
@@ -215,7 +215,7 @@ def build_report(results: Path, out: Path | None = None, *, overwrite: bool = Fa
         *_laws(records.valid, runs),
         *(_paper_figures(figures, runs, paper) if of_paper else []),
         *(_ida(figures, runs) if any(r["spec"]["analysis"] == "shake" for r in records.valid) else []),
-        *_montecarlo(results, figures, paper),
+        *_montecarlo(monte_carlo, unreadable, figures, paper),
     ]
     text = "\n\n".join(sections) + "\n"
     _write(markdown_path, text)
@@ -466,11 +466,11 @@ def montecarlo_summaries(results: Path) -> list[Path]:
     return kept + made
 
 
-def montecarlo_runs(results: Path) -> tuple[list[MonteCarloRun], list[str]]:
-    """The Monte Carlo runs of :func:`montecarlo_summaries`, by wall then folder, and the
-    summaries that cannot be read, each named with its fault."""
+def montecarlo_runs(summaries: list[Path]) -> tuple[list[MonteCarloRun], list[str]]:
+    """The Monte Carlo runs of ``summaries`` (:func:`montecarlo_summaries`), by wall then folder,
+    and the summaries that cannot be read, each named with its fault."""
     found, unreadable = [], []
-    for path in montecarlo_summaries(results):
+    for path in summaries:
         try:
             found.append(read_montecarlo(path))
         except RecordError as exc:
@@ -478,12 +478,11 @@ def montecarlo_runs(results: Path) -> tuple[list[MonteCarloRun], list[str]]:
     return sorted(found, key=lambda run: (run.wall, run.name)), unreadable
 
 
-def _montecarlo(results: Path, figures: Path, paper: dict) -> list[str]:
-    """The section of the study's Monte Carlo runs, none without any: per run, the statistics of
-    its computed collapse angles (from its summary.json: the samples that found one) and its
-    imperfections, beside the experimental mean and CoV of its wall (the paper's Table 1); the
-    figure of the CoVs; the summaries that cannot be read, named."""
-    found, unreadable = montecarlo_runs(results)
+def _montecarlo(found: list[MonteCarloRun], unreadable: list[str], figures: Path, paper: dict) -> list[str]:
+    """The section of the study's Monte Carlo runs (:func:`montecarlo_runs`), none without any:
+    per run, the statistics of its computed collapse angles (from its summary.json: the samples
+    that found one) and its imperfections, beside the experimental mean and CoV of its wall (the
+    paper's Table 1); the figure of the CoVs; the summaries that cannot be read, named."""
     if not found and not unreadable:
         return []
     experiment = paper["table1_experiment"]
