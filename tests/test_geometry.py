@@ -20,6 +20,49 @@ def test_box_mass_properties_match_closed_form():
     assert len(shape.faces) == 6 and all(len(f) == 4 for f in shape.faces)
 
 
+@pytest.mark.parametrize("seed", range(5))
+def test_the_closed_form_box_is_the_hull_of_its_corners(seed):
+    """dd.box builds its polyhedron without Qhull: the same corners, faces (as vertex rings,
+    counter-clockwise seen from outside, each about its own outward normal) and mass properties
+    as dd.convex_hull of the eight corners, on boxes of 1 mm to 50 m anywhere within 1 km."""
+    rng = np.random.default_rng(seed)
+    for _ in range(40):
+        lo = rng.uniform(-1e3, 1e3, 3) * rng.choice([1e-3, 1.0])
+        hi = lo + np.exp(rng.uniform(np.log(1e-3), np.log(50.0), 3))
+        closed, hulled = dd.box(lo, hi), dd.convex_hull(box_vertices(lo, hi))
+        size = closed.size
+        assert closed.size == pytest.approx(hulled.size, rel=1e-12)
+        assert closed.volume == pytest.approx(hulled.volume, rel=1e-9)
+        np.testing.assert_allclose(closed.centroid, hulled.centroid, rtol=0, atol=1e-12 * (size + np.abs(lo).max()))
+        np.testing.assert_allclose(closed.second_moment, hulled.second_moment, rtol=0, atol=1e-9 * closed.volume * size**2)
+        assert sorted(map(tuple, closed.vertices.tolist())) == sorted(map(tuple, hulled.vertices.tolist()))
+        assert face_rings(closed) == face_rings(hulled)
+        for k, ring in enumerate(closed.faces):  # the shoelace normal of each ring is its outward normal
+            p = closed.vertices[ring]
+            area_vector = 0.5 * np.cross(p, np.roll(p, -1, axis=0)).sum(0)
+            np.testing.assert_allclose(area_vector / np.linalg.norm(area_vector), closed.face_normals[k], atol=1e-12)
+            assert closed.face_normals[k] @ (p.mean(0) - closed.centroid) > 0
+
+
+def face_rings(shape) -> set:
+    """Each face as its vertices' coordinates in ring order, started at the smallest, with its normal."""
+    rings = set()
+    for ring, normal in zip(shape.faces, shape.face_normals):
+        points = [tuple(shape.vertices[i].tolist()) for i in ring]
+        start = points.index(min(points))
+        rings.add((tuple(points[start:] + points[:start]), tuple(np.round(normal, 12).tolist())))
+    return rings
+
+
+def test_a_box_too_far_too_small_or_too_flat_is_refused_as_a_hull_would_be():
+    with pytest.raises(dd.GeometryError, match=r"slab: a vertex is 2e\+06 m from the origin"):
+        dd.box([2e6, 0, 0], [2e6 + 1, 1, 1], name="slab")
+    with pytest.raises(dd.GeometryError, match=r"grain: 1.73e-07 m across: a block must be at least 1e-06 m across"):
+        dd.box([0, 0, 0], [1e-7, 1e-7, 1e-7], name="grain")
+    with pytest.raises(dd.GeometryError, match=r"sheet: degenerate block \(volume 1e-12 m3"):
+        dd.box([0, 0, 0], [1, 1, 1e-12], name="sheet")
+
+
 def test_tetrahedron_mass_properties_match_closed_form():
     # unit right tetrahedron: V = 1/6, centroid (1/4, 1/4, 1/4),
     # products of inertia about the centroid: I_xx = 1/80 rho ... (Tonon 2004, eq. for the corner tetrahedron):

@@ -303,3 +303,11 @@ def test_a_resumed_run_keeps_the_frames_already_written_and_goes_on_after_them(w
     tilt_analysis(wall, SETTINGS, on_frame=VtkSeries(folder, wall, resume=True), checkpoint=checkpoint, resume=True)
     resumed, uninterrupted = frames(folder), frames(run[1])
     assert [(r["frame"], r["kind"], r["tilt_deg"]) for r in resumed] == [(r["frame"], r["kind"], r["tilt_deg"]) for r in uninterrupted]
+
+
+def test_a_caption_shows_a_round_off_below_a_hundredth_of_a_millimetre_as_zero():
+    from drydem.report.animation import _caption
+
+    row = {"kind": "equilibrium", "tilt_deg": "0.0", "ux_m": "-3e-20"}
+    assert _caption(row, 0) == "equilibrium: tilt 0.00 deg, monitored ux 0.00 mm"
+    assert _caption({"time_s": "1.0", "ux_m": "-0.0042"}, 0) == "t = 1.000 s, monitored ux -4.20 mm"

@@ -57,14 +57,13 @@ A building of any other size is built from Python with a :class:`BuildingSpec`::
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
 from drydem.errors import ModelError
 from drydem.masonry.layout import BRICK_SIZE, BrickSize
 from drydem.model.assembly import MAX_BLOCKS, Block, Model, build_model
-from drydem.model.geometry import ConvexPolyhedron, box
+from drydem.model.geometry import box
 from drydem.model.parameters import G, ContactSettings, JointMaterial, Range, SolverSettings, check_fields, refuse
 
 #: the narrowest pier, in bricks: room for a lintel's bearing and a bonded brick beside it
@@ -270,16 +269,9 @@ def piece_box(spec: BuildingSpec, wall: int, course: int, cells: tuple[int, int]
     return np.array([x[0], y[0], z[0]]), np.array([x[1], y[1], z[1]])
 
 
-@lru_cache(maxsize=256)
-def _template(size: tuple[float, float, float]) -> ConvexPolyhedron:
-    """A box of ``size`` (m) with its min corner at the origin (hulled once per size)."""
-    return box([0.0, 0.0, 0.0], size, name="building block")
-
-
 def _block(name: str, lo: np.ndarray, hi: np.ndarray) -> Block:
-    """A box block from its corners, as a template box moved to ``lo`` (no hull per block)."""
-    size = tuple(float(v) for v in np.round(hi - lo, 12))
-    return Block(name=name, shape=_template(size).transformed(np.eye(3), lo))
+    """A box block between its corners (m)."""
+    return Block(name=name, shape=box(lo, hi, name=f"block {name!r}"))
 
 
 def base_slab(spec: BuildingSpec) -> Block:

@@ -51,7 +51,7 @@ from drydem.errors import ModelError
 from drydem.masonry.layout import BrickSize, unit_box
 from drydem.masonry.walls import Wall
 from drydem.model.assembly import Block, Model, base_under, build_model
-from drydem.model.geometry import convex_hull
+from drydem.model.geometry import box, convex_hull
 from drydem.model.parameters import InstanceOf, OneOf, Range, check_arguments, check_fields, refuse
 from drydem.model.tables import errors_naming
 
@@ -268,9 +268,9 @@ def _covered(start: float, end: float, starts: np.ndarray, ends: np.ndarray) -> 
 
 
 def _blocks(wall: Wall, laid: Placement, seed: int) -> list[Block]:
-    """The base and the bricks as placed: each brick the convex hull of its eight corners, given
-    in the order of drydem.model.geometry.box (so that a brick placed as drawn is the layout's box,
-    bit for bit). ModelError for a brick thinner than :data:`MIN_THICKNESS_FRACTION` of its height."""
+    """The base and the bricks as placed: each brick the convex hull of its eight corners, or,
+    where its bed faces are level, a box (drydem.model.geometry.box: a brick placed as drawn is
+    the layout's box, bit for bit). ModelError for a brick thinner than :data:`MIN_THICKNESS_FRACTION` of its height."""
     h = wall.brick.height_m
     thickness = h + laid.thickness_deviation()
     names = wall.layout.block_names()
@@ -283,12 +283,16 @@ def _blocks(wall: Wall, laid: Placement, seed: int) -> list[Block]:
     bricks = []
     for i, (name, unit) in enumerate(zip(names, wall.layout.solid_units)):
         lo, hi = unit_box(unit, wall.brick)
-        corners = []
-        for x in (laid.x_start[i], laid.x_end[i]):
-            bottom = lo[2] + (laid.lift[i] + laid.bottom_slope[i] * (x - mid[i]))
-            top = hi[2] + (laid.lift[i] + laid.height[i] + laid.top_slope[i] * (x - mid[i]))
-            corners += [[x, y, z] for y in (lo[1], hi[1]) for z in (bottom, top)]
-        bricks.append(Block(name=name, shape=convex_hull(np.array(corners), name=f"block {name!r}")))
+        ends = (laid.x_start[i], laid.x_end[i])
+        bottom = [lo[2] + (laid.lift[i] + laid.bottom_slope[i] * (x - mid[i])) for x in ends]
+        top = [hi[2] + (laid.lift[i] + laid.height[i] + laid.top_slope[i] * (x - mid[i])) for x in ends]
+        where = f"block {name!r}"
+        if bottom[0] == bottom[1] and top[0] == top[1]:  # level faces: a box
+            shape = box([ends[0], lo[1], bottom[0]], [ends[1], hi[1], top[0]], name=where)
+        else:
+            shape = convex_hull(np.array([[x, y, z] for k, x in enumerate(ends) for y in (lo[1], hi[1]) for z in (bottom[k], top[k])]),
+                                name=where)
+        bricks.append(Block(name=name, shape=shape))
     return [base_under(bricks), *bricks]
 
 

@@ -173,11 +173,16 @@ def _caption(row: dict, load_direction: int) -> str:
     monitored displacement along the load (``ux_m``: along y when tilting about x); a
     ValueError for a kind not of :data:`drydem.io.vtk.FRAME_KINDS`."""
     if row.get("time_s") is not None:
-        return f"t = {_finite(row, 'time_s'):.3f} s, monitored ux {_finite(row, 'ux_m') * 1e3:.2f} mm"
+        return f"t = {_finite(row, 'time_s'):.3f} s, monitored ux {_millimetres(_finite(row, 'ux_m'))} mm"
     if row["kind"] not in FRAME_KINDS:
         raise ValueError(f"kind {row['kind']!r}: must be one of {', '.join(map(repr, FRAME_KINDS))}")
-    along = f"monitored u{LOAD_AXES[load_direction]} {_finite(row, 'ux_m') * 1e3:.2f} mm"
+    along = f"monitored u{LOAD_AXES[load_direction]} {_millimetres(_finite(row, 'ux_m'))} mm"
     return f"{row['kind']}: tilt {_finite(row, 'tilt_deg'):.2f} deg, {along}"
+
+
+def _millimetres(metres: float) -> str:
+    """``metres`` in mm to 0.01 mm, a round-off below it shown as 0.00, not -0.00."""
+    return f"{round(metres * 1e3, 2) + 0.0:.2f}"
 
 
 def _finite(row: dict, column: str) -> float:
