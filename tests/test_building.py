@@ -182,8 +182,8 @@ def test_the_overlap_check_gives_the_pairwise_penetration_depths(small):
 
 @pytest.mark.parametrize("chunk", [1, 7, 1 << 14])
 def test_the_first_overlap_is_named_whichever_chunk_of_candidate_pairs_holds_it(monkeypatch, chunk):
-    # the pairs are checked a chunk at a time, up to the first overlap (coincident blocks were all
-    # paired before one was named): the same first pair, by block numbers, at any chunk size
+    # the pairs are found and checked a chunk at a time, up to the first overlap (coincident blocks
+    # were all paired before one was named): the same pair, first in the sweep along x, at any chunk size
     import drydem.model.assembly as assembly
     from drydem.model.assembly import Block, build_model
 
@@ -194,3 +194,28 @@ def test_the_first_overlap_is_named_whichever_chunk_of_candidate_pairs_holds_it(
         blocks[k] = Block(name=name, shape=blocks[k].shape.transformed(np.eye(3), np.array([0.01, 0.0, 0.0])))
     with pytest.raises(ModelError, match=r"blocks 's0w0c3b2' and 's0w0c3b3' overlap by 0.01 m at the start"):
         build_model(blocks, density=1800.0)
+
+
+def test_thirty_thousand_coincident_cubes_are_refused_within_a_bounded_memory(tmp_path):
+    """All the candidate pairs of 30,000 coincident cubes are 450 million (a MemoryError in 2.5 GB
+    of address space before the pairs were found a chunk at a time); refused, naming the first
+    two, in a process limited to 2.5 GB."""
+    import resource
+    import subprocess
+    import sys
+
+    script = tmp_path / "cubes.py"
+    script.write_text(
+        "import drydem as dd\n"
+        "cube = dd.box([0, 0, 0], [0.1, 0.1, 0.1])\n"
+        "blocks = [dd.Block(name='base', shape=dd.box([-1, -1, -0.1], [1, 1, 0]), fixed=True)]\n"
+        "blocks += [dd.Block(name=f'c{k}', shape=cube) for k in range(30000)]\n"
+        "try:\n"
+        "    dd.build_model(blocks, density=2000.0)\n"
+        "except dd.ModelError as error:\n"
+        "    print(error)\n")
+    limit = 2_500_000_000
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300,
+                          preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_AS, (limit, limit)))
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "blocks 'c0' and 'c1' overlap by 0.1 m at the start" in done.stdout

@@ -10,7 +10,7 @@ from scipy.spatial.transform import Rotation
 import drydem as dd
 from drydem.engine import contacts
 from drydem.engine.narrow_phase import SLIVER_FRACTION, narrow_phase
-from drydem.model.boxes import bounds, overlapping_pairs
+from drydem.model.boxes import bounds, overlapping_pairs, pair_chunks
 from drydem.model.geometry import FlatGeometry
 from drydem.model.parameters import ContactDensity
 from oracles import contacts as oracle
@@ -128,6 +128,22 @@ def test_detection_matches_all_pairs_oracle_on_random_clouds(seed):
     for pair, area in expected.items():
         assert found[pair] == pytest.approx(area, rel=1e-9)
     assert np.all(np.bincount(sub.contact) == 4)  # rectangles: corner points only
+
+
+@pytest.mark.parametrize("most", [1, 50, 10**9])
+def test_the_pairs_in_chunks_are_all_the_pairs_each_once(most):
+    """drydem.model.boxes.pair_chunks: the chunks hold the pairs of overlapping_pairs, each once,
+    and every chunk but the last reaches ``most``, so that a caller stopping at its first chunk
+    holds about ``most`` pairs (plus one block's), not all."""
+    rng = np.random.default_rng(11)
+    lo = rng.uniform(0, 5, (200, 3))
+    shapes = [dd.box(l, l + rng.uniform(0.1, 1.5, 3)) for l in lo]
+    movable = rng.random(200) < 0.8
+    chunks = list(pair_chunks(*bounds(shapes), movable, 0.05, most))
+    every = np.concatenate(chunks)
+    assert sorted(map(tuple, every.tolist())) == sorted(map(tuple, overlapping_pairs(*bounds(shapes), movable, 0.05).tolist()))
+    assert len({tuple(p) for p in every.tolist()}) == len(every)
+    assert all(len(c) >= most for c in chunks[:-1]) and (most > 1 or len(chunks) > 1)
 
 
 def test_broad_phase_matches_all_pairs_bounding_box_test():
