@@ -159,6 +159,26 @@ def test_obj_groups_name_the_blocks_of_a_file_without_objects(tmp_path):
     assert blocks[1].shape.centroid.tolist() == [0.5, 0.5, 1.5]
 
 
+def cube_obj(lift: int) -> str:
+    """An OBJ unit cube lifted by ``lift`` m: its 8 vertices and 6 faces (relative indices)."""
+    corners = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]
+    faces = "f -8 -5 -6 -7\nf -4 -3 -2 -1\nf -8 -7 -3 -4\nf -7 -6 -2 -3\nf -6 -5 -1 -2\nf -5 -8 -4 -1\n"
+    return "".join(f"v {x} {y} {z + 2 * lift}\n" for x, y, z in corners) + faces
+
+
+def test_the_blocks_of_an_object_of_several_take_names_no_object_has(tmp_path):
+    # object 'A' holds two closed surfaces and the file has an object 'A-2': its second block was
+    # named 'A-2' too, and the model refused "duplicate block names ['A-2']", a name given once;
+    # unnamed faces skip an object named 'part0' alike
+    path = tmp_path / "runs.obj"
+    path.write_text(f"o A\n{cube_obj(0)}{cube_obj(1)}o A-2\n{cube_obj(2)}o part0\n{cube_obj(3)}")
+    blocks, _ = read_mesh(path)
+    assert [b.name for b in blocks] == ["A", "A-3", "A-2", "part0"]
+    path.write_text(f"{cube_obj(0)}{cube_obj(1)}o part0\n{cube_obj(2)}o part2\n{cube_obj(3)}")
+    blocks, notes = read_mesh(path)
+    assert [b.name for b in blocks] == ["part1", "part3", "part0", "part2"] and notes[0].endswith("2 block(s) are named part0, part1, ... in file order, skipping the names of the file's objects")
+
+
 def test_an_imported_mesh_stands_on_a_fixed_base(tmp_path):
     path = tmp_path / "boxes.wrl"
     path.write_text(TWO_BOXES)

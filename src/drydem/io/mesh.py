@@ -24,7 +24,9 @@ are a handful of statements. Every error names the file and the line (or binary 
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
+from itertools import count, islice
 from pathlib import Path
 
 import numpy as np
@@ -61,12 +63,16 @@ class _Solid:
         self.origins.append(origin)
         self.fixed.append(fixed)
 
-    def run_name(self, k: int, first: int) -> str:
-        """The name of the k-th closed run of faces: the solid's (then NAME-2, NAME-3, ...), or
-        ``part{first + k}`` for unnamed faces."""
-        if self.name is None:
-            return f"part{first + k}"
-        return self.name if k == 0 else f"{self.name}-{k + 1}"
+    def run_name(self, k: int, first: int, taken: frozenset[str]) -> str:
+        """The name of the k-th closed run of faces: the solid's, then NAME-2, NAME-3, ..., or,
+        for unnamed faces, the (first + k)-th of part0, part1, ...; a name the file gives a
+        solid (``taken``) is skipped (an object 'A' of two blocks beside an object 'A-2' gave
+        two blocks 'A-2')."""
+        if self.name is not None and k == 0:
+            return self.name
+        names = (f"{self.name}-{n}" for n in count(2)) if self.name is not None else (f"part{n}" for n in count())
+        index = k - 1 if self.name is not None else first + k
+        return next(islice((name for name in names if name not in taken), index, None))
 
 
 def read_mesh(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], list[str]]:
@@ -87,11 +93,12 @@ def read_mesh(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], li
         raise ModelError(f"{path}: {far}")
     points, merged = _merged(points, [face for s in solids for face in s.faces])
     blocks, start, unnamed = [], 0, 0
+    taken = frozenset(s.name for s in solids if s.name is not None)
     for solid in solids:
         faces, start = merged[start:start + len(solid.faces)], start + len(solid.faces)
-        runs = _closed_runs(faces, solid.origins, lambda k, solid=solid, first=unnamed: f"{path}: {solid.run_name(k, first)!r}")
+        runs = _closed_runs(faces, solid.origins, lambda k, solid=solid, first=unnamed: f"{path}: {solid.run_name(k, first, taken)!r}")
         for k, (a, b) in enumerate(runs):
-            name, fixed = solid.run_name(k, unnamed), solid.fixed[a:b]
+            name, fixed = solid.run_name(k, unnamed, taken), solid.fixed[a:b]
             where = f"{path}: {name!r}"
             if any(fixed) and not all(fixed):
                 raise ModelError(f"{where}: {sum(fixed)} of its {b - a} faces are marked fixed (from {solid.origins[a + fixed.index(True)]}), "
@@ -101,7 +108,8 @@ def read_mesh(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], li
     notes = []
     if unnamed:
         what = "a binary STL names no block" if _is_binary_stl(path, data) else "some faces are in no named object or solid"
-        notes.append(f"{path}: {what}: {unnamed} block(s) are named part0, part1, ... in file order")
+        skip = ", skipping the names of the file's objects" if any(re.fullmatch(r"part\d+", name) for name in taken) else ""
+        notes.append(f"{path}: {what}: {unnamed} block(s) are named part0, part1, ... in file order{skip}")
     return blocks, notes
 
 
