@@ -82,12 +82,22 @@ class ConvexPolyhedron:
         return float(np.linalg.norm(self.vertices.max(0) - self.vertices.min(0)))
 
     @cached_property
+    def edges(self) -> tuple[np.ndarray, np.ndarray]:
+        """The vertex numbers at the tail and head of every face's edges, face by face, each
+        edge of a face from a corner to the next counter-clockwise (every edge twice: once in
+        each of its two faces)."""
+        tails = np.concatenate(self.faces)
+        sides = np.fromiter((len(f) for f in self.faces), dtype=np.int64, count=len(self.faces))
+        after = np.arange(1, len(tails) + 1)
+        after[np.cumsum(sides) - 1] -= sides  # a face's last corner is followed by its first
+        return tails, tails[after]
+
+    @cached_property
     def edge_directions(self) -> np.ndarray:
         """(E, 3) unit directions of the edges, each direction once (its sign chosen so that its
         first non-zero component is positive; of two that round alike to 1e-9, the first kept
         as it is; a repeat left by round-off changes no separation)."""
-        tails = np.concatenate(self.faces)
-        heads = np.concatenate([np.roll(f, -1) for f in self.faces])
+        tails, heads = self.edges
         d = self.vertices[heads] - self.vertices[tails]
         d /= np.linalg.norm(d, axis=1)[:, None]
         first = np.argmax(np.abs(d) > 1e-9, axis=1)
@@ -275,8 +285,7 @@ def face_interior_points(points: np.ndarray, shape: ConvexPolyhedron) -> np.ndar
 
     tol = HULL_TOLERANCE * shape.size
     off_corners = np.flatnonzero(cKDTree(shape.vertices).query(points)[0] > tol)  # few: a tree, not a points x vertices table
-    tails = np.concatenate(shape.faces)
-    heads = np.concatenate([np.roll(f, -1) for f in shape.faces])
+    tails, heads = shape.edges
     a, edge = shape.vertices[tails], shape.vertices[heads] - shape.vertices[tails]
     p = points[off_corners, None, :]
     along = np.clip(np.einsum("pej,ej->pe", p - a, edge) / np.einsum("ej,ej->e", edge, edge), 0.0, 1.0)
