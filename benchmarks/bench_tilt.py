@@ -37,7 +37,7 @@ def main() -> None:
             start = time.perf_counter()
             result = tilt_analysis(model, TiltSettings(increment_deg=args.increment, adaptive=adaptive))
             elapsed = time.perf_counter() - start
-            dls = result.drift_limit_angles_deg["0.01"]
+            dls = result.drift_limit_angles_deg[0.01]
             goal = GOALS_S.get((kn, adaptive))
             print(
                 f"{kn:10.3g} {protocol:>9} {result.collapse_angle_deg!s:>15} {'-' if dls is None else f'{dls:.2f}':>10} "

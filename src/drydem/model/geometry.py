@@ -3,7 +3,8 @@
 A block is the convex hull of its vertices (computed with Qhull through
 ``scipy.spatial.ConvexHull``); coplanar hull triangles are merged into polygonal
 faces whose vertices run counter-clockwise seen from outside, so every face has
-an outward unit normal.
+an outward unit normal. An axis-aligned box (:func:`box`, every brick of a wall
+file) is built in closed form, with the hull's faces and no Qhull.
 
 Mass properties are exact for the polyhedron: it is split into tetrahedra
 (centroid of the vertices, and a fan of each face), and each tetrahedron with
