@@ -343,6 +343,18 @@ def test_numpy_numbers_are_numbers_and_kept_as_python_numbers(make, field, expec
     json.dumps(dataclasses.asdict(settings))
 
 
+@pytest.mark.parametrize("make, field", [
+    (lambda: dd.Block(name="brick", shape=dd.box([0, 0, 0], [1, 1, 1]), fixed=np.bool_(1 < 2)), "fixed"),
+    (lambda: dd.Supports(fix_y=np.True_), "fix_y"),
+    (lambda: dd.SolverSettings(mass_scaling=np.False_), "mass_scaling"),
+])
+def test_numpy_booleans_are_switches_held_as_python_booleans(make, field):
+    """``fixed = z < 0.01`` of an array is np.True_: it was refused as "must be true or false"."""
+    settings = make()
+    assert type(getattr(settings, field)) is bool
+    json.dumps({field: getattr(settings, field)})
+
+
 @pytest.mark.parametrize("value, number, integer", [
     (np.int64(3), True, True), (np.uint8(3), True, True), (np.float64(0.5), True, False), (np.float32(0.5), True, False),
     (True, False, False), (np.True_, False, False), (np.float64("nan"), False, False), (np.float32("inf"), False, False),

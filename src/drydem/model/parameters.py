@@ -50,12 +50,20 @@ def is_integer(value) -> bool:
 
 
 def plain(value):
-    """A NumPy number as the Python int or float it equals (JSON and TOML writers take those, a
-    Python int does not overflow, and messages show ``0.5``, not ``np.float64(0.5)``); any other
-    value as it is."""
+    """A NumPy number or boolean as the Python int, float or bool it equals (JSON and TOML
+    writers take those, a Python int does not overflow, and messages show ``0.5``, not
+    ``np.float64(0.5)``); any other value as it is."""
+    if _is_numpy_bool(value):
+        return bool(value)
     if type(value) in (bool, int, float) or not isinstance(value, numbers.Real):
         return value
     return int(value) if isinstance(value, numbers.Integral) else float(value)
+
+
+def _is_numpy_bool(value) -> bool:
+    """Whether ``value`` is NumPy's boolean scalar (np.True_, np.False_; numbers.Real does not
+    count it, and NumPy is not imported here to ask)."""
+    return type(value).__module__ == "numpy" and type(value).__name__ in ("bool", "bool_")
 
 
 #: the longest value a message shows whole, characters (a value from a file may be a 400-digit
@@ -92,10 +100,11 @@ class Rule:
 
 
 class Flag(Rule):
-    """A switch: True or False (not 0 or 1, nor a string)."""
+    """A switch: True or False, or NumPy's (``z < 0.01`` of an array gives those); not 0 or 1,
+    nor a string."""
 
     def __contains__(self, value) -> bool:
-        return isinstance(value, bool)
+        return isinstance(value, bool) or _is_numpy_bool(value)
 
     def __str__(self) -> str:
         return "must be true or false"
