@@ -116,6 +116,20 @@ def test_an_unreadable_checkpoint_is_named(tmp_path, content):
     assert refused(run("tilt", model_file(tmp_path), "--out", out, "--resume"), "checkpoint.npz: not a readable drydem checkpoint")
 
 
+def test_a_checkpoint_whose_contacts_name_a_block_the_model_lacks_is_named_not_a_crash(tmp_path):
+    # block 10**9 in the checkpoint's contacts: the compiled cycle read out of bounds and the
+    # interpreter died of a segmentation fault on --resume
+    out, path = tmp_path / "run", model_file(tmp_path)
+    assert run("tilt", path, "--out", out).exit_code == 0
+    (out / "summary.json").unlink()  # an unfinished run, as after a kill
+    with np.load(out / "checkpoint.npz") as data:
+        arrays = {key: data[key] for key in data.files}
+    arrays["contacts.pairs"][0, 1] = 10**9
+    np.savez(out / "checkpoint.npz", **arrays)
+    assert refused(run("tilt", path, "--out", out, "--resume"),
+                   "checkpoint.npz: not a readable drydem checkpoint (", "snapshot contacts.pairs: block numbers 0 to 1000000000, not within 0 to 1")
+
+
 def test_a_checkpoint_resumes_whichever_path_names_the_same_model_file(tmp_path, monkeypatch):
     """brick.toml from its folder and the absolute path are one model: resumed, not 'another model'."""
     from drydem.io.target import load_target

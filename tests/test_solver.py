@@ -1,5 +1,7 @@
 """Equilibrium criteria, non-convergence and divergence are reported, never hidden."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -183,6 +185,47 @@ def test_a_checkpoint_keeps_the_divergence_test_s_farthest_travel(tmp_path):
                 load_checkpoint(path)
         else:
             assert load_checkpoint(path)[0].farthest_travel_kg_m == expected
+
+
+def spoiled(snapshot, part: str, field: str, change):
+    """``snapshot`` with ``part.field`` (a NamedTuple's field) replaced by ``change`` of a copy of it."""
+    tuple_ = getattr(snapshot, part)
+    return dataclasses.replace(snapshot, **{part: tuple_._replace(**{field: change(getattr(tuple_, field).copy())})})
+
+
+def at(index, value):
+    """A change that sets ``array[index] = value`` and returns the array."""
+    def change(array):
+        array[index] = value
+        return array
+    return change
+
+
+@pytest.mark.parametrize("part, field, change, words", [
+    ("contacts", "pairs", at((0, 1), 10**9), r"contacts.pairs: block numbers 0 to 1000000000, not within 0 to 3"),
+    ("contacts", "pairs", at((0, 0), -1), r"contacts.pairs: block numbers -1 to \d, not within 0 to 3"),
+    ("contacts", "start", at(-1, 10**6), r"contacts.start: must rise from 0 to the \d+ sub-contacts"),
+    ("contacts", "start", lambda a: a[:-1], r"contacts.start: must be a int64 array of shape \(\d+,\), not int64 \(\d+,\)"),
+    ("contacts", "pairs", lambda a: a.astype(np.int32), r"contacts.pairs: must be a int64 array of shape \(\d+, 2\), not int32"),
+    ("contacts", "area", lambda a: a[:-1], r"contacts.point_ref_body: must be a float64 array of shape \(\d+, 3\), not float64"),
+    ("contacts", "normal_force", at(0, np.nan), r"contacts.normal_force: not all finite numbers"),
+    ("contacts", "intact", lambda a: a.astype(np.float64), r"contacts.intact: must be a bool array"),
+    ("neighbours", "pairs", at((0, 1), 99), r"neighbours.pairs: block numbers 0 to 99, not within 0 to 3"),
+    ("neighbours", "pairs", lambda a: a[:, ::-1].copy(), r"neighbours.pairs: each pair \(i, j\) must have i < j"),
+    ("neighbours", "quaternion", lambda a: a[:, :, :3].copy(), r"neighbours.quaternion: must be a float64 array of shape"),
+])
+def test_a_snapshot_whose_contacts_the_kernels_would_index_out_of_bounds_is_refused(part, field, change, words):
+    """A block number of 10**9 in a checkpoint's contacts crashed the interpreter (the compiled
+    cycle reads without bounds checks); each field's dtype, shape, range and finiteness is
+    checked, and the snapshot as saved still restores."""
+    sim = dd.Simulation(stack_model([0.0055] * 3))
+    sim.cycle(200)
+    saved = sim.snapshot()
+    with pytest.raises(dd.ModelError, match="Simulation.restore: snapshot " + words):
+        dd.Simulation(sim.model).restore(spoiled(saved, part, field, change))
+    fresh = dd.Simulation(sim.model)
+    fresh.restore(saved)
+    fresh.cycle(10)
 
 
 def test_removed_blocks_stop_moving_and_let_go_of_the_others():

@@ -91,6 +91,49 @@ class NeighbourList(NamedTuple):
         return cls(np.zeros((0, 2), np.int64), np.zeros((0, 2, 3)), np.zeros((0, 2, 4)), np.zeros(0))
 
 
+#: each field's dtype and shape ("c": contacts, "s": sub-contacts, "n": neighbour pairs, numbers as they are)
+_SUB_FIELDS = {"pairs": ("i", ("c", 2)), "normal_body": ("f", ("c", 3)), "offset": ("f", ("c",)), "start": ("i", ("c+1",)),
+               "point_ref_body": ("f", ("s", 3)), "point_inc_body": ("f", ("s", 3)), "area": ("f", ("s",)),
+               "shear_force": ("f", ("s", 3)), "normal_force": ("f", ("s",)), "intact": ("b", ("s",))}
+_NEIGHBOUR_FIELDS = {"pairs": ("i", ("n", 2)), "position": ("f", ("n", 2, 3)), "quaternion": ("f", ("n", 2, 4)), "limit": ("f", ("n",))}
+_DTYPES = {"i": np.int64, "f": np.float64, "b": np.bool_}
+
+
+def snapshot_problem(contacts: SubContacts, neighbours: NeighbourList, n_blocks: int) -> str | None:
+    """What keeps ``contacts`` and ``neighbours`` (of a snapshot, which may come from a file)
+    from being cycled with ``n_blocks`` blocks, None if nothing does: each field an array of
+    its dtype (int64, float64, bool) and shape, finite; block numbers within 0..n_blocks - 1,
+    neighbour pairs (i < j) once each; the sub-contacts' ``start`` rising from 0 to their count;
+    every contact's blocks a neighbour pair. The compiled kernels index by these without bounds
+    checks: a block number of 10**9 in a checkpoint crashed the interpreter."""
+    counts = {"c": len(getattr(contacts, "pairs", ())), "s": len(getattr(contacts, "area", ())), "n": len(getattr(neighbours, "pairs", ()))}
+    counts["c+1"] = counts["c"] + 1
+    for part, value, rules in (("contacts", contacts, _SUB_FIELDS), ("neighbours", neighbours, _NEIGHBOUR_FIELDS)):
+        for name, (kind, shape) in rules.items():
+            array, expected = getattr(value, name, None), tuple(counts.get(n, n) for n in shape)
+            if not (isinstance(array, np.ndarray) and array.dtype == _DTYPES[kind] and array.shape == expected):
+                return f"{part}.{name}: must be a {np.dtype(_DTYPES[kind])} array of shape {expected}, not {_described(array)}"
+            if kind == "f" and not np.isfinite(array).all():
+                return f"{part}.{name}: not all finite numbers"
+    for part, pairs in (("contacts", contacts.pairs), ("neighbours", neighbours.pairs)):
+        if pairs.size and not (pairs.min() >= 0 and pairs.max() < n_blocks):
+            return f"{part}.pairs: block numbers {pairs.min()} to {pairs.max()}, not within 0 to {n_blocks - 1}"
+    start = contacts.start
+    if start[0] != 0 or start[-1] != counts["s"] or np.any(np.diff(start) < 0):
+        return f"contacts.start: must rise from 0 to the {counts['s']} sub-contacts"
+    keys = pair_keys(neighbours.pairs, n_blocks)
+    if np.any(neighbours.pairs[:, 0] >= neighbours.pairs[:, 1]) or len(np.unique(keys)) != len(keys):
+        return "neighbours.pairs: each pair (i, j) must have i < j and be listed once"
+    if not np.isin(pair_keys(contacts.pairs, n_blocks), keys).all():
+        return "contacts.pairs: a contact's blocks are not a neighbour pair"
+    return None
+
+
+def _described(value) -> str:
+    """An array's dtype and shape, or the type of what is not an array."""
+    return f"{value.dtype} {value.shape}" if isinstance(value, np.ndarray) else type(value).__name__
+
+
 def pair_keys(pairs: np.ndarray, n_blocks: int) -> np.ndarray:
     """Unordered key min(i, j) * n_blocks + max(i, j) of block pairs (n, 2)."""
     return np.minimum(pairs[:, 0], pairs[:, 1]) * n_blocks + np.maximum(pairs[:, 0], pairs[:, 1])

@@ -23,7 +23,7 @@ from typing import NamedTuple
 import numpy as np
 
 from drydem.engine import diagnostics, loop
-from drydem.engine.contacts import NeighbourList, SubContacts, closing_motion
+from drydem.engine.contacts import NeighbourList, SubContacts, closing_motion, snapshot_problem
 from drydem.engine.damping import Damping
 from drydem.engine.inertia import BlockConstants, keep_kinetic_energy, timestep_and_blocks
 from drydem.engine.joints import kernel_joint
@@ -248,10 +248,17 @@ class Simulation:
         """Go back to a :meth:`snapshot` (its arrays are copied, so it can be restored again;
         its state is checked as :class:`Simulation`'s: a snapshot may come from a file,
         :mod:`drydem.engine.checkpoint`)."""
+        where = f"{self.model.source}: Simulation.restore"
+        problem = snapshot_problem(snapshot.contacts, snapshot.neighbours, self.model.n_blocks)
+        if problem is None and not (isinstance(snapshot.active, np.ndarray) and snapshot.active.dtype == np.bool_
+                                    and snapshot.active.shape == (self.model.n_blocks,)):
+            problem = f"active: must be a bool array of shape ({self.model.n_blocks},)"
+        if problem is not None:
+            raise ModelError(f"{where}: snapshot {problem}")
         self.state = self._checked_state(snapshot.state)
         t = self.tracker
         t.contacts, t.neighbours = snapshot.contacts.copy(), snapshot.neighbours.copy()
-        t.broad_state, t.active = snapshot.broad_state.copy(), snapshot.active.copy()
+        t.broad_state, t.active = checked_state(snapshot.broad_state, self.model.n_blocks, f"{where} broad_"), snapshot.active.copy()
         self.cycles, self.time_s = snapshot.cycles, snapshot.time_s
         self._farthest_travel_kg_m = snapshot.farthest_travel_kg_m
         self._scaled_timestep = snapshot.scaled_timestep

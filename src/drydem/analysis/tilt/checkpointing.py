@@ -16,9 +16,9 @@ import numpy as np
 from drydem.analysis.tilt.run import TiltRun
 from drydem.analysis.tilt.settings import Record, TiltSettings
 from drydem.engine.checkpoint import load_checkpoint, save_checkpoint
-from drydem.errors import ModelError
+from drydem.errors import DrydemError, ModelError
 from drydem.model.assembly import Model
-from drydem.model.state import State
+from drydem.model.state import State, checked_state
 
 
 def fingerprint(model: Model, settings: TiltSettings) -> dict[str, str]:
@@ -86,15 +86,25 @@ def save(checkpoint: Path, run: TiltRun, records: list[Record], theta: float, st
 
 def resume(run: TiltRun, checkpoint: Path, fingerprint: dict[str, str], records: list[Record]) -> tuple[float, float]:
     """Restore ``run`` and ``records`` from ``checkpoint``; returns the tilt (deg) of its last
-    equilibrium and the step (deg) to take next. ModelError if it is of another model or protocol."""
+    equilibrium and the step (deg) to take next. ModelError if it is of another model or
+    protocol; DrydemError naming the file if what it holds does not fit the model (a file
+    edited or spoiled: its contacts are checked before the compiled kernels index by them)."""
     snapshot, saved = load_checkpoint(checkpoint)
     check_fingerprint(checkpoint, saved, fingerprint)
+    try:
+        return _restored(run, snapshot, saved, records)
+    except (ModelError, ValueError, TypeError, IndexError, KeyError) as exc:
+        raise DrydemError(f"{checkpoint}: not a readable drydem checkpoint ({exc}); start the analysis again without --resume") from None
+
+
+def _restored(run: TiltRun, snapshot, saved: dict, records: list[Record]) -> tuple[float, float]:
+    """:func:`resume` once the file is read and its fingerprint matches."""
     run.sim.restore(snapshot)
     records += [Record(*row[:4], int(row[4])) for row in saved["records"].tolist()]
     run.lost = list(zip(saved["lost_blocks"].tolist(), saved["lost_tilt_deg"].tolist()))
     rest = np.zeros((run.model.n_blocks, 3))
     for th, x, q in zip(saved["previous_theta_deg"], saved["previous_position"], saved["previous_quaternion"]):
-        run.remember(float(th), State(x, q, rest.copy(), rest.copy()))
+        run.remember(float(th), checked_state(State(x, q, rest.copy(), rest.copy()), run.model.n_blocks, "previous equilibrium"))
     theta = float(saved["theta_deg"])
     run.remember(theta)
     return theta, float(saved["step_deg"])
