@@ -205,14 +205,15 @@ def at(index, value):
     ("contacts", "pairs", at((0, 1), 10**9), r"contacts.pairs: block numbers 0 to 1000000000, not within 0 to 3"),
     ("contacts", "pairs", at((0, 0), -1), r"contacts.pairs: block numbers -1 to \d, not within 0 to 3"),
     ("contacts", "start", at(-1, 10**6), r"contacts.start: must rise from 0 to the \d+ sub-contacts"),
-    ("contacts", "start", lambda a: a[:-1], r"contacts.start: must be a int64 array of shape \(\d+,\), not int64 \(\d+,\)"),
-    ("contacts", "pairs", lambda a: a.astype(np.int32), r"contacts.pairs: must be a int64 array of shape \(\d+, 2\), not int32"),
-    ("contacts", "area", lambda a: a[:-1], r"contacts.point_ref_body: must be a float64 array of shape \(\d+, 3\), not float64"),
+    ("contacts", "start", lambda a: a[:-1], r"contacts.start: must be an int64 array of shape \(\d+,\), not int64 \(\d+,\)"),
+    ("contacts", "pairs", lambda a: a.astype(np.int32), r"contacts.pairs: must be an int64 array of shape \(\d+, 2\), not int32"),
+    ("contacts", "area", lambda a: a[:-1], r"contacts.area: must be a float64 array of shape \(\d+,\), not float64"),
     ("contacts", "normal_force", at(0, np.nan), r"contacts.normal_force: not all finite numbers"),
     ("contacts", "intact", lambda a: a.astype(np.float64), r"contacts.intact: must be a bool array"),
     ("neighbours", "pairs", at((0, 1), 99), r"neighbours.pairs: block numbers 0 to 99, not within 0 to 3"),
     ("neighbours", "pairs", lambda a: a[:, ::-1].copy(), r"neighbours.pairs: each pair \(i, j\) must have i < j"),
     ("neighbours", "quaternion", lambda a: a[:, :, :3].copy(), r"neighbours.quaternion: must be a float64 array of shape"),
+    ("broad_state", "position", at((0, 0), np.nan), r"broad state.position"),
 ])
 def test_a_snapshot_whose_contacts_the_kernels_would_index_out_of_bounds_is_refused(part, field, change, words):
     """A block number of 10**9 in a checkpoint's contacts crashed the interpreter (the compiled

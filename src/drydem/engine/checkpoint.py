@@ -52,6 +52,11 @@ def load_checkpoint(path: Path) -> tuple[Snapshot, dict]:
             progress = {key.removeprefix("progress."): data[key] for key in data.files if key.startswith("progress.")}
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
         # np.load raises each of these for a missing, empty, truncated or foreign file
-        raise DrydemError(f"{path}: not a readable drydem checkpoint ({type(exc).__name__}: {exc}); "
-                          "start the analysis again without --resume") from None
+        raise unreadable(path, exc) from None
     return snapshot, progress
+
+
+def unreadable(path: Path, reason: Exception) -> DrydemError:
+    """The error for a checkpoint at ``path`` that cannot be read or resumed, saying why (``reason``) and what to do."""
+    return DrydemError(f"{path}: not a readable drydem checkpoint ({type(reason).__name__}: {reason}); "
+                       "start the analysis again without --resume")

@@ -106,13 +106,15 @@ def snapshot_problem(contacts: SubContacts, neighbours: NeighbourList, n_blocks:
     neighbour pairs (i < j) once each; the sub-contacts' ``start`` rising from 0 to their count;
     every contact's blocks a neighbour pair. The compiled kernels index by these without bounds
     checks: a block number of 10**9 in a checkpoint crashed the interpreter."""
-    counts = {"c": len(getattr(contacts, "pairs", ())), "s": len(getattr(contacts, "area", ())), "n": len(getattr(neighbours, "pairs", ()))}
+    counts = {key: _common_length([getattr(value, name, None) for value, rules in ((contacts, _SUB_FIELDS), (neighbours, _NEIGHBOUR_FIELDS))
+                                   for name, (_, shape) in rules.items() if shape[0] == key]) for key in ("c", "s", "n")}
     counts["c+1"] = counts["c"] + 1
     for part, value, rules in (("contacts", contacts, _SUB_FIELDS), ("neighbours", neighbours, _NEIGHBOUR_FIELDS)):
         for name, (kind, shape) in rules.items():
             array, expected = getattr(value, name, None), tuple(counts.get(n, n) for n in shape)
             if not (isinstance(array, np.ndarray) and array.dtype == _DTYPES[kind] and array.shape == expected):
-                return f"{part}.{name}: must be a {np.dtype(_DTYPES[kind])} array of shape {expected}, not {_described(array)}"
+                dtype = np.dtype(_DTYPES[kind]).name
+                return f"{part}.{name}: must be {'an' if dtype[0] in 'aeiou' else 'a'} {dtype} array of shape {expected}, not {_described(array)}"
             if kind == "f" and not np.isfinite(array).all():
                 return f"{part}.{name}: not all finite numbers"
     for part, pairs in (("contacts", contacts.pairs), ("neighbours", neighbours.pairs)):
@@ -127,6 +129,12 @@ def snapshot_problem(contacts: SubContacts, neighbours: NeighbourList, n_blocks:
     if not np.isin(pair_keys(contacts.pairs, n_blocks), keys).all():
         return "contacts.pairs: a contact's blocks are not a neighbour pair"
     return None
+
+
+def _common_length(arrays: list) -> int:
+    """The length most of ``arrays`` have (so that the one that differs is the one named)."""
+    lengths = [len(a) if isinstance(a, np.ndarray) and a.ndim else -1 for a in arrays]
+    return max(set(lengths), key=lengths.count)
 
 
 def _described(value) -> str:

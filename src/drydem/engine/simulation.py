@@ -258,7 +258,7 @@ class Simulation:
         self.state = self._checked_state(snapshot.state)
         t = self.tracker
         t.contacts, t.neighbours = snapshot.contacts.copy(), snapshot.neighbours.copy()
-        t.broad_state, t.active = checked_state(snapshot.broad_state, self.model.n_blocks, f"{where} broad_"), snapshot.active.copy()
+        t.broad_state, t.active = checked_state(snapshot.broad_state, self.model.n_blocks, f"{where}: snapshot broad"), snapshot.active.copy()
         self.cycles, self.time_s = snapshot.cycles, snapshot.time_s
         self._farthest_travel_kg_m = snapshot.farthest_travel_kg_m
         self._scaled_timestep = snapshot.scaled_timestep

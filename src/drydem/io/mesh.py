@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, field
-from itertools import count, islice
+from itertools import chain, count
 from pathlib import Path
 
 import numpy as np
@@ -63,16 +63,24 @@ class _Solid:
         self.origins.append(origin)
         self.fixed.append(fixed)
 
-    def run_name(self, k: int, first: int, taken: frozenset[str]) -> str:
-        """The name of the k-th closed run of faces: the solid's, then NAME-2, NAME-3, ..., or,
-        for unnamed faces, the (first + k)-th of part0, part1, ...; a name the file gives a
-        solid (``taken``) is skipped (an object 'A' of two blocks beside an object 'A-2' gave
-        two blocks 'A-2')."""
-        if self.name is not None and k == 0:
-            return self.name
-        names = (f"{self.name}-{n}" for n in count(2)) if self.name is not None else (f"part{n}" for n in count())
-        index = k - 1 if self.name is not None else first + k
-        return next(islice((name for name in names if name not in taken), index, None))
+
+class _Names:
+    """The names a generator gives, by position, each made once and kept (a run's name is asked
+    for twice: for an error while its faces are read, and for its block)."""
+
+    def __init__(self, names):
+        self._names, self._made = names, []
+
+    def __getitem__(self, k: int) -> str:
+        while len(self._made) <= k:
+            self._made.append(next(self._names))
+        return self._made[k]
+
+
+def _free(names, taken: frozenset[str]):
+    """``names`` but those in ``taken`` (the names the file gives its solids: an object 'A' of
+    two blocks beside an object 'A-2' gave two blocks 'A-2')."""
+    return (name for name in names if name not in taken)
 
 
 def read_mesh(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], list[str]]:
@@ -94,11 +102,15 @@ def read_mesh(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], li
     points, merged = _merged(points, [face for s in solids for face in s.faces])
     blocks, start, unnamed = [], 0, 0
     taken = frozenset(s.name for s in solids if s.name is not None)
+    parts = _Names(_free((f"part{n}" for n in count()), taken))  # the unnamed runs of the whole file
     for solid in solids:
         faces, start = merged[start:start + len(solid.faces)], start + len(solid.faces)
-        runs = _closed_runs(faces, solid.origins, lambda k, solid=solid, first=unnamed: f"{path}: {solid.run_name(k, first, taken)!r}")
+        # a solid's runs: its name, then NAME-2, NAME-3, ...; unnamed ones the next parts
+        names, first = (parts, unnamed) if solid.name is None else \
+            (_Names(chain([solid.name], _free((f"{solid.name}-{n}" for n in count(2)), taken))), 0)
+        runs = _closed_runs(faces, solid.origins, lambda k, names=names, first=first: f"{path}: {names[first + k]!r}")
         for k, (a, b) in enumerate(runs):
-            name, fixed = solid.run_name(k, unnamed, taken), solid.fixed[a:b]
+            name, fixed = names[first + k], solid.fixed[a:b]
             where = f"{path}: {name!r}"
             if any(fixed) and not all(fixed):
                 raise ModelError(f"{where}: {sum(fixed)} of its {b - a} faces are marked fixed (from {solid.origins[a + fixed.index(True)]}), "

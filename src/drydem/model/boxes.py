@@ -27,8 +27,9 @@ def overlapping_pairs(lower: np.ndarray, upper: np.ndarray, movable: np.ndarray,
 
 def pair_chunks(lower: np.ndarray, upper: np.ndarray, movable: np.ndarray, margin: float, most: int):
     """The pairs of :func:`overlapping_pairs` in chunks, each sorted: the pairs of the next
-    blocks in the sweep's order (along x) until a chunk holds ``most`` or more. A caller that
-    stops early never holds them all: 30,000 coincident cubes make 450 million pairs (7 GB)."""
+    blocks in the sweep's order (along x) until a chunk holds ``most`` (at least 1) or more. A
+    caller that stops early never holds them all: 30,000 coincident cubes make 450 million pairs (7 GB)."""
+    most = max(int(most), 1)  # a chunk of no pair would never move on
     lo, hi = np.ascontiguousarray(lower, dtype=np.float64), np.ascontiguousarray(upper, dtype=np.float64)
     movable, order, start = np.ascontiguousarray(movable), np.argsort(lo[:, 0], kind="stable"), 0
     while True:

@@ -15,8 +15,8 @@ import numpy as np
 
 from drydem.analysis.tilt.run import TiltRun
 from drydem.analysis.tilt.settings import Record, TiltSettings
-from drydem.engine.checkpoint import load_checkpoint, save_checkpoint
-from drydem.errors import DrydemError, ModelError
+from drydem.engine.checkpoint import load_checkpoint, save_checkpoint, unreadable
+from drydem.errors import ModelError
 from drydem.model.assembly import Model
 from drydem.model.state import State, checked_state
 
@@ -94,7 +94,7 @@ def resume(run: TiltRun, checkpoint: Path, fingerprint: dict[str, str], records:
     try:
         return _restored(run, snapshot, saved, records)
     except (ModelError, ValueError, TypeError, IndexError, KeyError) as exc:
-        raise DrydemError(f"{checkpoint}: not a readable drydem checkpoint ({exc}); start the analysis again without --resume") from None
+        raise unreadable(checkpoint, exc) from None
 
 
 def _restored(run: TiltRun, snapshot, saved: dict, records: list[Record]) -> tuple[float, float]:
