@@ -1,6 +1,7 @@
 """Equilibrium criteria, non-convergence and divergence are reported, never hidden."""
 
 import dataclasses
+import re
 
 import numpy as np
 import pytest
@@ -227,6 +228,14 @@ def test_a_snapshot_whose_contacts_the_kernels_would_index_out_of_bounds_is_refu
     fresh = dd.Simulation(sim.model)
     fresh.restore(saved)
     fresh.cycle(10)
+
+
+def test_a_snapshot_whose_active_flags_do_not_fit_the_model_is_refused():
+    sim = dd.Simulation(stack_model([0.0055] * 3))
+    saved = sim.snapshot()
+    for active, found in ((saved.active[:-1], "bool (3,)"), (saved.active.astype(np.int64), "int64 (4,)")):
+        with pytest.raises(dd.ModelError, match=rf"Simulation.restore: snapshot active: must be a bool array of shape \(4,\), not {re.escape(found)}"):
+            dd.Simulation(sim.model).restore(dataclasses.replace(saved, active=active))
 
 
 def test_removed_blocks_stop_moving_and_let_go_of_the_others():

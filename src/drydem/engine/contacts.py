@@ -99,24 +99,26 @@ _NEIGHBOUR_FIELDS = {"pairs": ("i", ("n", 2)), "position": ("f", ("n", 2, 3)), "
 _DTYPES = {"i": np.int64, "f": np.float64, "b": np.bool_}
 
 
-def snapshot_problem(contacts: SubContacts, neighbours: NeighbourList, n_blocks: int) -> str | None:
-    """What keeps ``contacts`` and ``neighbours`` (of a snapshot, which may come from a file)
-    from being cycled with ``n_blocks`` blocks, None if nothing does: each field an array of
-    its dtype (int64, float64, bool) and shape, finite; block numbers within 0..n_blocks - 1,
-    neighbour pairs (i < j) once each; the sub-contacts' ``start`` rising from 0 to their count;
-    every contact's blocks a neighbour pair. The compiled kernels index by these without bounds
-    checks: a block number of 10**9 in a checkpoint crashed the interpreter."""
-    counts = {key: _common_length([getattr(value, name, None) for value, rules in ((contacts, _SUB_FIELDS), (neighbours, _NEIGHBOUR_FIELDS))
-                                   for name, (_, shape) in rules.items() if shape[0] == key]) for key in ("c", "s", "n")}
-    counts["c+1"] = counts["c"] + 1
-    for part, value, rules in (("contacts", contacts, _SUB_FIELDS), ("neighbours", neighbours, _NEIGHBOUR_FIELDS)):
-        for name, (kind, shape) in rules.items():
-            array, expected = getattr(value, name, None), tuple(counts.get(n, n) for n in shape)
-            if not (isinstance(array, np.ndarray) and array.dtype == _DTYPES[kind] and array.shape == expected):
-                dtype = np.dtype(_DTYPES[kind]).name
-                return f"{part}.{name}: must be {'an' if dtype[0] in 'aeiou' else 'a'} {dtype} array of shape {expected}, not {_described(array)}"
-            if kind == "f" and not np.isfinite(array).all():
-                return f"{part}.{name}: not all finite numbers"
+def snapshot_problem(contacts: SubContacts, neighbours: NeighbourList, active: np.ndarray, n_blocks: int) -> str | None:
+    """What keeps ``contacts``, ``neighbours`` and ``active`` (of a snapshot, which may come
+    from a file) from being cycled with ``n_blocks`` blocks, None if nothing does: each field an
+    array of its dtype (int64, float64, bool) and shape, finite; ``active`` (n_blocks,) bool;
+    block numbers within 0..n_blocks - 1, neighbour pairs (i < j) once each; the sub-contacts'
+    ``start`` rising from 0 to their count; every contact's blocks a neighbour pair. The compiled
+    kernels index by these without bounds checks: a block number of 10**9 in a checkpoint
+    crashed the interpreter."""
+    fields = [(f"{part}.{name}", getattr(value, name, None), kind, shape)
+              for part, value, rules in (("contacts", contacts, _SUB_FIELDS), ("neighbours", neighbours, _NEIGHBOUR_FIELDS))
+              for name, (kind, shape) in rules.items()]
+    counts = {key: _common_length([array for _, array, _, shape in fields if shape[0] == key]) for key in ("c", "s", "n")}
+    counts["c+1"], counts["b"] = counts["c"] + 1, n_blocks
+    for where, array, kind, shape in [*fields, ("active", active, "b", ("b",))]:
+        expected = tuple(counts.get(n, n) for n in shape)
+        if not (isinstance(array, np.ndarray) and array.dtype == _DTYPES[kind] and array.shape == expected):
+            dtype = np.dtype(_DTYPES[kind]).name
+            return f"{where}: must be {'an' if dtype[0] in 'aeiou' else 'a'} {dtype} array of shape {expected}, not {_described(array)}"
+        if kind == "f" and not np.isfinite(array).all():
+            return f"{where}: not all finite numbers"
     for part, pairs in (("contacts", contacts.pairs), ("neighbours", neighbours.pairs)):
         if pairs.size and not (pairs.min() >= 0 and pairs.max() < n_blocks):
             return f"{part}.pairs: block numbers {pairs.min()} to {pairs.max()}, not within 0 to {n_blocks - 1}"

@@ -207,11 +207,12 @@ class Simulation:
             return None
         return (*closing_motion(self.tracker.contacts, self.state, matrices(self.state.quaternion)), self.timestep)
 
-    def _checked_state(self, state: State) -> State:
+    def _checked_state(self, state: State, where: str | None = None) -> State:
         """A checked copy of ``state`` (:func:`~drydem.model.state.checked_state`); for the planar
         kernel, which reads a quaternion as a turn about y (:mod:`drydem.engine.cycle_planar`),
-        ModelError for a block turned about another axis."""
-        where = f"{self.model.source}: Simulation"
+        ModelError for a block turned about another axis. Messages start with ``where``
+        (default: the model's source and "Simulation")."""
+        where = f"{self.model.source}: Simulation" if where is None else where
         state = checked_state(state, self.model.n_blocks, where)
         if not self._planar:
             return state
@@ -248,17 +249,14 @@ class Simulation:
         """Go back to a :meth:`snapshot` (its arrays are copied, so it can be restored again;
         its state is checked as :class:`Simulation`'s: a snapshot may come from a file,
         :mod:`drydem.engine.checkpoint`)."""
-        where = f"{self.model.source}: Simulation.restore"
-        problem = snapshot_problem(snapshot.contacts, snapshot.neighbours, self.model.n_blocks)
-        if problem is None and not (isinstance(snapshot.active, np.ndarray) and snapshot.active.dtype == np.bool_
-                                    and snapshot.active.shape == (self.model.n_blocks,)):
-            problem = f"active: must be a bool array of shape ({self.model.n_blocks},)"
+        where = f"{self.model.source}: Simulation.restore: snapshot"
+        problem = snapshot_problem(snapshot.contacts, snapshot.neighbours, snapshot.active, self.model.n_blocks)
         if problem is not None:
-            raise ModelError(f"{where}: snapshot {problem}")
+            raise ModelError(f"{where} {problem}")
         self.state = self._checked_state(snapshot.state)
         t = self.tracker
         t.contacts, t.neighbours = snapshot.contacts.copy(), snapshot.neighbours.copy()
-        t.broad_state, t.active = checked_state(snapshot.broad_state, self.model.n_blocks, f"{where}: snapshot broad"), snapshot.active.copy()
+        t.broad_state, t.active = self._checked_state(snapshot.broad_state, f"{where} broad"), snapshot.active.copy()
         self.cycles, self.time_s = snapshot.cycles, snapshot.time_s
         self._farthest_travel_kg_m = snapshot.farthest_travel_kg_m
         self._scaled_timestep = snapshot.scaled_timestep
