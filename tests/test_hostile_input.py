@@ -116,18 +116,39 @@ def test_an_unreadable_checkpoint_is_named(tmp_path, content):
     assert refused(run("tilt", model_file(tmp_path), "--out", out, "--resume"), "checkpoint.npz: not a readable drydem checkpoint")
 
 
-def test_a_checkpoint_whose_contacts_name_a_block_the_model_lacks_is_named_not_a_crash(tmp_path):
+def _pair_to_a_missing_block(arrays):
+    arrays["contacts.pairs"][0, 1] = 10**9
+
+
+def _remembered_equilibrium_turned_about_x(arrays):
+    quaternion = arrays["state.quaternion"].copy()
+    quaternion[1] = [0.6, 0.8, 0.0, 0.0]
+    arrays |= {"progress.previous_theta_deg": np.array([1.0]), "progress.previous_position": arrays["state.position"][None],
+               "progress.previous_quaternion": quaternion[None]}
+
+
+@pytest.mark.parametrize("spoil, message", [
     # block 10**9 in the checkpoint's contacts: the compiled cycle read out of bounds and the
     # interpreter died of a segmentation fault on --resume
-    out, path = tmp_path / "run", model_file(tmp_path)
+    (_pair_to_a_missing_block, "snapshot contacts.pairs: block numbers 0 to 1000000000, not within 0 to 1"),
+    # a remembered equilibrium (the predictor's) turned about x: the in-plane model's planar
+    # cycle reads a quaternion as a turn about y, and would have gone on from a wrong state
+    (_remembered_equilibrium_turned_about_x,
+     "previous equilibrium state.quaternion[1] = [0.6, 0.8, 0.0, 0.0]: the blocks of an in-plane model turn about y only"),
+])
+def test_a_checkpoint_that_does_not_fit_the_model_is_named_not_a_crash(tmp_path, spoil, message):
+    out, path = tmp_path / "run", model_file(tmp_path, BRICK_ON_BASE + "[supports]\nfix_y = true\n")  # in-plane: the planar cycle
     assert run("tilt", path, "--out", out).exit_code == 0
     (out / "summary.json").unlink()  # an unfinished run, as after a kill
     with np.load(out / "checkpoint.npz") as data:
         arrays = {key: data[key] for key in data.files}
-    arrays["contacts.pairs"][0, 1] = 10**9
+    spoil(arrays)
+    np.savez(out / "checkpoint.npz", **arrays)  # its digest no longer fits: refused as changed
+    assert refused(run("tilt", path, "--out", out, "--resume"), "checkpoint.npz: not a readable drydem checkpoint (ValueError: its "
+                   "arrays have changed since it was written (SHA-256 ")
+    del arrays["sha256"]  # as a file written before the digest: its structure is checked
     np.savez(out / "checkpoint.npz", **arrays)
-    assert refused(run("tilt", path, "--out", out, "--resume"),
-                   "checkpoint.npz: not a readable drydem checkpoint (", "snapshot contacts.pairs: block numbers 0 to 1000000000, not within 0 to 1")
+    assert refused(run("tilt", path, "--out", out, "--resume"), "checkpoint.npz: not a readable drydem checkpoint (", message)
 
 
 def test_a_checkpoint_resumes_whichever_path_names_the_same_model_file(tmp_path, monkeypatch):
@@ -160,10 +181,32 @@ def test_tilt_options_out_of_range_are_named(tmp_path):
     assert refused(run("tilt", path, "--monitor", "base"), "monitored block 'base' is fixed")
     assert refused(run("tilt", path, "--monitor", "nothing"), "no block named 'nothing'")
     assert refused(run("tilt", path, "--increment", "10", "--max-angle", "5"), "increment_deg = 10.0 exceeds max_angle_deg = 5.0")
-    assert refused(run("tilt", path, "--increment", "0"), "tilt setting increment_deg = 0.0: must be a number in (0, 90) deg")
-    assert refused(run("tilt", path, "--stop-displacement", "-1"), "stop_displacement_m = -1.0: must be a number in (0, 100] m")
-    assert refused(run("tilt", path, "--kn", "0"), "[joint] kn = 0.0: must be a number in [1e+04, 1e+15] Pa/m")
     assert not (tmp_path / "results").exists()
+
+
+@pytest.mark.parametrize("option, value, message", [
+    ("--increment", "0", "0.0: must be a number in (0, 90) deg (tilt setting increment_deg)"),
+    ("--max-angle", "90", "90.0: must be a number in (0, 90) deg (tilt setting max_angle_deg)"),
+    ("--stop-displacement", "-1", "-1.0: must be a number in (0, 100] m (tilt setting stop_displacement_m)"),
+    ("--kn", "0", "0.0: must be a number in [1e+04, 1e+15] Pa/m ([joint] kn)"),
+    ("--ks", "nan", "nan: must be a number in [1e+04, 1e+15] Pa/m ([joint] ks)"),
+    ("--friction", "inf", "inf: must be a number in (0, 10] ([joint] friction)"),
+    ("--points", "33", "33: must be an integer in [1, 32] ([contacts] points_per_length)"),
+    ("--density", "0.5", "0.5: must be a number in [1, 2.5e+04] kg/m3 (the density of every block)"),
+    ("--kn-exponent", "4", "4.0: must be a number in [0, 3] ([joint] kn_exponent)"),
+    ("--joint-kn-min", "1", "1.0: must be a number in [1e+04, 1e+15] Pa/m ([joint] kn_min)"),
+])
+def test_a_tilt_option_out_of_its_range_is_refused_as_itself_with_what_it_sets(tmp_path, option, value, message):
+    """The message names the option the user typed (not only the model key it sets), the value
+    and the rule: a usage error (exit 2), before the target is read and the folder made."""
+    result = run("tilt", model_file(tmp_path), option, value, "--out", tmp_path / "never")
+    assert result.exit_code == 2 and refused(result, f"Invalid value for '{option}': {message}")
+    assert not (tmp_path / "never").exists()
+
+
+def test_limit_names_its_friction_option_out_of_range(tmp_path):
+    result = run("limit", model_file(tmp_path), "--friction", "0", "--out", tmp_path / "never")
+    assert result.exit_code == 2 and refused(result, "Invalid value for '--friction': 0.0: must be a number in (0, 10] ([joint] friction)")
 
 
 def test_no_equilibrium_under_gravity_exits_non_zero_without_a_verdict(tmp_path):

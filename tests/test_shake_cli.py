@@ -208,7 +208,8 @@ def test_an_overturning_pulse_names_the_block_and_overwrite_replaces_only_the_ea
                                                                      "table at rest, no motion; a negative one flips the motion); --frequency"),
     (["--pulse", "ricker", "--amplitude", "3", "--frequency", "2", "--cycles", "2"], "--cycles 2: a ricker pulse is one period"),
     ([*PULSE, "--baseline"], "--baseline corrects a --motion record; a pulse is analytic"),
-    ([*PULSE, "--kn", "-1"], "[joint] kn = -1.0: must be a number in [1e+04, 1e+15] Pa/m"),
+    ([*PULSE, "--kn", "-1"], "Invalid value for '--kn': -1.0: must be a number in [1e+04, 1e+15] Pa/m ([joint] kn)"),
+    ([*PULSE, "--density", "true"], "Invalid value for '--density': 'true' is not a valid float"),
     ([*PULSE, "--monitor", "nosuch"], "no block named 'nosuch'"),
 ])
 def test_bad_input_is_refused_with_its_option_or_file_and_no_traceback(files, tmp_path, arguments, message):

@@ -221,7 +221,7 @@ def test_joint_law_from_the_command_line(tmp_path):
                          (["--joint-model", "power"], "model = 'power' needs kn_exponent"),
                          (["--kn-per-stress", "100"], "kn_per_stress applies to model = 'affine', not 'constant'"),
                          (["--joint-model", "affine", "--kn-per-stress", "true"], "'true' is not a valid float"),
-                         (["--joint-model", "affine", "--kn-per-stress", "-1"], "kn_per_stress = -1.0: must be a number in [0, 1e+07] 1/m")]:
+                         (["--joint-model", "affine", "--kn-per-stress", "-1"], "Invalid value for '--kn-per-stress': -1.0: must be a number in [0, 1e+07] 1/m ([joint] kn_per_stress)")]:
         result = CliRunner().invoke(main, ["tilt", "WD5", *bad, "--out", str(tmp_path / "bad")])
         assert result.exit_code != 0 and message in result.output and "Traceback" not in result.output, result.output
 

@@ -11,6 +11,7 @@ import itertools
 import math
 import shutil
 import signal
+from collections.abc import Callable
 from contextlib import contextmanager
 from datetime import datetime
 from pathlib import Path
@@ -20,7 +21,7 @@ import click
 
 from drydem import __version__
 from drydem.errors import DrydemError
-from drydem.model.parameters import JOINT_MODELS
+from drydem.model.parameters import DENSITY, JOINT_MODELS, JOINT_RULES, POINTS, Rule
 
 if TYPE_CHECKING:
     from drydem.io.target import Target
@@ -60,20 +61,59 @@ def _threads(ctx, param, value):
 threads_option = click.option("--threads", type=int, callback=_threads, expose_value=False,
                               help="Most threads for the compiled kernels (default: all cores; a small model takes fewer).")
 
+def ruled(rule: Rule | Callable[[], Rule], sets: str):
+    """An option's callback: its value if ``rule`` (drydem.model.parameters; or a function
+    giving it, for a rule whose module imports NumPy, which ``drydem --help`` does not) allows
+    it, else a usage error naming the option (click does), the rule and ``sets``, what the
+    value sets in the model or analysis: ``--kn -1`` is refused as itself, before the target
+    is read. None (not given) passes."""
+    def check(ctx, param, value):
+        allowed = rule if isinstance(rule, Rule) else rule()
+        if value is not None and value not in allowed:
+            raise click.BadParameter(f"{value!r}: {allowed} ({sets})")
+        return value
+    return check
+
+
+def joint_option(key: str, flag: str, help: str):
+    """An option setting the [joint] table's ``key``, checked by its rule (JOINT_RULES)."""
+    return click.option(flag, type=float, callback=ruled(JOINT_RULES[key], f"[joint] {key}"), help=help)
+
+
+#: the options that override a model's parameters (``drydem tilt``, ``montecarlo``, ``shake``):
+#: the keyword of drydem.model.assembly.Model.overridden -> the option
+MODEL_OPTIONS = {
+    "kn": joint_option("kn", "--kn", "Normal joint stiffness, Pa/m (overrides the model file)."),
+    "ks": joint_option("ks", "--ks", "Shear joint stiffness, Pa/m."),
+    "friction": joint_option("friction", "--friction", "Coulomb friction coefficient."),
+    "points": click.option("--points", type=int, callback=ruled(POINTS, "[contacts] points_per_length"),
+                           help="Sub-contact points per length."),
+    "density": click.option("--density", type=float, callback=ruled(DENSITY, "the density of every block"),
+                            help="Density of every block, kg/m3."),
+}
+
+
+def model_options(command):
+    """The options of :data:`MODEL_OPTIONS` (each its own argument of ``command``, by its keyword)."""
+    for option in reversed(MODEL_OPTIONS.values()):
+        command = option(command)
+    return command
+
+
 #: the options of a joint law: option name -> ([joint] key, the option)
 JOINT_LAW_OPTIONS = {
     "joint_model": ("model", click.option("--joint-model", type=click.Choice(JOINT_MODELS),
                                           help="Joint law ([joint] model): constant, or kn and ks a power of the normal stress sigma or "
                                                "affine in it (overrides the model file's law; the law's keys below)")),
-    "kn_exponent": ("kn_exponent", click.option("--kn-exponent", type=float, help="power: kn (sigma / stress_ref)^kn_exponent.")),
-    "ks_exponent": ("ks_exponent", click.option("--ks-exponent", type=float, help="power: ks (sigma / stress_ref)^ks_exponent "
-                                                                                       "(default: kn_exponent).")),
-    "stress_ref": ("stress_ref", click.option("--stress-ref", type=float, help="power: the stress at which kn and ks hold, Pa.")),
-    "kn_per_stress": ("kn_per_stress", click.option("--kn-per-stress", type=float, help="affine: kn + kn_per_stress sigma, 1/m.")),
-    "ks_per_stress": ("ks_per_stress", click.option("--ks-per-stress", type=float, help="affine: ks + ks_per_stress sigma, 1/m "
-                                                                                             "(default: kn_per_stress).")),
-    "joint_kn_min": ("kn_min", click.option("--joint-kn-min", type=float, help="The law's smallest stiffness, Pa/m ([joint] kn_min).")),
-    "joint_kn_max": ("kn_max", click.option("--joint-kn-max", type=float, help="The law's largest stiffness, Pa/m ([joint] kn_max).")),
+    "kn_exponent": ("kn_exponent", joint_option("kn_exponent", "--kn-exponent", "power: kn (sigma / stress_ref)^kn_exponent.")),
+    "ks_exponent": ("ks_exponent", joint_option("ks_exponent", "--ks-exponent", "power: ks (sigma / stress_ref)^ks_exponent "
+                                                                                  "(default: kn_exponent).")),
+    "stress_ref": ("stress_ref", joint_option("stress_ref", "--stress-ref", "power: the stress at which kn and ks hold, Pa.")),
+    "kn_per_stress": ("kn_per_stress", joint_option("kn_per_stress", "--kn-per-stress", "affine: kn + kn_per_stress sigma, 1/m.")),
+    "ks_per_stress": ("ks_per_stress", joint_option("ks_per_stress", "--ks-per-stress", "affine: ks + ks_per_stress sigma, 1/m "
+                                                                                        "(default: kn_per_stress).")),
+    "joint_kn_min": ("kn_min", joint_option("kn_min", "--joint-kn-min", "The law's smallest stiffness, Pa/m ([joint] kn_min).")),
+    "joint_kn_max": ("kn_max", joint_option("kn_max", "--joint-kn-max", "The law's largest stiffness, Pa/m ([joint] kn_max).")),
 }
 
 

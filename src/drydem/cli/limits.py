@@ -9,13 +9,13 @@ import time
 import click
 
 from drydem.errors import DrydemError
-from drydem.cli.common import out_path, results_folder, resolve_target, main, threads_option, unit_option
+from drydem.cli.common import joint_option, main, out_path, resolve_target, results_folder, threads_option, unit_option
 
 
 @main.command()
 @click.argument("target")
 @click.option("--non-associative", is_flag=True, help="Friction without dilatancy (iterative LP of Gilbert et al. 2006).")
-@click.option("--friction", type=float, help="Coulomb friction coefficient (overrides the model file).")
+@joint_option("friction", "--friction", "Coulomb friction coefficient (overrides the model file).")
 @click.option("--tilt-axis", type=click.Choice(["y", "x"]), default="y", show_default=True,
               help="Axis the table tilts about: y, the live load along x (in the plane of a wall along x); "
                    "x, the live load along y (out of that plane; not for in-plane models, held in y).")

@@ -8,7 +8,10 @@ from typing import TYPE_CHECKING
 import click
 
 from drydem.errors import DrydemError
-from drydem.cli.common import discard_unstarted, out_path, results_folder, signals_interrupt, resolve_target, joint_law_options, main, threads_option, unit_option
+from drydem.cli.common import (
+    discard_unstarted, joint_law_options, main, model_options, out_path, resolve_target, results_folder, signals_interrupt, threads_option,
+    unit_option,
+)
 from drydem.cli.tilting import _render
 
 if TYPE_CHECKING:
@@ -69,11 +72,7 @@ class _Restitution(click.ParamType):
               help="Contact damping ratio (of critical), set directly instead of --restitution (default: 0.5 if neither is given).")
 @click.option("--rayleigh-mass", type=float, default=0.0, show_default=True, help="Rayleigh damping, mass term alpha, 1/s.")
 @click.option("--rayleigh-stiffness", type=float, default=0.0, show_default=True, help="Rayleigh damping, stiffness term beta, s.")
-@click.option("--kn", type=float, help="Normal joint stiffness, Pa/m (overrides the model file).")
-@click.option("--ks", type=float, help="Shear joint stiffness, Pa/m.")
-@click.option("--friction", type=float, help="Coulomb friction coefficient.")
-@click.option("--points", type=int, help="Sub-contact points per length.")
-@click.option("--density", type=float, help="Density of every block, kg/m3.")
+@model_options
 @joint_law_options
 @click.option("--monitor", help="Block whose response is recorded (default: the top block nearest the middle).")
 @click.option("--out", type=click.Path(), callback=out_path, help="Results folder (default: results/TARGET-TIME).")

@@ -11,7 +11,10 @@ import click
 
 from drydem.errors import DrydemError
 from drydem.model.parameters import CRITERIA
-from drydem.cli.common import CHECKPOINT, discard_unstarted, given, out_path, results_folder, signals_interrupt, resolve_target, joint_law_options, main, threads_option, unit_option
+from drydem.cli.common import (
+    CHECKPOINT, MODEL_OPTIONS, discard_unstarted, given, joint_law_options, main, out_path, resolve_target, results_folder, ruled,
+    signals_interrupt, threads_option, unit_option,
+)
 
 if TYPE_CHECKING:
     from drydem.io.target import Target
@@ -53,22 +56,30 @@ class TiltOptions:
                             monitor=self.monitor, max_angle_deg=self.max_angle)
 
 
+def tilt_setting(field: str):
+    """The callback of the option setting TiltSettings' ``field``: its rule checked
+    (drydem.analysis.tilt.settings.SETTING_RANGES, imported when the option is read)."""
+    def rule():
+        from drydem.analysis.tilt.settings import SETTING_RANGES
+
+        return SETTING_RANGES[field]
+
+    return ruled(rule, f"tilt setting {field}")
+
+
 def tilt_options(*, adaptive: bool):
     """The options of :class:`TiltOptions`, handed to the command as one ``tilt`` argument;
     ``adaptive``: the protocol by default (--adaptive or --fixed)."""
     protocol = "adaptive" if adaptive else "fixed"
     options = [
-        click.option("--kn", type=float, help="Normal joint stiffness, Pa/m (overrides the model file)."),
-        click.option("--ks", type=float, help="Shear joint stiffness, Pa/m."),
-        click.option("--friction", type=float, help="Coulomb friction coefficient."),
-        click.option("--points", type=int, help="Sub-contact points per length."),
-        click.option("--density", type=float, help="Density of every block, kg/m3."),
-        click.option("--increment", type=float, default=0.1, show_default=True, help="Tilt step, deg."),
+        *MODEL_OPTIONS.values(),
+        click.option("--increment", type=float, default=0.1, show_default=True, callback=tilt_setting("increment_deg"),
+                     help="Tilt step, deg."),
         click.option("--adaptive/--fixed", default=adaptive,
                      help=f"Coarse steps, then bisection down to the increment; or every step one increment (default: {protocol})."),
         click.option("--predictor/--no-predictor", default=True, show_default=True,
                      help="Start each step from the last two equilibria extrapolated (fewer cycles)."),
-        click.option("--stop-displacement", type=float, default=0.10, show_default=True,
+        click.option("--stop-displacement", type=float, default=0.10, show_default=True, callback=tilt_setting("stop_displacement_m"),
                      help="Monitored horizontal displacement that ends the run, m."),
         click.option("--criterion", type=click.Choice(CRITERIA), help="Equilibrium criterion (default: the model file's)."),
         click.option("--loading", type=click.Choice(["tilt", "multiplier"]), default="tilt", show_default=True,
@@ -78,7 +89,8 @@ def tilt_options(*, adaptive: bool):
                           "x loads along y, out of the plane of the walls along x (3D models; a building's long walls)."),
         click.option("--monitor", help="Block whose centroid is monitored (default: the top block nearest the middle in x; "
                                        "with --tilt-axis x, on the leeward wall)."),
-        click.option("--max-angle", type=float, default=80.0, show_default=True, help="Largest tilt tried, deg."),
+        click.option("--max-angle", type=float, default=80.0, show_default=True, callback=tilt_setting("max_angle_deg"),
+                     help="Largest tilt tried, deg."),
     ]
     names = [f.name for f in fields(TiltOptions)]
 

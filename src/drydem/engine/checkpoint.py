@@ -5,11 +5,16 @@ shear history, neighbour list, blocks still in the analysis) and the analysis' o
 (arrays and scalars by name). It is written to a temporary file and renamed
 (:func:`drydem.files.replaced_atomically`), so a kill while writing leaves the previous
 checkpoint intact; Ctrl-C or SIGTERM while it is written waits for it (:func:`drydem.files.uninterrupted`).
+The file holds the SHA-256 digest of its arrays (:data:`DIGEST`): a file spoiled or edited since
+it was written is refused, not resumed into wrong numbers (files written before the digest have
+none and are read as they are, their structure checked by the analysis that resumes them).
 """
 
 from __future__ import annotations
 
+import hashlib
 import zipfile
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -29,9 +34,36 @@ def save_checkpoint(path: Path, snapshot: Snapshot, progress: dict) -> None:
     arrays |= {"active": snapshot.active, "cycles": snapshot.cycles, "time_s": snapshot.time_s,
                "scaled_timestep": np.nan if snapshot.scaled_timestep is None else snapshot.scaled_timestep,
                "farthest_travel_kg_m": snapshot.farthest_travel_kg_m}
+    arrays = {name: np.asarray(value) for name, value in arrays.items()}
     arrays |= {f"progress.{name}": np.asarray(value) for name, value in progress.items()}
+    arrays[DIGEST] = np.asarray(digest(arrays))
     with uninterrupted(), replaced_atomically(path) as partial:
         np.savez(partial, **arrays)
+
+
+#: the name of the array holding the SHA-256 digest of a checkpoint's other arrays (:func:`digest`)
+DIGEST = "sha256"
+
+
+def digest(arrays: Mapping[str, np.ndarray]) -> str:
+    """The SHA-256 digest (hex) of ``arrays`` (name -> array): each one's name, dtype, shape and
+    bytes, in the order of their names."""
+    found = hashlib.sha256()
+    for name in sorted(arrays):
+        array = np.ascontiguousarray(arrays[name])
+        found.update(f"{name}|{array.dtype.str}|{array.shape}|".encode())
+        found.update(array.tobytes())
+    return found.hexdigest()
+
+
+def _check_digest(data) -> None:
+    """ValueError if the checkpoint ``data`` (an open NpzFile) holds a digest its other arrays
+    do not have (:func:`digest`)."""
+    if DIGEST in data.files:
+        held = str(data[DIGEST])
+        found = digest({key: data[key] for key in data.files if key != DIGEST})
+        if found != held:
+            raise ValueError(f"its arrays have changed since it was written (SHA-256 {found[:12]}..., written {held[:12]}...)")
 
 
 def load_checkpoint(path: Path) -> tuple[Snapshot, dict]:
@@ -39,6 +71,7 @@ def load_checkpoint(path: Path) -> tuple[Snapshot, dict]:
     if it is missing, empty, truncated or not a drydem checkpoint."""
     try:
         with np.load(path) as data:
+            _check_digest(data)
             parts = {part: cls(**{name: data[f"{part}.{name}"] for name in cls._fields}) for part, cls in _PARTS.items()}
             scaled = float(data["scaled_timestep"])
             # checkpoints written before the model time was kept have none: 0 s

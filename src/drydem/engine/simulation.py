@@ -133,7 +133,7 @@ class Simulation:
         self.damping = Damping(model.solver.damping) if damping is None else _checked(damping, model)
         self.run_cycles = _cycle_function(model, engine)
         self._planar = _planar(model, engine)
-        self.state = State.at_rest(model.block_centroid) if state is None else self._checked_state(state)
+        self.state = State.at_rest(model.block_centroid) if state is None else self.fit_state(state)
         self.tracker = ContactTracker(model, self.state)
         #: (nb, 3) m: the centroids the cycling started from, the divergence test's origin: a block
         #: released above its base has fallen that far when it lands (:func:`drydem.engine.loop.cycle_loop`)
@@ -207,7 +207,7 @@ class Simulation:
             return None
         return (*closing_motion(self.tracker.contacts, self.state, matrices(self.state.quaternion)), self.timestep)
 
-    def _checked_state(self, state: State, where: str | None = None) -> State:
+    def fit_state(self, state: State, where: str | None = None) -> State:
         """A checked copy of ``state`` (:func:`~drydem.model.state.checked_state`); for the planar
         kernel, which reads a quaternion as a turn about y (:mod:`drydem.engine.cycle_planar`),
         ModelError for a block turned about another axis. Messages start with ``where``
@@ -253,10 +253,10 @@ class Simulation:
         problem = snapshot_problem(snapshot.contacts, snapshot.neighbours, snapshot.active, self.model.n_blocks)
         if problem is not None:
             raise ModelError(f"{where} {problem}")
-        self.state = self._checked_state(snapshot.state)
+        self.state = self.fit_state(snapshot.state)
         t = self.tracker
         t.contacts, t.neighbours = snapshot.contacts.copy(), snapshot.neighbours.copy()
-        t.broad_state, t.active = self._checked_state(snapshot.broad_state, f"{where} broad"), snapshot.active.copy()
+        t.broad_state, t.active = self.fit_state(snapshot.broad_state, f"{where} broad"), snapshot.active.copy()
         self.cycles, self.time_s = snapshot.cycles, snapshot.time_s
         self._farthest_travel_kg_m = snapshot.farthest_travel_kg_m
         self._scaled_timestep = snapshot.scaled_timestep

@@ -18,7 +18,7 @@ from drydem.analysis.tilt.settings import Record, TiltSettings
 from drydem.engine.checkpoint import load_checkpoint, save_checkpoint, unreadable
 from drydem.errors import ModelError
 from drydem.model.assembly import Model
-from drydem.model.state import State, checked_state
+from drydem.model.state import State
 
 
 def fingerprint(model: Model, settings: TiltSettings) -> dict[str, str]:
@@ -104,7 +104,7 @@ def _restored(run: TiltRun, snapshot, saved: dict, records: list[Record]) -> tup
     run.lost = list(zip(saved["lost_blocks"].tolist(), saved["lost_tilt_deg"].tolist()))
     rest = np.zeros((run.model.n_blocks, 3))
     for th, x, q in zip(saved["previous_theta_deg"], saved["previous_position"], saved["previous_quaternion"]):
-        run.remember(float(th), checked_state(State(x, q, rest.copy(), rest.copy()), run.model.n_blocks, "previous equilibrium"))
+        run.remember(float(th), run.sim.fit_state(State(x, q, rest.copy(), rest.copy()), "previous equilibrium"))
     theta = float(saved["theta_deg"])
     run.remember(theta)
     return theta, float(saved["step_deg"])
