@@ -59,7 +59,7 @@ def refused(error, *fragments, call):
     ("velocity", np.zeros(2), "state.velocity must be a (2, 3) array"),
     ("angular_velocity", np.zeros((3, 2)), "state.angular_velocity must be a (2, 3) array"),
     ("position", np.zeros((2, 3), dtype=object), "got shape (2, 3) object"),
-    ("position", np.array([[0.0, 0.0, 0.0], [np.nan, 0.0, 0.0]]), "state.position must be a (2, 3) array of finite numbers"),
+    ("position", np.array([[0.0, 0.0, 0.0], [np.nan, 0.0, 0.0]]), "state.position must be a (2, 3) array of finite numbers, got nan at (1, 0)"),
     ("velocity", np.array([[0.0, 0.0, 0.0], [np.inf, 0.0, 0.0]]), "state.velocity must be a (2, 3) array of finite numbers"),
     ("velocity", np.zeros((2, 3), dtype=bool), "state.velocity"),
     ("velocity", [[0.0, 0.0, True], [0.0, 0.0, 0.0]], "state.velocity"),
@@ -156,7 +156,8 @@ def test_a_cycle_count_of_zero_or_a_numpy_integer_is_taken(model):
 @pytest.mark.parametrize("displacement, rotation, words", [
     (np.zeros((3, 3)), np.zeros((2, 3)), "move displacement must be a (2, 3) array of finite numbers, got shape (3, 3)"),
     (np.zeros((2, 3)), np.zeros(3), "move rotation must be a (2, 3) array"),
-    (np.full((2, 3), np.nan), np.zeros((2, 3)), "move displacement must be a (2, 3) array of finite numbers"),
+    (np.full((2, 3), np.nan), np.zeros((2, 3)), "move displacement must be a (2, 3) array of finite numbers, got nan at (0, 0) "
+                                                "(6 entries are not finite)"),
     (np.zeros((2, 3)), "none", "move rotation"),
 ])
 def test_a_move_of_the_wrong_shape_is_refused_naming_it(model, displacement, rotation, words):

@@ -5,6 +5,7 @@ test_walls.py / test_layout.py; sweeps: test_hostile_sweep.py; geometry files an
 outputs: test_hostile_io.py.)"""
 
 import os
+import zipfile
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ from click.testing import CliRunner
 import drydem as dd
 from drydem.analysis.tilt import TiltSettings, tilt_analysis
 from drydem.cli import main
+from drydem.engine.checkpoint import DIGEST, digest
 
 #: a brick on a base: the cheapest model that tilts (slides at atan 0.5 = 26.6 deg)
 BRICK_ON_BASE = """\
@@ -127,10 +129,20 @@ def _remembered_equilibrium_turned_about_x(arrays):
                "progress.previous_quaternion": quaternion[None]}
 
 
+def _negative_step(arrays):
+    arrays["progress.step_deg"] = np.asarray(-1.0)  # it tilted on to -27 deg and called that a collapse
+
+
+def _unknown_lost_block(arrays):
+    arrays |= {"progress.lost_blocks": np.array(["nosuch"]), "progress.lost_tilt_deg": np.array([1.0])}
+
+
 @pytest.mark.parametrize("spoil, message", [
     # block 10**9 in the checkpoint's contacts: the compiled cycle read out of bounds and the
     # interpreter died of a segmentation fault on --resume
     (_pair_to_a_missing_block, "snapshot contacts.pairs: block numbers 0 to 1000000000, not within 0 to 1"),
+    (_negative_step, "next step of -1.0 deg: must be in [0, 90) and (0, 90)"),
+    (_unknown_lost_block, "its lost blocks ['nosuch']: not blocks of the model"),
     # a remembered equilibrium (the predictor's) turned about x: the in-plane model's planar
     # cycle reads a quaternion as a turn about y, and would have gone on from a wrong state
     (_remembered_equilibrium_turned_about_x,
@@ -146,9 +158,32 @@ def test_a_checkpoint_that_does_not_fit_the_model_is_named_not_a_crash(tmp_path,
     np.savez(out / "checkpoint.npz", **arrays)  # its digest no longer fits: refused as changed
     assert refused(run("tilt", path, "--out", out, "--resume"), "checkpoint.npz: not a readable drydem checkpoint (ValueError: its "
                    "arrays have changed since it was written (SHA-256 ")
-    del arrays["sha256"]  # as a file written before the digest: its structure is checked
-    np.savez(out / "checkpoint.npz", **arrays)
+    del arrays[DIGEST]  # as a faulty writer would, its digest made again: its structure is checked
+    np.savez(out / "checkpoint.npz", **arrays, **{DIGEST: np.asarray(digest(arrays))})
     assert refused(run("tilt", path, "--out", out, "--resume"), "checkpoint.npz: not a readable drydem checkpoint (", message)
+
+
+def test_a_checkpoint_without_its_digest_or_claiming_terabytes_is_named_not_a_traceback(tmp_path):
+    """A file of an earlier drydem (no digest) is not trusted; an array header claiming 2 TiB
+    was a MemoryError traceback."""
+    out, path = tmp_path / "run", model_file(tmp_path)
+    assert run("tilt", path, "--out", out).exit_code == 0
+    (out / "summary.json").unlink()
+    with np.load(out / "checkpoint.npz") as data:
+        arrays = {key: data[key] for key in data.files if key != DIGEST}
+    np.savez(out / "checkpoint.npz", **arrays)
+    assert refused(run("tilt", path, "--out", out, "--resume"), "no SHA-256 digest of its arrays: written by an earlier drydem")
+    with zipfile.ZipFile(out / "checkpoint.npz") as archive:
+        members = {name: archive.read(name) for name in archive.namelist()}
+    member = members["state.position.npy"]  # magic, version, header length (2 bytes), header padded with spaces, data
+    length = int.from_bytes(member[8:10], "little")
+    header = member[10:10 + length].replace(b"(2, 3)", b"(100000000000, 3)")
+    header = header.rstrip(b" \n")[:length - 1].ljust(length - 1) + b"\n"
+    members["state.position.npy"] = member[:10] + header + member[10 + length:]
+    with zipfile.ZipFile(out / "checkpoint.npz", "w") as archive:
+        for name, content in members.items():
+            archive.writestr(name, content)
+    assert refused(run("tilt", path, "--out", out, "--resume"), "checkpoint.npz: not a readable drydem checkpoint (")
 
 
 def test_a_checkpoint_resumes_whichever_path_names_the_same_model_file(tmp_path, monkeypatch):
@@ -185,7 +220,8 @@ def test_tilt_options_out_of_range_are_named(tmp_path):
 
 
 @pytest.mark.parametrize("option, value, message", [
-    ("--increment", "0", "0.0: must be a number in (0, 90) deg (tilt setting increment_deg)"),
+    ("--increment", "0", "0.0: must be a number in [0.001, 90) deg (tilt setting increment_deg)"),
+    ("--increment", "1e-12", "1e-12: must be a number in [0.001, 90) deg (tilt setting increment_deg)"),
     ("--max-angle", "90", "90.0: must be a number in (0, 90) deg (tilt setting max_angle_deg)"),
     ("--stop-displacement", "-1", "-1.0: must be a number in (0, 100] m (tilt setting stop_displacement_m)"),
     ("--kn", "0", "0.0: must be a number in [1e+04, 1e+15] Pa/m ([joint] kn)"),
@@ -250,7 +286,7 @@ def test_a_study_folder_that_cannot_be_one_is_refused(tmp_path, command):
     (lambda: dd.SolverSettings(mass_scaling=1), "[solver] mass_scaling = 1: must be true or false"),
     (lambda: dd.SolverSettings(criterion="speed"), "[solver] criterion = 'speed': must be one of ('ratio', 'velocity')"),
     (lambda: dd.Supports(fix_y="yes"), "[supports] fix_y = 'yes': must be true or false"),
-    (lambda: TiltSettings(increment_deg=True), "tilt setting increment_deg = True: must be a number in (0, 90) deg"),
+    (lambda: TiltSettings(increment_deg=True), "tilt setting increment_deg = True: must be a number in [0.001, 90) deg"),
 ])
 def test_python_settings_refuse_booleans_as_numbers_with_one_error_type(make, message):
     if message is None:

@@ -17,8 +17,8 @@ from scipy import integrate, stats
 from drydem.errors import DrydemError
 from drydem.parametric import montecarlo as montecarlo_module
 from drydem.parametric.limits import MAX_SAMPLES
-from drydem.parametric.montecarlo import (MonteCarloError, MonteCarloSettings, SummaryWriter, check_resumable, monte_carlo, sample_seed,
-                                          statistics)
+from drydem.parametric.montecarlo import (MonteCarloError, MonteCarloSettings, SummaryWriter, check_resumable, monte_carlo, read_sample,
+                                          sample_seed, statistics)
 from drydem.analysis.tilt import TiltSettings
 from drydem.cli import main
 from drydem.masonry.imperfections import Imperfections, imperfect_blocks
@@ -185,6 +185,30 @@ def test_a_resumed_run_computes_only_the_missing_and_corrupt_samples_with_the_sa
     assert [s["seed"] for s in second.summary["samples"]] == [sample_seed(3, k) for k in range(4)]
 
 
+def test_a_recorded_sample_with_an_angle_out_of_range_is_corrupt_not_averaged_in(tall_brick, tmp_path):
+    """A sample's record with collapse_angle_deg = -40 was read as it was: the resumed run's mean
+    and 5th percentile took it in (drydem report called the same record corrupt)."""
+    wall = load_wall(tall_brick)
+    with ThreadPoolExecutor(1) as pool:
+        monte_carlo(wall, settings(2), tmp_path, pool, target={"name": "tall"})
+    path = tmp_path / "samples" / "0001" / "summary.json"
+    record = json.loads(path.read_text())
+    path.write_text(json.dumps(record | {"collapse_angle_deg": -40.0}))
+    with pytest.raises(MonteCarloError, match=re.escape(f"{path}: summary collapse_angle_deg = -40.0: must be a number in [0, 90] deg")):
+        read_sample(tmp_path, settings(2), 1)
+    with ThreadPoolExecutor(1) as pool:
+        again = monte_carlo(wall, settings(2), tmp_path, pool, target={"name": "tall"})
+    assert len(again.corrupt) == 1 and all(0.0 <= s["collapse_angle_deg"] <= 90.0 for s in again.summary["samples"])
+
+
+def test_a_summary_whose_settings_are_not_a_table_is_no_run_to_resume(tall_brick, tmp_path):
+    # "settings": "x" was an AttributeError traceback on --resume
+    wall = load_wall(tall_brick)
+    (tmp_path / "summary.json").write_text(json.dumps({"settings": "x"}))
+    with pytest.raises(MonteCarloError, match="summary.json: not the summary of a drydem montecarlo run"):
+        check_resumable(tmp_path, settings(2), wall)
+
+
 def test_a_run_asked_for_fewer_samples_than_it_holds_is_refused_and_keeps_them(tall_brick, tmp_path):
     wall = load_wall(tall_brick)
     with ThreadPoolExecutor(1) as pool:
@@ -307,7 +331,7 @@ def test_a_resumed_command_reads_each_recorded_sample_once_and_names_the_corrupt
     (["--samples", "true"], "Invalid value for '--samples': 'true' is not a valid integer"),
     (["--resume", "--overwrite"], "--resume goes on with the run in --out and --overwrite deletes it"),
     (["--resume"], "--resume needs --out DIR holding the summary.json of an earlier drydem montecarlo"),
-    (["--increment", -1], "Invalid value for '--increment': -1.0: must be a number in (0, 90) deg (tilt setting increment_deg)"),
+    (["--increment", -1], "Invalid value for '--increment': -1.0: must be a number in [0.001, 90) deg (tilt setting increment_deg)"),
     (["--friction", 0], "Invalid value for '--friction': 0.0: must be a number in (0, 10] ([joint] friction)"),
     (["--monitor", "nothing"], "nothing"),
     (["--height-sd", 6], "--height-sd = 6.0: must be at most 5 mm"),

@@ -76,7 +76,7 @@ def assert_left_out(results, bad, message: str, good_row: str) -> str:
 BAD_TILT_FIELDS = {
     "string DLS angle": (("drift_limit_angles_deg", "0.01"), "abc", "summary drift_limit_angles_deg 0.01 = 'abc': must be a number in [0, 90] deg"),
     "list DLS angle": (("drift_limit_angles_deg", "0.01"), [1], "summary drift_limit_angles_deg 0.01 = [1]: must be a number in [0, 90] deg"),
-    "string increment": (("analysis", "increment_deg"), "tiny", "summary analysis increment_deg = 'tiny': must be a number in (0, 90) deg"),
+    "string increment": (("analysis", "increment_deg"), "tiny", "summary analysis increment_deg = 'tiny': must be a number in [0.001, 90) deg"),
     "string adaptive": (("analysis", "adaptive"), "yes", "summary analysis adaptive = 'yes': must be true or false"),
     "string points": (("model", "contacts", "points_per_length"), "many",
                       "summary model contacts points_per_length = 'many': must be an integer in [1, 32]"),

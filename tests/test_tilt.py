@@ -57,6 +57,20 @@ def test_no_collapse_below_the_maximum_angle_ends_at_the_last_increment_within_i
         assert (result.ended_by, result.collapse_angle_deg, result.last_equilibrium_deg) == ("maximum angle", None, 20.0)
 
 
+def test_an_equilibrium_beyond_the_stop_displacement_ends_the_run_at_the_one_before():
+    """The stop displacement ends the run when the monitored point reaches it at rest too (a
+    brick shearing its joint elastically, ~0.1 um a degree): before, only a step that did not
+    settle was tested, and 1e-8 m was accepted and never acted (the run went on to max_angle)."""
+    model = stack_model([0.0055], joint=dd.JointMaterial(kn=1e8, ks=1e8, friction=0.5))
+    elastic = tilt_analysis(model, TiltSettings(increment_deg=1.0, max_angle_deg=3.0))
+    ux = {r.tilt_deg: r.ux_m for r in elastic.records}
+    assert 0.0 < ux[1.0] < ux[2.0] < ux[3.0] < 1e-6
+    stop = 0.5 * (ux[2.0] + ux[3.0])
+    result = tilt_analysis(model, TiltSettings(increment_deg=1.0, max_angle_deg=5.0, stop_displacement_m=stop))
+    assert (result.ended_by, result.collapse_angle_deg) == ("stop displacement", 2.0)
+    assert max(abs(r.ux_m) for r in result.records) < stop
+
+
 def test_a_brick_on_joints_closing_most_of_its_height_settles_by_w_over_kn_a_and_slides_at_atan_mu():
     """kn = 2e4 Pa/m, the brick 5.5 mm high: it settles by rho g h / kn = 4.855 mm (W / (kn A)),
     then slides at atan 0.5 = 26.57 deg. Its critical timestep (17 ms) let it fall through its

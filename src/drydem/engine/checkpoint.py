@@ -6,8 +6,8 @@ shear history, neighbour list, blocks still in the analysis) and the analysis' o
 (:func:`drydem.files.replaced_atomically`), so a kill while writing leaves the previous
 checkpoint intact; Ctrl-C or SIGTERM while it is written waits for it (:func:`drydem.files.uninterrupted`).
 The file holds the SHA-256 digest of its arrays (:data:`DIGEST`): a file spoiled or edited since
-it was written is refused, not resumed into wrong numbers (files written before the digest have
-none and are read as they are, their structure checked by the analysis that resumes them).
+it was written, or written by a drydem before the digest, is refused, not resumed into wrong
+numbers; the analysis that resumes one checks its structure against the model too.
 """
 
 from __future__ import annotations
@@ -57,13 +57,14 @@ def digest(arrays: Mapping[str, np.ndarray]) -> str:
 
 
 def _check_digest(data) -> None:
-    """ValueError if the checkpoint ``data`` (an open NpzFile) holds a digest its other arrays
-    do not have (:func:`digest`)."""
-    if DIGEST in data.files:
-        held = str(data[DIGEST])
-        found = digest({key: data[key] for key in data.files if key != DIGEST})
-        if found != held:
-            raise ValueError(f"its arrays have changed since it was written (SHA-256 {found[:12]}..., written {held[:12]}...)")
+    """ValueError unless the checkpoint ``data`` (an open NpzFile) holds the digest of its other
+    arrays (:func:`digest`)."""
+    if DIGEST not in data.files:
+        raise ValueError("it holds no SHA-256 digest of its arrays: written by an earlier drydem, or not by drydem")
+    held = str(data[DIGEST])
+    found = digest({key: data[key] for key in data.files if key != DIGEST})
+    if found != held:
+        raise ValueError(f"its arrays have changed since it was written (SHA-256 {found[:12]}..., written {held[:12]}...)")
 
 
 def load_checkpoint(path: Path) -> tuple[Snapshot, dict]:
@@ -73,18 +74,15 @@ def load_checkpoint(path: Path) -> tuple[Snapshot, dict]:
         with np.load(path) as data:
             _check_digest(data)
             parts = {part: cls(**{name: data[f"{part}.{name}"] for name in cls._fields}) for part, cls in _PARTS.items()}
-            scaled = float(data["scaled_timestep"])
-            # checkpoints written before the model time was kept have none: 0 s
-            time_s = float(data["time_s"]) if "time_s" in data.files else 0.0
-            # and before the divergence test kept the farthest travel: 0, an allowance that only grows from there
-            farthest = float(data["farthest_travel_kg_m"]) if "farthest_travel_kg_m" in data.files else 0.0
+            scaled, time_s, farthest = (float(data[key]) for key in ("scaled_timestep", "time_s", "farthest_travel_kg_m"))
             if not 0.0 <= farthest < np.inf:
                 raise ValueError(f"farthest_travel_kg_m = {farthest}: must be a finite number >= 0")
             snapshot = Snapshot(**parts, active=data["active"], cycles=int(data["cycles"]), time_s=time_s,
                                 scaled_timestep=None if np.isnan(scaled) else scaled, farthest_travel_kg_m=farthest)
             progress = {key.removeprefix("progress."): data[key] for key in data.files if key.startswith("progress.")}
-    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
-        # np.load raises each of these for a missing, empty, truncated or foreign file
+    except (OSError, ValueError, KeyError, EOFError, MemoryError, zipfile.BadZipFile) as exc:
+        # np.load raises each of these for a missing, empty, truncated or foreign file (MemoryError:
+        # an array's header claiming terabytes)
         raise unreadable(path, exc) from None
     return snapshot, progress
 

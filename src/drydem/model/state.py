@@ -51,8 +51,12 @@ def block_array(value, shape: tuple[int, int], where: str) -> np.ndarray:
     nested lists) of ``shape``, finite real numbers: another shape would be read out of bounds or
     fail deep in the kernels, and texts, booleans, complex numbers and objects are no coordinates."""
     array = real_array(value)
-    if array is None or array.shape != shape or not np.isfinite(array).all():
+    if array is None or array.shape != shape:
         raise ModelError(f"{where} must be a {shape} array of finite numbers, got {described(value)}")
+    bad = np.argwhere(~np.isfinite(array))
+    if bad.size:
+        raise ModelError(f"{where} must be a {shape} array of finite numbers, got {array[tuple(bad[0])]} at {tuple(bad[0].tolist())}"
+                         + (f" ({len(bad)} entries are not finite)" if len(bad) > 1 else ""))
     return array
 
 

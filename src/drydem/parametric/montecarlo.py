@@ -55,6 +55,7 @@ from drydem.masonry.walls import Wall
 from drydem.model.parameters import Range, field_problems, refuse
 from drydem.parametric.calibrate import wall_angle
 from drydem.parametric.limits import SAMPLES
+from drydem.parametric.records import collapse_problem
 
 #: the percentile reported as ``p05``
 PERCENTILE = 5.0
@@ -182,6 +183,9 @@ def read_sample(folder: Path, settings: MonteCarloSettings, index: int) -> dict:
             raise MonteCarloError(f"{path}: its {', '.join(wrong)} are not sample {index}'s")
         if sample["status"] == "ok" and not (path.parent / "pushover.csv").is_file():
             raise MonteCarloError(f"{path.parent}: no pushover.csv")
+        problem = collapse_problem("tilt", summary) if sample["status"] == "ok" else None
+        if problem is not None:  # an angle of -40 deg was averaged in
+            raise MonteCarloError(f"{path}: {problem}")
         return sample_entry(summary)
     except ModelError as exc:
         raise MonteCarloError(str(exc)) from None
@@ -249,7 +253,9 @@ def check_resumable(folder: Path, settings: MonteCarloSettings, wall: Wall) -> N
     try:
         recorded = json.loads(regular_file(path, "a Monte Carlo summary").read_text(encoding="utf-8"))["settings"]
     except (ModelError, OSError, ValueError, TypeError, KeyError):
-        raise MonteCarloError(f"{path}: not the summary of a drydem montecarlo run; --resume needs the --out of one") from None
+        recorded = None
+    if not isinstance(recorded, dict):  # "settings": "x" was an AttributeError
+        raise MonteCarloError(f"{path}: not the summary of a drydem montecarlo run; --resume needs the --out of one")
     current = settings.identity(wall)
     differ = sorted(key for key in current.keys() | recorded.keys() if current.get(key) != recorded.get(key))
     if differ:

@@ -172,7 +172,7 @@ def _result_problem(spec: RunSpec, summary, curve) -> str | None:
     """What is wrong with the ``summary`` and pushover ``curve`` of a finished run of ``spec``, or None."""
     if not isinstance(summary, dict) or not SUMMARY_KEYS[spec.analysis] <= set(summary):
         return f"summary must hold {sorted(SUMMARY_KEYS[spec.analysis])}"
-    problem = _shake_problem(spec, summary) if spec.analysis == "shake" else _collapse_problem(spec.analysis, summary)
+    problem = _shake_problem(spec, summary) if spec.analysis == "shake" else collapse_problem(spec.analysis, summary)
     if problem is not None:
         return problem
     if not isinstance(curve, list) or not all(isinstance(row, list) and len(row) == CURVE_COLUMNS and all(map(_numeric, row)) for row in curve):
@@ -196,7 +196,7 @@ def _shake_problem(spec: RunSpec, summary: dict) -> str | None:
     return None
 
 
-def _collapse_problem(analysis: str, summary: dict) -> str | None:
+def collapse_problem(analysis: str, summary: dict) -> str | None:
     """What is wrong with what the report reads of a tilt or limit ``summary``, or None: its fields
     within :data:`SUMMARY_RULES` (angles in [0, 90] deg, a height > 0, a known method, ...), a
     tilt's drift limit angles and settings (:func:`_tilt_problems`) and its model's (:func:`_model_problems`)."""

@@ -63,7 +63,7 @@ from pathlib import Path
 from drydem.errors import DrydemError, ModelError
 from drydem.files import plain_name_problem, read_toml
 from drydem.model.assembly import Model
-from drydem.model.parameters import is_number
+from drydem.model.parameters import JOINT_RULES, POINTS, is_number
 from drydem.model.tables import no_unknown
 from drydem.parametric.limits import MAX_RUNS
 
@@ -78,6 +78,8 @@ GRID_KEYS = {"tilt": COMMON_KEYS | {"protocol", "increment_deg"}, "limit": COMMO
 DEFAULT_KEYS = {"friction", "points", "increment_deg", "duration_s", "restitution", "contact_damping_ratio"}
 #: the RunSpec fields that override the target's parameters
 OVERRIDES = ("kn", "ks", "friction", "points")
+#: the rule of each of the OVERRIDES, checked under the grid's own key (its message names that key)
+OVERRIDE_RULES = {"kn": JOINT_RULES["kn"], "ks": JOINT_RULES["ks"], "friction": JOINT_RULES["friction"], "points": POINTS}
 #: the RunSpec fields of shake runs only: None in the others, and then left out of the id's
 #: hash, so that the ids (the record names) of tilt and limit runs are those they always had
 SHAKE_FIELDS = ("motion", "scale", "duration_s", "restitution", "contact_damping_ratio", "monitor")
@@ -461,7 +463,7 @@ def _problems(model, spec: RunSpec, motion=None) -> list[str]:
     step, or its shaking settings on ``motion`` (its motion read, or the message saying why it
     cannot be), as the run itself builds them (the rules are the parameter classes', written
     once), each override alone so that one bad value does not hide another."""
-    checks = [lambda key=key: model.parameter_changes(**{key: getattr(spec, key)}) for key in OVERRIDES]
+    checks = [lambda key=key: _override(model, spec, key) for key in OVERRIDES if not (key == "ks" and spec.ks is spec.kn)]
     if spec.analysis != "shake":
         checks.append(spec.tilt_settings)  # a limit run's increment is unused, but is part of its id
     else:
@@ -480,6 +482,16 @@ def _problems(model, spec: RunSpec, motion=None) -> list[str]:
         except ModelError as exc:
             found.append(str(exc))
     return found
+
+
+def _override(model, spec: RunSpec, key: str) -> None:
+    """ModelError naming the grid's ``key`` (not the model table's) unless the run's value of it
+    obeys its rule (:data:`OVERRIDE_RULES`) and fits ``model`` (its joint law, ...). A ks that is
+    the run's kn (ks = "kn", the default) is not checked again: one mistake, one message."""
+    value = getattr(spec, key)
+    if value is not None:
+        OVERRIDE_RULES[key].check(value, key)
+    model.parameter_changes(**{key: value})
 
 
 def _raise(message: str):

@@ -99,12 +99,18 @@ def resume(run: TiltRun, checkpoint: Path, fingerprint: dict[str, str], records:
 
 def _restored(run: TiltRun, snapshot, saved: dict, records: list[Record]) -> tuple[float, float]:
     """:func:`resume` once the file is read and its fingerprint matches."""
+    theta, step = float(saved["theta_deg"]), float(saved["step_deg"])
+    if not (0.0 <= theta < 90.0 and 0.0 < step < 90.0):
+        raise ModelError(f"its last equilibrium at {theta!r} deg and next step of {step!r} deg: must be in [0, 90) and (0, 90)")
+    lost = list(zip(saved["lost_blocks"].tolist(), saved["lost_tilt_deg"].tolist()))
+    unknown = sorted({name for name, _ in lost} - set(run.model.block_name))
+    if unknown:
+        raise ModelError(f"its lost blocks {unknown}: not blocks of the model")
     run.sim.restore(snapshot)
     records += [Record(*row[:4], int(row[4])) for row in saved["records"].tolist()]
-    run.lost = list(zip(saved["lost_blocks"].tolist(), saved["lost_tilt_deg"].tolist()))
+    run.lost = lost
     rest = np.zeros((run.model.n_blocks, 3))
     for th, x, q in zip(saved["previous_theta_deg"], saved["previous_position"], saved["previous_quaternion"]):
         run.remember(float(th), run.sim.fit_state(State(x, q, rest.copy(), rest.copy()), "previous equilibrium"))
-    theta = float(saved["theta_deg"])
     run.remember(theta)
-    return theta, float(saved["step_deg"])
+    return theta, step

@@ -176,9 +176,10 @@ class TiltRun:
             return FELL if vertical else MONITOR_FELL
         if give_up is not None and not converged and give_up():
             return GAVE_UP
-        if converged:
-            return EQUILIBRIUM
-        if abs(ux) >= self.settings.stop_displacement_m:
+        beyond = abs(ux) >= self.settings.stop_displacement_m
+        if converged:  # at rest beyond the stop displacement: the run ends there too (it went on to the maximum angle)
+            return STOP_DISPLACEMENT if beyond and not vertical else EQUILIBRIUM
+        if beyond:
             return FELL if vertical else STOP_DISPLACEMENT
         return None
 

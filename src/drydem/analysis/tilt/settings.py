@@ -33,7 +33,9 @@ MAXIMUM_ANGLE = "maximum angle"
 
 #: the allowed values of TiltSettings' numbers (a tilt of 90 deg or more is no tilting table)
 SETTING_RANGES = {
-    "increment_deg": Range(0.0, 90.0, low_open=True, high_open=True, unit="deg"),
+    # a thousandth of a degree is 90,000 steps to 90 deg; at 1e-12 the predictor's extrapolation
+    # divided by a difference of tilts lost to round-off
+    "increment_deg": Range(1e-3, 90.0, high_open=True, unit="deg"),
     "refinements": Range(0, 12, integer=True),
     "stop_displacement_m": Range(0.0, 100.0, low_open=True, unit="m"),
     "max_angle_deg": Range(0.0, 90.0, low_open=True, high_open=True, unit="deg"),
