@@ -179,6 +179,32 @@ def test_the_blocks_of_an_object_of_several_take_names_no_object_has(tmp_path):
     assert [b.name for b in blocks] == ["part1", "part3", "part0", "part2"] and notes[0].endswith("2 block(s) are named part0, part1, ... in file order, skipping the names of the file's objects")
 
 
+def test_an_obj_object_named_twice_is_noted_with_the_names_of_its_blocks(tmp_path):
+    # two statements 'o A' add their faces to one object, read as 'A' and 'A-2' without a word
+    path = tmp_path / "twice.obj"
+    path.write_text(f"o A\n{cube_obj(0)}o A\n{cube_obj(1)}")
+    blocks, notes = read_mesh(path)
+    assert [b.name for b in blocks] == ["A", "A-2"]
+    assert notes == [f"{path}: the object 'A' is named on lines 1, 16 (the name occurs 2 times in the file): its faces "
+                     "close 2 surfaces, read as 2 blocks named 'A', 'A-2'"]
+    path.write_text(f"o A\n{cube_obj(0)}{cube_obj(1)}o B\n{cube_obj(2)}")
+    blocks, notes = read_mesh(path)
+    assert [b.name for b in blocks] == ["A", "A-2", "B"]
+    assert notes == [f"{path}: the object 'A' (line 1): its faces close 2 surfaces, read as 2 blocks named 'A', 'A-2'"]
+
+
+def test_obj_texture_and_normal_indices_and_a_named_endsolid_are_read(tmp_path):
+    path = tmp_path / "refs.obj"
+    path.write_text("o A\n" + cube_obj(0).replace("f -8 -5 -6 -7", "f -8/1 -5/2/3 -6//4 -7/-1/"))
+    assert [b.name for b in read_mesh(path)[0]] == ["A"]
+    stl = tmp_path / "named.stl"
+    triangle = "facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n"
+    for end in ("endsolid", "endsolid  a [fixed] ", "ENDSOLID a [fixed]"):
+        stl.write_text(f"solid a [fixed]\n{triangle}{end}\n")
+        with pytest.raises(ModelError, match="'a' \\(from line 2\\) is not a closed surface"):  # read to the end
+            read_mesh(stl)
+
+
 def test_an_imported_mesh_stands_on_a_fixed_base(tmp_path):
     path = tmp_path / "boxes.wrl"
     path.write_text(TWO_BOXES)

@@ -34,11 +34,17 @@ def fails(args: list[str], *messages: str):
     ("inf.obj", CUBE.replace("v 1 1 0\n", "v 1 1 inf\n"), "line 3: vertex 3: '1 1 inf': a vertex needs three finite numbers"),
     ("short.obj", CUBE.replace("v 1 1 0\n", "v 1 1\n"), "line 3: vertex 3: '1 1': a vertex needs three finite numbers"),
     ("text.obj", CUBE.replace("v 1 1 0\n", "v 1 one 0\n"), "line 3: vertex 3: '1 one 0': the coordinates must be numbers"),
+    ("underscore.obj", CUBE.replace("v 1 1 0\n", "v 1 1_0 0\n"), "line 3: vertex 3: '1 1_0 0': the coordinates must be numbers"),
     ("missing.obj", CUBE.replace("f 5 6 7 8", "f 5 6 7 9"), "line 10: the face refers to vertex 9; the file has 8"),
     ("zero.obj", CUBE.replace("f 5 6 7 8", "f 0 6 7 8"), "line 10: the face refers to vertex 0, which does not exist"),
     ("back.obj", CUBE.replace("f 5 6 7 8", "f -9 6 7 8"), "line 10: the face refers to vertex -9, which does not exist"),
     ("two.obj", CUBE.replace("f 5 6 7 8", "f 5 6"), "line 10: a face needs at least 3 vertices, this one has 2"),
     ("word.obj", CUBE.replace("f 5 6 7 8", "f 5 six 7 8"), "line 10: 'six' is not a vertex number"),
+    ("texture.obj", CUBE.replace("f 5 6 7 8", "f 5/abc/ 6 7 8"), "line 10: '5/abc/': the texture index 'abc' is not a whole number"),
+    ("normal.obj", CUBE.replace("f 5 6 7 8", "f 5 6//n7 7 8"), "line 10: '6//n7': the normal index 'n7' is not a whole number"),
+    ("slashes.obj", CUBE.replace("f 5 6 7 8", "f 5/1/1/1 6 7 8"), "line 10: '5/1/1/1': a face's vertex is v, v/vt, v/vt/vn or v//vn, not 4 numbers"),
+    ("huge.obj", CUBE.replace("f 5 6 7 8", "f 5 6 7 " + "9" * 400),
+     f"line 10: the face refers to vertex {'9' * 18}...{'9' * 18} (400 characters); the file has 8"),
     ("empty.obj", "", "empty.obj: no faces: the file holds no block"),
     ("points.obj", "# only vertices\nv 0 0 0\nv 1 0 0\n", "points.obj: no faces: the file holds no block"),
     ("open.obj", CUBE[:CUBE.rindex("f ")], "'part0' (from line 9) is not a closed surface"),
@@ -50,13 +56,27 @@ def fails(args: list[str], *messages: str):
     ("outside.stl", "solid a\nendsolid a\nfacet normal 0 0 1\n", "line 3: 'facet' is out of place (outside any solid)"),
     ("verb.stl", "solid a\nfacets\n", "line 2: 'facets' is not an ASCII STL statement"),
     ("edge.stl", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\nendfacet\nendsolid a\n",
-     "line 7: the facet has 2 vertices; it needs at least 3"),
-    ("empty.stl", "", "not an STL file: it does not start with 'solid' (ASCII), and its 0 bytes are not 84 + 50 x 0"),
+     "line 7: the facet has 2 vertices; it needs 3 (an STL facet is a triangle)"),
+    ("quad.stl", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 1 1 0\nvertex 0 1 0\nendloop\nendfacet\n",
+     "line 7: a fourth vertex in the facet of line 2: an STL facet is a triangle, 3 vertices"),
+    ("other.stl", "solid a\nendsolid b\n", "line 2: endsolid names 'b', but it closes the solid 'a' of line 1: the name after "
+     "endsolid, when given, must be the solid's"),
+    ("cutname.stl", "solid a [fixed]\nendsolid a [", "line 2: endsolid names 'a [', but it closes the solid 'a [fixed]' of line 1"),
+    ("empty.stl", "", "not an STL file: it does not start with 'solid' (ASCII), and its 0 bytes are too few for a binary STL "
+     "(an 80-byte header and a 4-byte triangle count"),
+    ("abc.stl", "abc", "not an STL file: it does not start with 'solid' (ASCII), and its 3 bytes are too few for a binary STL"),
 ])
 def test_a_bad_mesh_file_is_refused_naming_the_file_and_line(tmp_path, name, text, message):
     path = tmp_path / name
     path.write_text(text)
     fails(["check", path], f"{path}: ", message)
+
+
+def test_a_huge_obj_vertex_number_is_shown_shortened(tmp_path):
+    path = tmp_path / "huge.obj"
+    path.write_text(CUBE.replace("f 5 6 7 8", "f 5 6 -" + "9" * 400 + " 8"))
+    result = fails(["check", path], f"{path}: line 10: the face refers to vertex -{'9' * 17}...{'9' * 18} (401 characters), which does not exist")
+    assert "9" * 40 not in result.output
 
 
 def test_a_binary_stl_with_a_nan_names_the_triangle(tmp_path):

@@ -97,11 +97,40 @@ def test_vrml_nesting_hidden_in_use_copies_counts_to_the_depth_limit(tmp_path):
     ("nan", "IndexedFaceSet.coordIndex holds nan: each number must be finite"),
     ("inf", "IndexedFaceSet.coordIndex holds inf: each number must be finite"),
     ("0.9", "coordIndex 0.9 is not a whole number (a point's index from 0, or -1 ending a face)"),
+    ("1_0", "unexpected '1_0' in a field value"),  # float() read it as 10
 ])
 def test_a_coord_index_that_is_not_a_whole_number_is_refused_naming_it(tmp_path, entry, message):
     path = wrl(tmp_path, cube(CUBE_INDEX.replace("0", entry, 1)))
     with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}, line 2: {re.escape(message)}"):
         read_vrml(path)
+
+
+@pytest.mark.parametrize("entry, shown", [
+    ("9" * 30, "9" * 30),  # read as a float, it was 1000000000000000019884624838656
+    ("9" * 400, f"{'9' * 18}...{'9' * 18} (400 characters)"),
+])
+def test_a_coord_index_out_of_range_is_shown_as_written(tmp_path, entry, shown):
+    path = wrl(tmp_path, cube(CUBE_INDEX.replace("7 6 -1", f"7 {entry} -1")))
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}, line 2: coordIndex {re.escape(shown)} is out of range "
+                                         r"\(there are 8 points\)"):
+        read_vrml(path)
+
+
+@pytest.mark.parametrize("field", ["rotation 0 0 0 1", "scaleOrientation 0 0 0 -0.5"])
+def test_a_rotation_about_a_zero_axis_is_refused_naming_its_field(tmp_path, field):
+    path = wrl(tmp_path, f"Transform {{ {field} children [ {BOX} ] }}")
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}, line 2: Transform.{field.split()[0]} = \[0.0, 0.0, 0.0, "
+                                         r"-?[0-9.]+\]: the axis \(the first three numbers\) is zero"):
+        read_vrml(path)
+
+
+def test_a_rotation_of_angle_zero_or_about_a_long_axis_is_read(tmp_path):
+    def corners(rotation):
+        return read_vrml(wrl(tmp_path, f"Transform {{ rotation {rotation} children [ {cube()} ] }}"))[0].shape.vertices
+    assert corners("0 0 0 0").tolist() == corners("0 0 1 0").tolist()
+    # an axis of 1e200 has a norm past the float range: it was taken as no rotation
+    assert corners("1e200 0 0 1.5707963267948966") == pytest.approx(corners("1 0 0 1.5707963267948966"), abs=1e-15)
+    assert corners("1e200 0 0 1.5707963267948966") != pytest.approx(corners("0 0 1 0"), abs=1e-3)
 
 
 @pytest.mark.parametrize("size", ["-1 1 1", "1 0 1", "1 1 -0.5"])
@@ -117,6 +146,8 @@ def test_a_box_side_of_zero_or_less_is_refused(tmp_path, size):
     (f"Transform {{ translation 0 nan 0 children [ {BOX} ] }}", "Transform.translation", "nan"),
     (f"Transform {{ rotation 0 0 1 inf children [ {BOX} ] }}", "Transform.rotation", "inf"),
     (cube().replace("0 0 0,", "0 0 -inf,"), "Coordinate.point", "-inf"),
+    (cube().replace("0 0 0,", "0 0 -" + "9" * 400 + ","), "Coordinate.point", "-inf"),  # a whole number read as an int
+    (f"Transform {{ scale {'9' * 400} 1 1 children [ {BOX} ] }}", "Transform.scale", "inf"),
 ])
 def test_a_vrml_number_that_is_not_finite_is_refused_naming_its_field(tmp_path, body, field, value):
     path = wrl(tmp_path, body)
@@ -171,6 +202,35 @@ def test_a_compas_integer_past_the_digit_limit_is_refused_naming_the_file(tmp_pa
     path.write_text('[{"dtype": "compas.datastructures/Mesh", "guid": ' + "1" * (MAX_INTEGER_DIGITS + 1) + "}]")
     with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}: an integer of {MAX_INTEGER_DIGITS + 1:,} digits "
                                          rf"\(111111111111\.\.\.\): more than the {MAX_INTEGER_DIGITS:,} digits"):
+        read_compas(path)
+
+
+def unit_mesh() -> dict:
+    """The unit cube of :func:`block_model` as a compas Mesh named 'M'."""
+    return block_model([])["data"]["elements"]["g1"]["data"]["geometry"]
+
+
+def test_a_json_key_given_twice_is_refused_naming_it(tmp_path):
+    # json.loads keeps the last value of a key: the block 'a' given first was dropped without a word
+    mesh = json.dumps(unit_mesh())
+    path = tmp_path / "twice.json"
+    path.write_text(f'{{"a": {mesh}, "b": {mesh}, "a": {mesh}}}')
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}: the key 'a' occurs more than once in one JSON object: "
+                                         "each key of an object must be given once"):
+        read_compas(path)
+    path.write_text("[" + mesh.replace('"7": {', '"6": {"x": 9}, "7": {', 1) + "]")  # a vertex given twice
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}: the key '6' occurs more than once"):
+        read_compas(path)
+
+
+@pytest.mark.parametrize("vertex, shown", [("1", '"1"'), (1.0, "1.0"), (True, "true")])
+def test_a_compas_face_vertex_that_is_not_an_integer_is_refused_naming_the_face(tmp_path, vertex, shown):
+    # the string "1" was read as the vertex 1, while 1.0 was "a vertex the mesh does not have"
+    mesh = unit_mesh()
+    mesh["data"]["face"]["2"] = [0, vertex, 5, 4]
+    path = json_file(tmp_path, [mesh])
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}: mesh 0 'M': face 2: its vertex {re.escape(shown)} is not "
+                                         "an integer: a face lists its vertices' keys as JSON integers"):
         read_compas(path)
 
 

@@ -58,7 +58,7 @@ from drydem.errors import ModelError
 from drydem.files import read_text
 from drydem.io.mesh import closed_convex_block
 from drydem.model.assembly import Block, Model
-from drydem.model.parameters import DENSITY
+from drydem.model.parameters import DENSITY, shown
 
 MESH_DTYPE = "compas.datastructures/Mesh"
 MODEL_DTYPE = "compas_model.models/Model"
@@ -97,7 +97,7 @@ def read_compas(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], 
     path = Path(path)
     text = read_text(path, f"drydem reads {READS}")
     try:
-        data = json.loads(text, parse_int=partial(_integer, source=str(path)))
+        data = json.loads(text, parse_int=partial(_integer, source=str(path)), object_pairs_hook=partial(_unique, source=str(path)))
     except json.JSONDecodeError as exc:
         raise ModelError(f"{path}: not JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}; drydem reads {READS}") from None
     except RecursionError:
@@ -123,6 +123,18 @@ def _integer(digits: str, source: str) -> int:
         raise ModelError(f"{source}: an integer of {len(digits.lstrip('-')):,} digits ({digits[:12]}...): more than the "
                          f"{MAX_INTEGER_DIGITS:,} digits an integer may have; drydem reads {READS}")
     return int(digits)
+
+
+def _unique(pairs: list[tuple[str, object]], source: str) -> dict:
+    """A JSON object whose keys are each given once (json.loads keeps a repeated key's last
+    value: a block or a vertex dropped without a word)."""
+    data = dict(pairs)
+    if len(data) < len(pairs):
+        seen: set[str] = set()
+        key = next(key for key, _ in pairs if key in seen or seen.add(key))
+        raise ModelError(f"{source}: the key {shown(key)} occurs more than once in one JSON object: each key of an object must be "
+                         f"given once (the second would replace the first); drydem reads {READS}")
+    return data
 
 
 def write_compas(model: Model, path: str | Path) -> None:
@@ -275,13 +287,23 @@ def _block(part: _Part, name: str, unit_m: float) -> Block:
         face = _list(face, f"{where}: face {key}")
         if len(face) < 3:
             raise ModelError(f"{where}: face {key} has {len(face)} vertices; a face needs at least 3")
+        _check_face_keys(face, f"{where}: face {key}")
         missing = [v for v in face if str(v) not in index]
         if missing:
-            raise ModelError(f"{where}: face {key} refers to vertex {missing[0]!r}, which the mesh does not have")
+            raise ModelError(f"{where}: face {key} refers to vertex {shown(missing[0])}, which the mesh does not have")
         faces.append([index[str(v)] for v in face])
     placed = points @ part.matrix[:3, :3].T + part.matrix[:3, 3]
     block = closed_convex_block(placed * unit_m, faces, name=name, where=where)
     return replace(block, fixed=part.fixed, density=part.density)
+
+
+def _check_face_keys(face: list, where: str) -> None:
+    """The rule on a face's vertices: JSON integers, the vertices' keys (as compas writes them;
+    not strings, booleans or floats, which only look like them)."""
+    wrong = [v for v in face if not isinstance(v, int) or isinstance(v, bool)]
+    if wrong:
+        raise ModelError(f"{where}: its vertex {json.dumps(wrong[0])[:40]} is not an integer: a face lists its vertices' "
+                         "keys as JSON integers")
 
 
 def _matrix(value, where: str) -> np.ndarray:

@@ -34,6 +34,7 @@ import numpy as np
 from drydem.errors import ModelError
 from drydem.model.geometry import convex_hull, far_vertex_problem
 from drydem.model.assembly import Block, Model
+from drydem.model.parameters import shown
 
 #: vertices closer than this fraction of the mesh's size are one vertex
 MERGE_FRACTION = 1e-9
@@ -45,15 +46,20 @@ FIXED_MATERIAL, MOVABLE_MATERIAL = "fixed", "block"
 FIXED_SOLID = " [fixed]"
 #: binary STL: an 80-byte header, the triangle count, then 50 bytes per triangle
 STL_TRIANGLE = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
+#: a whole number as OBJ writes one (int() also takes blanks and underscores)
+_INTEGER = re.compile(r"[+-]?[0-9]+")
 
 
 @dataclass
 class _Solid:
     """Faces read as one named block, or as blocks to tell apart (name None: the file gives
     none): the faces (indices into the file's points), where each is in the file (line or
-    triangle) and whether each is marked fixed."""
+    triangle) and whether each is marked fixed; what the file calls it (object, group, solid)
+    and the lines that give its name."""
 
     name: str | None
+    kind: str = "solid"
+    named: list[int] = field(default_factory=list)
     faces: list[list[int]] = field(default_factory=list)
     origins: list[str] = field(default_factory=list)
     fixed: list[bool] = field(default_factory=list)
@@ -100,7 +106,7 @@ def read_mesh(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], li
     if far is not None:
         raise ModelError(f"{path}: {far}")
     points, merged = _merged(points, [face for s in solids for face in s.faces])
-    blocks, start, unnamed = [], 0, 0
+    blocks, start, unnamed, renamed = [], 0, 0, []
     taken = frozenset(s.name for s in solids if s.name is not None)
     parts = _Names(_free((f"part{n}" for n in count()), taken))  # the unnamed runs of the whole file
     for solid in solids:
@@ -117,12 +123,26 @@ def read_mesh(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], li
                                  f"the others not; a fixed block has all its faces in the material {FIXED_MATERIAL!r}")
             blocks.append(Block(name=name, shape=_convex_shape(points, faces[a:b], where=where), fixed=all(fixed)))
         unnamed += len(runs) if solid.name is None else 0
+        renamed += _renamed(path, solid, [names[first + k] for k in range(len(runs))])
     notes = []
     if unnamed:
         what = "a binary STL names no block" if _is_binary_stl(path, data) else "some faces are in no named object or solid"
         skip = ", skipping the names of the file's objects" if any(re.fullmatch(r"part\d+", name) for name in taken) else ""
         notes.append(f"{path}: {what}: {unnamed} block(s) are named part0, part1, ... in file order{skip}")
-    return blocks, notes
+    return blocks, notes + renamed
+
+
+def _renamed(path: Path, solid: _Solid, names: list[str]) -> list[str]:
+    """A note on a named solid whose faces close several surfaces, so several blocks (NAME,
+    NAME-2, ...): where the file gives the name (more than once: an OBJ adds each statement's
+    faces to one object of that name) and what the blocks are named."""
+    if solid.name is None or len(names) < 2:
+        return []
+    lines = ", ".join(map(str, solid.named))
+    given = (f"is named on lines {lines} (the name occurs {len(solid.named)} times in the file)" if len(solid.named) > 1
+             else f"(line {lines})")
+    return [f"{path}: the {solid.kind} {solid.name!r} {given}: its faces close {len(names)} surfaces, "
+            f"read as {len(names)} blocks named {', '.join(map(repr, names))}"]
 
 
 def write_mesh(model: Model, path: str | Path) -> None:
@@ -194,6 +214,7 @@ def _read_obj(path: Path, data: bytes) -> tuple[list[list[float]], list[_Solid]]
     points: list[list[float]] = []
     faces = []  # (line, object, group, material, vertex indices)
     obj = group = material = None
+    stated: dict[str, dict[str, list[int]]] = {"o": {}, "g": {}}  # the lines naming each object and group
     for number, line in enumerate(_text(path, data).splitlines(), start=1):
         words = line.split()
         if not words or words[0].startswith("#"):
@@ -209,14 +230,18 @@ def _read_obj(path: Path, data: bytes) -> tuple[list[list[float]], list[_Solid]]
             group = rest
         elif key == "usemtl":
             material = rest
+        if key in stated and rest is not None:
+            stated[key].setdefault(rest, []).append(number)
     for number, *_, face in faces:
         if max(face) >= len(points):
-            raise ModelError(f"{path}: line {number}: the face refers to vertex {max(face) + 1}; the file has {len(points)}")
+            raise ModelError(f"{path}: line {number}: the face refers to vertex {shown(max(face) + 1)}; the file has {len(points)}")
     by_object = any(obj is not None for _, obj, *_ in faces)
+    kind, statement = ("object", "o") if by_object else ("group", "g")
     solids: dict[str | None, _Solid] = {}  # a name seen again adds faces to its solid, as OBJ groups do
     for number, obj, group, material, face in faces:
         name = obj if by_object else group
-        solids.setdefault(name, _Solid(name)).add(face, f"line {number}", (material or "").lower() == FIXED_MATERIAL)
+        solid = solids.setdefault(name, _Solid(name, kind, stated[statement].get(name, [])))
+        solid.add(face, f"line {number}", (material or "").lower() == FIXED_MATERIAL)
     return points, list(solids.values())
 
 
@@ -226,15 +251,30 @@ def _face(words: list[str], count: int, where: str) -> list[int]:
         raise ModelError(f"{where}: a face needs at least 3 vertices, this one has {len(words)}")
     indices = []
     for word in words:
-        try:
-            index = int(word.split("/")[0])
-        except ValueError:
-            raise ModelError(f"{where}: {word!r} is not a vertex number") from None
+        index = _vertex_reference(word, where)
         if index == 0 or index < -count:
-            raise ModelError(f"{where}: the face refers to vertex {index}, which does not exist "
+            raise ModelError(f"{where}: the face refers to vertex {shown(index)}, which does not exist "
                              f"({count} vertices so far; numbers start at 1, negative ones count back)")
         indices.append(index - 1 if index > 0 else count + index)
     return indices
+
+
+def _vertex_reference(word: str, where: str) -> int:
+    """The vertex number of a face's vertex reference ``v``, ``v/vt``, ``v/vt/vn`` or ``v//vn``:
+    whole numbers, the texture and normal ones (not used) left out or empty."""
+    parts = word.split("/")
+    if not _INTEGER.fullmatch(parts[0]):
+        raise ModelError(f"{where}: {shown(word)} is not a vertex number")
+    if len(parts) > 3:
+        raise ModelError(f"{where}: {shown(word)}: a face's vertex is v, v/vt, v/vt/vn or v//vn, not {len(parts)} numbers")
+    for what, part in zip(("texture", "normal"), parts[1:]):
+        if part and not _INTEGER.fullmatch(part):
+            raise ModelError(f"{where}: {shown(word)}: the {what} index {shown(part)} is not a whole number "
+                             "(a face's vertex is v, v/vt, v/vt/vn or v//vn; vt and vn may be left out)")
+    try:
+        return int(parts[0])
+    except ValueError:  # past Python's limit on the digits of an integer
+        raise ModelError(f"{where}: {shown(word)} is not a vertex number ({len(parts[0]):,} digits)") from None
 
 
 def _read_stl(path: Path, data: bytes) -> tuple[list[list[float]], list[_Solid]]:
@@ -249,7 +289,10 @@ def _read_stl(path: Path, data: bytes) -> tuple[list[list[float]], list[_Solid]]
                        origins=[f"triangle {k}" for k in range(len(triangles))], fixed=[False] * len(triangles))
         return triangles.reshape(-1, 3).tolist(), [solid]
     if not data.lstrip().startswith(b"solid"):
-        count = int.from_bytes(data[80:84], "little") if len(data) >= 84 else 0
+        if len(data) < 84:
+            raise ModelError(f"{path}: not an STL file: it does not start with 'solid' (ASCII), and its {len(data)} bytes are "
+                             "too few for a binary STL (an 80-byte header and a 4-byte triangle count, then 50 bytes a triangle)")
+        count = int.from_bytes(data[80:84], "little")
         raise ModelError(f"{path}: not an STL file: it does not start with 'solid' (ASCII), and its {len(data)} bytes are not "
                          f"84 + 50 x {count} (binary, {count} triangles by its header)")
     return _read_ascii_stl(path, _text(path, data))
@@ -260,9 +303,10 @@ def _is_binary_stl(path: Path, data: bytes) -> bool:
 
 
 def _read_ascii_stl(path: Path, text: str) -> tuple[list[list[float]], list[_Solid]]:
-    """``solid NAME``, then facets (``facet normal``, ``outer loop``, ``vertex x y z`` ...,
-    ``endloop``, ``endfacet``), ``endsolid``; one or more solids. The normals are not used
-    (drydem orients faces itself); each statement is checked in its place."""
+    """``solid NAME``, then facets (``facet normal``, ``outer loop``, three ``vertex x y z``,
+    ``endloop``, ``endfacet``), ``endsolid`` (``endsolid NAME``: the name of the solid it
+    closes); one or more solids. The normals are not used (drydem orients faces itself); each
+    statement is checked in its place."""
     points: list[list[float]] = []
     solids: list[_Solid] = []
     solid = facet = None
@@ -283,33 +327,47 @@ def _read_ascii_stl(path: Path, text: str) -> tuple[list[list[float]], list[_Sol
         if key == "solid":
             name = line.strip()[len(words[0]):].strip() or None
             fixed = name is not None and name.endswith(FIXED_SOLID)
-            solid = _Solid(name[: -len(FIXED_SOLID)] if fixed else name)
+            solid = _Solid(name[: -len(FIXED_SOLID)] if fixed else name, "solid", [number])
             solids.append(solid)
         elif key == "facet":
             facet, start = [], number
         elif key == "vertex":
+            if len(facet) == 3:
+                raise ModelError(f"{where}: a fourth vertex in the facet of line {start}: an STL facet is a triangle, 3 vertices")
             facet.append(len(points))
             points.append(_coordinates(words[1:], f"{where}: vertex"))
         elif key == "endfacet":
-            if len(facet) < 3:
-                raise ModelError(f"{where}: the facet has {len(facet)} vertices; it needs at least 3")
+            if len(facet) != 3:
+                raise ModelError(f"{where}: the facet has {len(facet)} vertices; it needs 3 (an STL facet is a triangle)")
             solid.add(facet, f"line {start}", fixed)
             facet = None
         elif key == "endsolid":
+            _check_endsolid(line.strip()[len(words[0]):].strip(), name, solid.named[0], where)
             solid = None
     if solid is not None:
         raise ModelError(f"{path}: line {number}: the file ends inside the solid {solid.name!r} (no endsolid): is it cut short?")
     return points, solids
 
 
+def _check_endsolid(closing: str, opened: str | None, line: int, where: str) -> None:
+    """The rule on ``endsolid NAME``: the name, when given, is the one of the solid it closes
+    (``opened``, given on ``line``; a file cut inside the line, or solids mixed up, differ)."""
+    if closing and closing != opened:
+        raise ModelError(f"{where}: endsolid names {shown(closing)}, but it closes the solid {shown(opened or '')} of line "
+                         f"{line}: the name after endsolid, when given, must be the solid's (is the file cut short?)")
+
+
 def _coordinates(words: list[str], where: str) -> list[float]:
-    """x, y, z: three finite numbers (an OBJ vertex may add w or a colour, which are not used)."""
+    """x, y, z: three finite numbers (an OBJ vertex may add w or a colour, which are not used),
+    written as numbers are (float() also takes 1_0 for 10)."""
     try:
+        if any("_" in w for w in words[:3]):
+            raise ValueError
         xyz = [float(w) for w in words[:3]]
     except ValueError:
-        raise ModelError(f"{where}: {' '.join(words)!r}: the coordinates must be numbers") from None
+        raise ModelError(f"{where}: {shown(' '.join(words))}: the coordinates must be numbers") from None
     if len(xyz) < 3 or not all(map(math.isfinite, xyz)):
-        raise ModelError(f"{where}: {' '.join(words)!r}: a vertex needs three finite numbers x y z")
+        raise ModelError(f"{where}: {shown(' '.join(words))}: a vertex needs three finite numbers x y z")
     return xyz
 
 

@@ -35,6 +35,7 @@ from drydem.errors import ModelError
 from drydem.files import read_text
 from drydem.io.mesh import closed_convex_block
 from drydem.model.assembly import MAX_BLOCKS, Block
+from drydem.model.parameters import shown
 
 GROUPING = {"Transform", "Group", "Anchor", "Collision"}
 #: nodes that carry no geometry: skipped wherever they are
@@ -133,15 +134,15 @@ def _geometry(node: Node, source: str) -> tuple[np.ndarray, list[list[int]]]:
     if len(values) % 3:
         raise ModelError(f"{source}, line {coord[0].line}: {len(values)} numbers in point, not a multiple of 3")
     points = np.asarray(values, float).reshape(-1, 3)
-    return points, _faces(_numbers(node, "coordIndex", None, None, source), len(points), where)
+    return points, _faces(_indices(node, "coordIndex", source), len(points), where)
 
 
-def _faces(coord_index: list[float], count: int, where: str) -> list[list[int]]:
+def _faces(coord_index: list[int | float], count: int, where: str) -> list[list[int]]:
     """The faces of an IndexedFaceSet's coordIndex: each entry a whole number, a point's index
     (0 to ``count`` - 1) or -1 ending a face (the last face may end without it)."""
     faces, face = [], []
-    for value in [*coord_index, -1.0]:
-        if not value.is_integer():
+    for value in [*coord_index, -1]:
+        if isinstance(value, float) and not value.is_integer():
             raise ModelError(f"{where}: coordIndex {value!r} is not a whole number (a point's index from 0, or -1 ending a face)")
         i = int(value)
         if i == -1:
@@ -149,7 +150,7 @@ def _faces(coord_index: list[float], count: int, where: str) -> list[list[int]]:
                 faces.append(face)
             face = []
         elif not 0 <= i < count:
-            raise ModelError(f"{where}: coordIndex {i} is out of range (there are {count} points)")
+            raise ModelError(f"{where}: coordIndex {shown(value)} is out of range (there are {count} points)")
         else:
             face.append(i)
     return faces
@@ -159,8 +160,8 @@ def _transform_matrix(node: Node, source: str) -> np.ndarray:
     """P' = T C R SR S SR^-1 C^-1 P, the Transform's 4 x 4 matrix (ISO/IEC 14772-1, 6.52)."""
     t = _numbers(node, "translation", [0, 0, 0], 3, source)
     c = _numbers(node, "center", [0, 0, 0], 3, source)
-    r = _axis_angle(_numbers(node, "rotation", [0, 0, 1, 0], 4, source))
-    sr = _axis_angle(_numbers(node, "scaleOrientation", [0, 0, 1, 0], 4, source))
+    r = _axis_angle(node, "rotation", source)
+    sr = _axis_angle(node, "scaleOrientation", source)
     s = np.diag(_numbers(node, "scale", [1, 1, 1], 3, source))
     linear = r @ sr @ s @ sr.T
     matrix = np.eye(4)
@@ -169,29 +170,65 @@ def _transform_matrix(node: Node, source: str) -> np.ndarray:
     return matrix
 
 
-def _axis_angle(values: list[float]) -> np.ndarray:
+def _axis_angle(node: Node, name: str, source: str) -> np.ndarray:
+    """The rotation matrix of the field ``name`` (x y z angle, an SFRotation): its axis is not
+    zero, unless its angle is 0 (no rotation); the axis may be of any length."""
+    values = _numbers(node, name, [0, 0, 1, 0], 4, source)
     axis, angle = np.asarray(values[:3], float), values[3]
-    norm = np.linalg.norm(axis)
-    return np.eye(3) if norm == 0 else Rotation.from_rotvec(axis / norm * angle).as_matrix()
+    scale = np.abs(axis).max()  # a unit axis at any size: 1e200 squared is past the float range
+    if scale == 0 and angle != 0:
+        raise ModelError(f"{source}, line {node.line}: {node.type}.{name} = {values}: the axis (the first three numbers) "
+                         "is zero, so it names no direction to turn by the angle; give an axis, or the angle 0")
+    if scale == 0:
+        return np.eye(3)
+    axis = axis / scale
+    return Rotation.from_rotvec(axis / np.linalg.norm(axis) * angle).as_matrix()
 
 
-def _numbers(node: Node, name: str, default, count: int | None, source: str) -> list[float]:
+def _field(node: Node, name: str, default, count: int | None, source: str) -> list[int | float]:
     """The field ``name`` of ``node`` (``default`` if it is missing; None: it must be there):
-    numbers, ``count`` of them if given, each finite (VRML has no nan or inf; a number past
-    1.8e308 reads as inf)."""
+    numbers as read (int or float), ``count`` of them if given."""
     values = node.fields.get(name)
     if values is None:
         if default is None:
             raise ModelError(f"{source}, line {node.line}: {node.type} needs the field {name!r}")
         return list(default)
-    if not all(isinstance(v, float) for v in values) or (count is not None and len(values) != count):
+    if not all(map(_is_value_number, values)) or (count is not None and len(values) != count):
         expected = f"{count} numbers" if count else "numbers"
-        raise ModelError(f"{source}, line {node.line}: {node.type}.{name} must be {expected}, got {values!r}")
+        raise ModelError(f"{source}, line {node.line}: {node.type}.{name} must be {expected}, got {shown(values)}")
+    return values
+
+
+def _numbers(node: Node, name: str, default, count: int | None, source: str) -> list[float]:
+    """The field ``name`` of ``node`` as :func:`_field` reads it, as floats, each finite (VRML
+    has no nan or inf; a number past 1.8e308 reads as inf)."""
+    values = [_float(v) for v in _field(node, name, default, count, source)]
+    _check_finite(node, name, values, source)
+    return values
+
+
+def _indices(node: Node, name: str, source: str) -> list[int | float]:
+    """The field ``name`` of ``node``, which must be there, as :func:`_field` reads it: a whole
+    number as written (an int, shown whole in messages), any other finite."""
+    values = _field(node, name, None, None, source)
+    _check_finite(node, name, [v for v in values if isinstance(v, float)], source)
+    return values
+
+
+def _check_finite(node: Node, name: str, values: list[float], source: str) -> None:
+    """The rule on a field's numbers: each finite."""
     infinite = [v for v in values if not math.isfinite(v)]
     if infinite:
         raise ModelError(f"{source}, line {node.line}: {node.type}.{name} holds {infinite[0]!r}: each number must be "
                          "finite (no nan, inf, or a number past 1.8e308)")
-    return values
+
+
+def _float(value: int | float) -> float:
+    """A number read as a float: an int past the float range is inf, as the float of its digits is."""
+    try:
+        return float(value)
+    except OverflowError:
+        return math.inf if value > 0 else -math.inf
 
 
 class _Parser:
@@ -303,7 +340,7 @@ class _Parser:
         if self._starts_node():
             return [self._node()]
         values = self._single()
-        while self.at < len(self.tokens) and _is_number(self._peek()[0]) and values and isinstance(values[0], float):
+        while self.at < len(self.tokens) and _is_number(self._peek()[0]) and values and _is_value_number(values[0]):
             values += self._single()
         return values
 
@@ -317,7 +354,7 @@ class _Parser:
             return [self._node()]
         token, line = self._next()
         if _is_number(token):
-            return [float(token)]
+            return [_number(token)]
         if token in ("TRUE", "FALSE"):
             return [token == "TRUE"]
         if token.startswith('"') or token == "NULL":
@@ -325,9 +362,26 @@ class _Parser:
         raise ModelError(f"{self.source}, line {line}: unexpected {token!r} in a field value")
 
 
+def _number(token: str) -> int | float:
+    """A number token's value: an int where it is written as a whole number (an index, kept as
+    written; past Python's limit on an integer's digits, a float), else a float."""
+    if re.fullmatch(r"[+-]?[0-9]+", token):
+        try:
+            return int(token)
+        except ValueError:
+            pass
+    return float(token)
+
+
+def _is_value_number(value) -> bool:
+    """Whether a parsed field value is a number (TRUE and FALSE are booleans, not numbers)."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
 def _is_number(token: str) -> bool:
+    """Whether ``token`` is a number as VRML writes one (float() also takes 1_0 for 10)."""
     try:
         float(token)
     except ValueError:
         return False
-    return True
+    return "_" not in token
