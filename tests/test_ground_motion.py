@@ -2,6 +2,7 @@
 correction, scaling and the acceleration handed to each explicit cycle."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -142,6 +143,49 @@ def test_a_direction_is_refused_for_a_csv_motion(tmp_path):
     refused(lambda: read_motion(path, direction="y"), f"{path}: direction = 'y' applies to a single-component .AT2 record")
 
 
+@pytest.mark.parametrize("value", ["1_0", "0x10", "\u0661", "\uff12", "1.0D-3"], ids=["underscore", "hex", "arabic-digit", "fullwidth-digit", "fortran-d"])
+def test_a_csv_number_that_is_not_a_plain_decimal_is_refused_naming_the_file_line_and_column(tmp_path, value):
+    """The finding: float() reads 1_0 as 10 (and digits of other scripts as theirs), so a
+    record said 10 m/s2 where its file said no number drydem writes or reads elsewhere."""
+    path = written(tmp_path, "odd.csv", f"time_s,acc_x_m_s2\n0,0\n0.01,{value}\n0.02,0\n")
+    refused(lambda: read_motion(path), f"{path}: line 3: acc_x_m_s2: {value!r} is not a number (a plain decimal such as 0.01")
+
+
+def test_a_long_unreadable_value_is_shown_shortened(tmp_path):
+    path = written(tmp_path, "long.csv", "time_s,acc_x_m_s2\n0,0\n0.01," + "1_" * 500 + "1\n")
+    refused(lambda: read_motion(path), f"{path}: line 3: acc_x_m_s2: '1_1_1_", "(1003 characters) is not a number")
+
+
+@pytest.mark.parametrize("name, text", [
+    ("zeros.csv", "time_s,acc_x_m_s2,acc_y_m_s2\n0,0,0\n0.01,0,-0\n0.02,0.0,0e5\n"),
+    ("zeros.AT2", AT2_NEW.replace(AT2_BODY, "  .0000000E+00" * 5 + "\n" + " -.0000000E+00" * 2 + "\n")),
+], ids=["csv", "at2"])
+def test_a_record_whose_accelerations_are_all_zero_is_refused_as_a_table_at_rest(tmp_path, name, text):
+    """As --scale 0 and a pulse of amplitude 0 are: a table at rest is no shaking test (the
+    finding: such a record ran, and reported a PGA of 0)."""
+    path = written(tmp_path, name, text)
+    refused(lambda: read_motion(path), f"{path}: every acceleration of the record is 0: a table at rest, no motion")
+
+
+def test_the_messages_of_a_record_name_its_file_as_given(tmp_path, monkeypatch):
+    """Every message about a record read from a file names the file as the command was given it,
+    as reading it does (the finding: a baseline correction refused named only 'bigdur.csv');
+    the motion's name, which the reports show, stays the file's name."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "mo").mkdir()
+    written(tmp_path / "mo", "bigdur.csv", "time_s,acc_x_m_s2\n0,0\n0.01,1\n999999.0,0\n")
+    written(tmp_path / "mo", "r.csv", "time_s,acc_x_m_s2\n0,0\n0.5,1\n1,0\n")
+    written(tmp_path / "mo", "r.AT2", AT2_NEW)
+    spread = read_motion(Path("mo/bigdur.csv"))
+    assert spread.name == "bigdur.csv" and spread.label == "mo/bigdur.csv"
+    refused(spread.baseline_corrected, "mo/bigdur.csv: a baseline correction needs samples spread over the record")
+    record = read_motion("mo/r.csv")
+    refused(lambda: record.baseline_corrected().scaled(1e4), "mo/r.csv, baseline-corrected x 10000: the acceleration reaches")
+    assert record.resolution_problem(1.0).startswith("mo/r.csv: its duration, 1 s, spans 1 timesteps")
+    at2 = read_motion("mo/r.AT2")
+    assert at2.name == "r.AT2" and at2.scaled(2.0).label == "mo/r.AT2 x 2"
+
+
 # ---------------------------------------------------------------- PEER .AT2
 
 
@@ -196,6 +240,26 @@ def test_the_main_direction_is_the_horizontal_axis_with_the_larger_peak():
 def test_a_bad_at2_record_is_refused_naming_the_file_and_the_problem(tmp_path, text, message):
     path = written(tmp_path, "bad.AT2", text)
     refused(lambda: read_motion(path), f"{path}: ", message)
+
+
+@pytest.mark.parametrize("npts, message", [
+    ("\u00b2", "line 4: NPTS = '\u00b2': must be an integer in [2, inf)"),
+    ("9" * 5000, "line 4: NPTS = '99999"),
+    ("9" * 300, "line 4 gives NPTS = 99999"),
+], ids=["superscript", "past-int-digits", "long"])
+def test_an_at2_npts_is_refused_without_a_traceback_and_shown_shortened(tmp_path, npts, message):
+    """str.isdigit takes a superscript 2, which int() refuses; int() refuses more than 4300
+    digits: both were tracebacks. A long NPTS is shown shortened."""
+    path = tmp_path / "bad.AT2"
+    path.write_text(AT2_NEW.replace("NPTS=     7", f"NPTS= {npts}"), encoding="latin-1")
+    with pytest.raises(ModelError) as error:
+        read_motion(path)
+    assert str(error.value).startswith(f"{path}: ") and message in str(error.value) and "9" * 40 not in str(error.value)
+
+
+def test_an_at2_value_that_is_not_a_plain_decimal_is_refused_naming_the_file_and_line(tmp_path):
+    path = written(tmp_path, "odd.AT2", AT2_NEW.replace(".5000000E+00", "1_0"))
+    refused(lambda: read_motion(path), f"{path}: line 6: '1_0' is not a number")
 
 
 def test_an_at2_direction_other_than_x_y_z_is_refused(tmp_path):

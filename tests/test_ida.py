@@ -159,7 +159,7 @@ GRID = "[[grid]] #0 ('ida')"
     (("duration_s = 2.0", 'monitor = "base"'), "the monitored block 'base' is fixed"),
     (('targets = ["block.toml"]', 'targets = ["brick.toml"]\nrestitution = "housner"'),
      "restitution = 'housner': the monitored block 'block' is too squat to rock: alpha = atan(b / h) = 77.6 deg"),
-    (("kn = [1e8]", "kn = [-1.0]"), "[joint] kn = -1.0: must be a number in [1e+04, 1e+15] Pa/m"),
+    (("kn = [1e8]", "kn = [-1.0]"), "kn = -1.0: must be a number in [1e+04, 1e+15] Pa/m"),
     (("duration_s = 2.0", "increment_deg = 1.0"), "unknown key(s) ['increment_deg'] in the grid (a shake analysis)"),
     (("duration_s = 2.0", 'protocol = ["fixed"]'), "unknown key(s) ['protocol'] in the grid (a shake analysis)"),
     (('analysis = "shake"', 'analysis = "tilt"'), "unknown key(s) ['duration_s', 'motions', 'scales'] in the grid (a tilt analysis)"),

@@ -219,6 +219,23 @@ def test_bad_input_is_refused_with_its_option_or_file_and_no_traceback(files, tm
     assert not out.exists()  # refused before anything was written
 
 
+@pytest.mark.parametrize("name, text, message", [
+    # as --scale 0 and --amplitude 0 are refused (the finding: it ran, and reported a PGA of 0)
+    ("zeros.csv", "time_s,acc_x_m_s2\n0,0\n0.01,0\n0.02,0\n", "every acceleration of the record is 0: a table at rest, no motion"),
+    # float() reads 1_0 as 10
+    ("underscore.csv", "time_s,acc_x_m_s2\n0,0\n0.01,1_0\n0.02,0\n", "line 3: acc_x_m_s2: '1_0' is not a number"),
+    # its message named bigdur.csv alone
+    ("bigdur.csv", "time_s,acc_x_m_s2\n0,0\n0.01,1\n999999.0,0\n", "a baseline correction needs samples spread over the record"),
+], ids=["all-zero", "underscore", "baseline"])
+def test_a_record_that_is_no_motion_is_refused_naming_the_file_as_given(files, tmp_path, monkeypatch, name, text, message):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "mo").mkdir()
+    (tmp_path / "mo" / name).write_text(text)
+    result = shake(files["block"], "--motion", f"mo/{name}", "--damping-ratio", "0.05", "--duration", "0.05", "--out", "never")
+    assert result.exit_code == 1 and f"Error: mo/{name}: {message}" in result.output, result.output
+    assert not (tmp_path / "never").exists()
+
+
 def test_a_record_with_a_component_along_a_held_axis_is_run_along_the_others_with_a_note(files, tmp_path):
     """A 2- or 3-component record on an in-plane model: its y component moves nothing (the
     supports take it), said in a note; its x component is analysed."""

@@ -233,6 +233,44 @@ def test_animate_names_the_line_of_a_frame_whose_tilt_is_not_finite(run, tmp_pat
     assert "frames.csv: line 3: not a frame of drydem tilt or shake --vtk (ValueError(\"tilt_deg 'nan': must be a finite number" in result.output
 
 
+def _frame(line, number):
+    """A row of frames.csv with its frame number replaced by ``number``."""
+    return f"{number},{line.partition(',')[2]}"
+
+
+def _with_column(lines):
+    """frames.csv with a column drydem does not write."""
+    return [lines[0] + ",extra", *(line + ",1" for line in lines[1:])]
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda lines: [*lines[:3], _frame(lines[3], 1)],
+     "line 4: frame 1 is not after frame 1 (line 3): frame numbers must increase strictly"),
+    (lambda lines: [lines[0], lines[1], lines[3], lines[2]],
+     "line 4: frame 1 is not after frame 2 (line 3): frame numbers must increase strictly"),
+    (_with_column, "line 1: unknown columns 'extra'; drydem writes the columns frame, kind, tilt_deg, ux_m, load_direction "
+                   "(tilt --vtk) or frame, time_s, ux_m, load_direction (shake --vtk)"),
+    (lambda lines: [",".join(lines[0].split(",")[:2] + lines[0].split(",")[3:]), *lines[1:]],
+     "line 1: missing columns 'tilt_deg'"),
+    (lambda lines: [lines[0], lines[1], lines[2] + ",1", lines[3]],
+     "line 3: not a frame of drydem tilt or shake --vtk (ValueError('6 values; the header has 5 columns'))"),
+    (lambda lines: [lines[0], lines[1], _frame(lines[2], "+1"), lines[3]],
+     "line 3: not a frame of drydem tilt or shake --vtk (ValueError(\"frame '+1': must be written in the digits 0-9"),
+    (lambda lines: [lines[0], lines[1], _frame(lines[2], "9" * 400), lines[3]],
+     "line 3: not a frame of drydem tilt or shake --vtk (ValueError(\"frame '99999999999999999...99999999999999999' "
+     "(402 characters): must be at most 999999999"),
+], ids=["listed-twice", "out-of-order", "unknown-column", "missing-column", "extra-value", "plus-sign", "400-digits"])
+def test_animate_refuses_a_frames_csv_not_as_drydem_writes_it_naming_the_line_and_the_rule(run, tmp_path, edit, message):
+    """The findings: a frame listed twice (only noted: a frame on disk left out), frames listed
+    backwards, and an unknown column were drawn; a 400-digit frame number was echoed whole."""
+    short = first_frames(run, tmp_path / "three")
+    lines = (short / "frames.csv").read_text().splitlines()
+    (short / "frames.csv").write_text("\n".join(edit(lines)) + "\n")
+    result = CliRunner().invoke(main, ["animate", str(short), "-o", str(tmp_path / "collapse.gif")])
+    assert result.exit_code == 1 and f"Error: {short / 'frames.csv'}: {message}" in result.output, result.output
+    assert "9" * 40 not in result.output and not (tmp_path / "collapse.gif").exists()
+
+
 def spoiled(run, tmp_path, spoil):
     """A one-frame series whose blocks_0000.vtu ``spoil`` (a function of the meshio mesh) changed."""
     import meshio

@@ -14,7 +14,8 @@ checked before any frame is drawn (an existing one is kept unless it is to be re
 whole or not at all (drydem.files). A series is read whole before any drawing: a file that is not one
 drydem writes (not a regular file, not text, a row of an unknown kind or load direction, a truncated
 frame, a non-finite number, no block left in the analysis, a frame of another model: another block
-count) is named, with its line. Frame files on disk that ``frames.csv`` does not list are left out,
+count, a column drydem does not write, a frame number listed twice or out of order) is named, with
+its line. Frame files on disk that ``frames.csv`` does not list are left out,
 with a note: not refused, since a run stopped between a frame and its index, or resumed and ended
 sooner, leaves some.
 """
@@ -33,6 +34,7 @@ import numpy as np
 from drydem.errors import DrydemError
 from drydem.files import regular_file, replaceable, replaced_atomically
 from drydem.io.vtk import FRAME_KINDS, LOAD_AXES, frames_csv_rows
+from drydem.model.parameters import shown
 from drydem.report.plots import draw_displacements, draw_faces_3d, frame_3d, new_figure, one_deep, xz_outline
 
 #: frame size: 1280 x 720 pixels (a multiple of 16, as H.264 wants)
@@ -65,6 +67,13 @@ class VideoFrame:
 VTU_EXPECTED = "a frame of drydem tilt or shake --vtk is a blocks_NNNN.vtu file that frames.csv lists"
 #: a frame's file on disk, listed in frames.csv or not
 FRAME_FILE = re.compile(r"blocks_\d{4,}\.vtu")
+#: the columns of ``frames.csv`` that drydem writes (drydem.io.vtk.VtkSeries, ShakeSeries): a
+#: tilting series' and, with ``time_s``, a shaking-table series'; the last, ``load_direction``,
+#: is missing from a series written before it was recorded
+FRAMES_COLUMNS = {"tilt": ("frame", "kind", "tilt_deg", "ux_m", "load_direction"),
+                  "shake": ("frame", "time_s", "ux_m", "load_direction")}
+#: the largest frame number: 9 digits, more frames than any series holds (each is a file)
+MAX_FRAME = 999_999_999
 
 
 def series_frames(folder: Path, *, note: Callable[[str], None] | None = None) -> list[VideoFrame]:
@@ -81,7 +90,9 @@ def series_frames(folder: Path, *, note: Callable[[str], None] | None = None) ->
     rows = frames_csv_rows(index)
     if not rows:
         raise DrydemError(f"{index}: no frames")
+    _check_columns(index, [name for name in rows[0] if name is not None])
     listed = [_listed_frame(index, line, row) for line, row in enumerate(rows, start=2)]
+    _check_increasing(index, rows)
     unlisted = _unlisted(folder, listed)
     if unlisted and note is not None:
         note(f"{folder}: {len(unlisted)} frames on disk are not listed in frames.csv ({', '.join(unlisted[:3])}"
@@ -95,13 +106,52 @@ def _unlisted(folder: Path, listed: list[tuple[Path, str, int]]) -> list[str]:
     return sorted(on_disk - {file.name for file, _, _ in listed})
 
 
+def _check_columns(index: Path, header: list[str]) -> None:
+    """A DrydemError naming ``frames.csv`` (line 1) if its ``header`` has a column that drydem
+    does not write or lacks one it does (:data:`FRAMES_COLUMNS`; ``load_direction`` may be
+    missing): a table of something else, or edited."""
+    kind = "shake" if "time_s" in header else "tilt"
+    unknown = [name for name in header if name not in FRAMES_COLUMNS[kind]]
+    missing = [name for name in FRAMES_COLUMNS[kind][:-1] if name not in header]
+    for problem, names in (("unknown columns", unknown), ("missing columns", missing)):
+        if names:
+            raise DrydemError(f"{index}: line 1: {problem} {', '.join(shown(name) for name in names)}; drydem writes the columns "
+                              f"{', '.join(FRAMES_COLUMNS['tilt'])} (tilt --vtk) or {', '.join(FRAMES_COLUMNS['shake'])} "
+                              "(shake --vtk), load_direction missing in a series written before it was recorded")
+
+
+def _check_increasing(index: Path, rows: list[dict]) -> None:
+    """A DrydemError naming the line of ``frames.csv`` whose frame number is not after the one
+    before (each checked by :func:`_frame_number`): drydem numbers a series' frames 0, 1, 2, ...,
+    so a frame listed twice or out of order is not a series it wrote."""
+    for line, (before, row) in enumerate(zip(rows, rows[1:]), start=3):
+        if int(row["frame"]) <= int(before["frame"]):
+            raise DrydemError(f"{index}: line {line}: frame {row['frame']} is not after frame {before['frame']} (line {line - 1}): "
+                              "frame numbers must increase strictly, as drydem numbers a series' frames (0, 1, 2, ...)")
+
+
+def _frame_number(text: str) -> int:
+    """The frame number ``text`` of a row of ``frames.csv``: digits 0-9 (int() also takes +1, 1_0
+    and digits of other scripts), at most :data:`MAX_FRAME`; a ValueError saying the rule."""
+    frame = int(text)
+    if frame < 0:
+        raise ValueError(f"frame {shown(frame)}: must be an integer >= 0")
+    if not (text.isascii() and text.isdigit()):
+        raise ValueError(f"frame {shown(text)}: must be written in the digits 0-9, as drydem writes it")
+    if frame > MAX_FRAME:
+        raise ValueError(f"frame {shown(text)}: must be at most {MAX_FRAME} (more frames than any series holds)")
+    return frame
+
+
 def _listed_frame(index: Path, line: int, row: dict) -> tuple[Path, str, int]:
     """A row of ``frames.csv`` (at ``line``): its frame's file, caption and load direction; a
-    DrydemError naming the file and line if the row is not one drydem writes."""
+    DrydemError naming the file and line if the row is not one drydem writes (as many values
+    as the header has columns, a frame number of :func:`_frame_number`)."""
     try:
-        frame = int(row["frame"])
-        if frame < 0:
-            raise ValueError(f"frame {frame}: must be an integer >= 0")
+        if None in row or None in row.values():  # csv.DictReader: values past the header, or too few
+            values = sum(value is not None for name, value in row.items() if name is not None) + len(row.get(None, []))
+            raise ValueError(f"{values} values; the header has {len(row) - (None in row)} columns")
+        frame = _frame_number(row["frame"])
         load_direction = _load_direction(row)
         return index.parent / f"blocks_{frame:04d}.vtu", _caption(row, load_direction), load_direction
     except (KeyError, TypeError, ValueError) as exc:

@@ -432,7 +432,9 @@ def histogram_figure(angles_deg, path: Path, *, title: str = "", mean_deg: float
                      experiment: tuple[float, float] | None = None, xlabel: str = "collapse angle (deg)") -> Path:
     """Histogram of the samples' ``angles_deg`` (a Monte Carlo run), with their mean and 5th
     percentile marked, and an ``experiment`` (mean in deg, coefficient of variation as a
-    fraction) drawn as its mean and the band mean (1 +- cov)."""
+    fraction) drawn as its mean and the band mean (1 +- cov). The legend is drawn only when
+    something is labelled (no sample angle and nothing marked: none, and no warning of
+    matplotlib's)."""
     angles = np.asarray(angles_deg, dtype=float)
     fig = new_figure(figsize=(6.4, 4.4), layout="constrained")
     ax = fig.subplots()
@@ -450,5 +452,6 @@ def histogram_figure(angles_deg, path: Path, *, title: str = "", mean_deg: float
         ax.axvline(p05_deg, color="tab:red", linestyle="--", linewidth=1.2, label=f"5th percentile {p05_deg:.2f} deg")
     ax.set(xlabel=xlabel, ylabel="samples", title=title)
     ax.grid(alpha=0.3)
-    ax.legend(loc="best", fontsize="small")
+    if ax.get_legend_handles_labels()[1]:
+        ax.legend(loc="best", fontsize="small")
     return saved(fig, path)

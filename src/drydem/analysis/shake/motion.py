@@ -24,7 +24,7 @@ from scipy.integrate import cumulative_trapezoid, trapezoid
 
 from drydem.errors import ModelError
 from drydem.files import read_text
-from drydem.model.parameters import G, OneOf, Range, Rule, check_fields, is_number
+from drydem.model.parameters import G, OneOf, Range, Rule, check_fields, is_number, shown
 
 #: the analytic pulses of :func:`pulse`
 PULSES = ("one-sine", "sine", "ricker")
@@ -35,6 +35,10 @@ TIME_COLUMN = "time_s"
 ACCELERATION_COLUMNS = ("acc_x_m_s2", "acc_y_m_s2", "acc_z_m_s2")
 #: the suffixes :func:`read_motion` knows (lower case)
 SUFFIXES = (".csv", ".at2")
+#: a number in a motion file: a plain decimal, ASCII digits with an optional sign, point and
+#: exponent (float() also takes 1_0 for 10, and digits of other scripts); nan and inf are read,
+#: then refused as not finite
+PLAIN_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
 
 #: any finite real: a negative scale factor or amplitude flips the motion
 REAL = Range(None, None)
@@ -112,6 +116,9 @@ class GroundMotion:
     (:meth:`resolution_problem`); None for a record, whose content is not known.
     notes : what reading the motion changed, for the commands to print (a record shifted to
     start at 0).
+    source : the file a record was read from, as given (its path), which messages name in
+    place of the file name that begins ``name`` (:attr:`label`); None for a pulse or a motion
+    made in code.
 
     Both arrays are stored as read-only float copies. Between samples the acceleration is
     linear; after the last one the table moves freely (zero acceleration).
@@ -122,22 +129,32 @@ class GroundMotion:
     name: str
     period_s: float | None = None
     notes: tuple[str, ...] = ()
+    source: str | None = None
 
     def __post_init__(self):
         try:
             time = np.array(self.time_s, dtype=float)
             acceleration = np.array(self.acceleration_m_s2, dtype=float)
         except (TypeError, ValueError) as exc:
-            raise ModelError(f"{self.name}: the times and accelerations must be numbers ({exc})") from None
+            raise ModelError(f"{self.label}: the times and accelerations must be numbers ({exc})") from None
         problem = _samples_problem(time, acceleration)
         if problem is not None:
-            raise ModelError(f"{self.name}: {problem}")
+            raise ModelError(f"{self.label}: {problem}")
         if self.period_s is not None:
-            TIMESTEP.check(self.period_s, f"{self.name}: period_s")
+            TIMESTEP.check(self.period_s, f"{self.label}: period_s")
         time.flags.writeable = acceleration.flags.writeable = False
         object.__setattr__(self, "time_s", time)
         object.__setattr__(self, "acceleration_m_s2", acceleration)
         object.__setattr__(self, "notes", tuple(self.notes))
+
+    @property
+    def label(self) -> str:
+        """The motion as messages name it: its ``name``, with the file name it begins with given
+        as the file's path (:attr:`source`: ``records/el-centro.csv, baseline-corrected``), as
+        every message of reading the file names it."""
+        if self.source is None or not self.name.startswith(Path(self.source).name):
+            return self.name
+        return self.source + self.name.removeprefix(Path(self.source).name)
 
     @property
     def duration_s(self) -> float:
@@ -168,7 +185,7 @@ class GroundMotion:
     def scaled(self, factor: float) -> GroundMotion:
         """The motion with every acceleration times ``factor`` (any finite real: 0 is a table at
         rest, a negative factor flips the motion)."""
-        REAL.check(factor, f"{self.name}: scale factor")
+        REAL.check(factor, f"{self.label}: scale factor")
         return replace(self, acceleration_m_s2=self.acceleration_m_s2 * factor, name=f"{self.name} x {factor:g}")
 
     def velocity_m_s(self) -> np.ndarray:
@@ -212,12 +229,12 @@ class GroundMotion:
         unchanged up to round-off. Needs 3 samples or more (with 2 the conditions are dependent).
         """
         if self.time_s.size < 3:
-            raise ModelError(f"{self.name}: a baseline correction needs at least 3 samples; the record has {self.time_s.size}")
+            raise ModelError(f"{self.label}: a baseline correction needs at least 3 samples; the record has {self.time_s.size}")
         u = self.time_s / self.duration_s
         posedness = 1.0 - float(np.sum(np.diff(u) ** 3))
         if posedness < BASELINE_POSEDNESS:
             longest = float(np.diff(u).max())
-            raise ModelError(f"{self.name}: a baseline correction needs samples spread over the record: one step spans "
+            raise ModelError(f"{self.label}: a baseline correction needs samples spread over the record: one step spans "
                              f"{longest:.9%} of it, which leaves the conditions of zero final velocity and displacement "
                              f"nearly dependent (1 - sum (dt / T)^3 = {posedness:.3g}, at least {BASELINE_POSEDNESS:g}); "
                              "resample the record, or do not correct it (--no-baseline)")
@@ -240,7 +257,7 @@ class GroundMotion:
             return None
         advice = (f"give a frequency of at most {1.0 / (STEPS_PER_PERIOD * dt_s):.4g} Hz (--frequency; FREQUENCY_HZ of a study's pulse)"
                   if self.period_s is not None else f"give a record lasting at least {STEPS_PER_PERIOD * dt_s:.4g} s")
-        return (f"{self.name}: {what}, {span:.4g} s, spans {span / dt_s:.3g} timesteps of {dt_s:.3g} s (the model's at the start "
+        return (f"{self.label}: {what}, {span:.4g} s, spans {span / dt_s:.3g} timesteps of {dt_s:.3g} s (the model's at the start "
                 f"of the shaking); the analysis follows a motion only over at least {STEPS_PER_PERIOD} timesteps: {advice}")
 
     def per_cycle(self, dt_s: float, cycles: int, start_s: float = 0.0) -> np.ndarray:
@@ -305,14 +322,23 @@ def _read_text(path: Path, kind: str, encoding: str) -> str:
 
 
 def _number(text: str, where: str) -> float:
-    """``text`` as a finite float; else a ModelError ``WHERE: 'TEXT' is not a (finite) number``."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise ModelError(f"{where}: {text.strip()!r} is not a number") from None
+    """``text`` as a finite float; else a ModelError ``WHERE: 'TEXT' is not a (finite) number``:
+    a number of a motion file is a plain decimal (:data:`PLAIN_NUMBER`: not 1_0, 0x10, 1.0D-3)."""
+    if not PLAIN_NUMBER.fullmatch(text.strip()):
+        raise ModelError(f"{where}: {shown(text.strip())} is not a number (a plain decimal such as 0.01, -2 or 1.5e-3)")
+    value = float(text)
     if not math.isfinite(value):
-        raise ModelError(f"{where}: {text.strip()!r} is not a finite number")
+        raise ModelError(f"{where}: {shown(text.strip())} is not a finite number")
     return value
+
+
+def _moving(path: Path, acceleration: np.ndarray) -> np.ndarray:
+    """``acceleration`` (n, 3), m/s2, read from the record ``path``; a ModelError naming the file
+    if every value is 0: a table at rest, no motion (as ``drydem shake --scale 0`` is refused)."""
+    if not acceleration.any():
+        raise ModelError(f"{path}: every acceleration of the record is 0: a table at rest, no motion; "
+                         "a record must move the table")
+    return acceleration
 
 
 def _checked_times(path: Path, time: np.ndarray, lines: list[int]) -> tuple[np.ndarray, tuple[str, ...]]:
@@ -368,7 +394,7 @@ def read_csv_motion(path: str | Path) -> GroundMotion:
     for column, name in enumerate(present[1:], start=1):
         acceleration[:, ACCELERATION_COLUMNS.index(name)] = table[:, column]
     time, notes = _checked_times(path, table[:, 0], lines)
-    return GroundMotion(time, acceleration, path.name, notes=notes)
+    return GroundMotion(time, _moving(path, acceleration), path.name, notes=notes, source=str(path))
 
 
 def _present_columns(path: Path, header: list[str]) -> list[str]:
@@ -418,15 +444,15 @@ def read_at2(path: str | Path, direction: str = "x") -> GroundMotion:
         raise ModelError(f"{path}: {len(lines)} lines; a PEER .AT2 file has 4 header lines "
                          "(title; event and station; units; NPTS and DT), then the accelerations")
     if not AT2_UNITS.search(lines[2]):
-        raise ModelError(f"{path}: line 3: {lines[2].strip()!r}: expected 'ACCELERATION TIME SERIES IN UNITS OF G'")
+        raise ModelError(f"{path}: line 3: {shown(lines[2].strip())}: expected 'ACCELERATION TIME SERIES IN UNITS OF G'")
     npts, dt_s = _at2_npts_dt(path, lines[3])
     values = [_number(text, f"{path}: line {number}") for number, line in enumerate(lines[4:], start=5) for text in line.split()]
     if len(values) != npts:
-        raise ModelError(f"{path}: line 4 gives NPTS = {npts}, but the file holds {len(values)} values"
+        raise ModelError(f"{path}: line 4 gives NPTS = {shown(npts)}, but the file holds {len(values)} values"
                          f"{' (truncated?)' if len(values) < npts else ''}")
     acceleration = np.zeros((npts, 3))
     acceleration[:, DIRECTIONS.index(direction)] = np.array(values) * G
-    return GroundMotion(np.arange(npts) * dt_s, acceleration, path.name)
+    return GroundMotion(np.arange(npts) * dt_s, _moving(path, acceleration), path.name, source=str(path))
 
 
 def _at2_npts_dt(path: Path, line: str) -> tuple[int, float]:
@@ -435,9 +461,11 @@ def _at2_npts_dt(path: Path, line: str) -> tuple[int, float]:
     :data:`MIN_SAMPLE_STEP_S`."""
     match = AT2_NPTS_DT[0].search(line) or AT2_NPTS_DT[1].match(line)
     if match is None:
-        raise ModelError(f"{path}: line 4: {line.strip()!r}: expected 'NPTS=  5590, DT=   .0050 SEC' or '5590    0.0050    NPTS, DT'")
+        raise ModelError(f"{path}: line 4: {shown(line.strip())}: expected 'NPTS=  5590, DT=   .0050 SEC' or '5590    0.0050    NPTS, DT'")
     npts_text, dt_text = match.groups()
-    npts = int(npts_text) if npts_text.isdigit() else npts_text
+    # ASCII digits (str.isdigit also takes superscripts, which int() refuses), fewer than the
+    # 4300 that int() converts
+    npts = int(npts_text) if npts_text.isascii() and npts_text.isdigit() and len(npts_text) <= 4000 else npts_text
     NPTS.check(npts, f"{path}: line 4: NPTS")
     dt_s = _number(dt_text, f"{path}: line 4: DT")
     AT2_DT.check(dt_s, f"{path}: line 4: DT")
