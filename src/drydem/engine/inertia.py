@@ -282,13 +282,13 @@ def timestep_and_blocks(
     if solver.mass_scaling:
         dt = dt if scaled_timestep is None else scaled_timestep
         mass, inertia = scaled_inertia(mass, inertia, k_t, k_r, dt, solver.timestep_safety)
-    return Inertia(float(dt), BlockConstants(
-        mass=model.block_mass,
+    return Inertia(float(dt), BlockConstants(  # the model's arrays are read-only: the kernels are built for writable ones
+        mass=model.block_mass.copy(),
         inv_mass=np.where(movable, 1.0 / mass, 0.0),
-        inertia_body=inertia,
+        inertia_body=np.array(inertia),
         inv_inertia_body=np.linalg.inv(inertia) if solver.mass_scaling else model.block_inertia_inverse,
         free=(~model.block_fixed & movable[:, None]).astype(float),
-        radius=model.block_radius,
+        radius=model.block_radius.copy(),
         origin=origin,
     ), bound.closure_limit)
 

@@ -39,6 +39,8 @@ class ContactTracker:
         self.contacts = SubContacts.empty()
         self.neighbours = NeighbourList.empty()
         self.active = np.ones(model.n_blocks, dtype=bool)
+        #: (nb,) m, the blocks' radii as the compiled kernels take them (the model's are read-only)
+        self.radius_m = model.block_radius.copy()
         self.broad_state = state.copy()
         self.detections = 0
         self.detect(state, everything=True)
@@ -62,7 +64,7 @@ class ContactTracker:
         rot = matrices(state.quaternion)
         old_list, old = self.neighbours, self.contacts
         motion = np.empty(len(old_list.pairs))
-        loop.pair_motions(state, old_list, m.block_radius, motion)
+        loop.pair_motions(state, old_list, self.radius_m, motion)
         if everything or self._moved_far(state):
             pairs = broad_phase(m.geometry, state.position, rot, m.block_movable, 0.5 * NEIGHBOUR_MARGIN * tol)
             pairs = pairs[self.active[pairs].all(axis=1)]
@@ -78,7 +80,7 @@ class ContactTracker:
     def _moved_far(self, state: State) -> bool:
         """Some block point moved (margin - tolerance) / 2 since the last broad phase."""
         slack = np.empty(self.model.n_blocks)
-        return loop.detection_slack(state, self.broad_state, NeighbourList.empty(), self.model.block_radius, self.absolute_limit, slack) <= 0.0
+        return loop.detection_slack(state, self.broad_state, NeighbourList.empty(), self.radius_m, self.absolute_limit, slack) <= 0.0
 
     def remove(self, blocks) -> None:
         """Take ``blocks`` (indices) out of the analysis: their contacts and neighbour pairs go."""

@@ -85,7 +85,7 @@ BASE_DEPTH_FRACTION = 1e-3
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Model:
-    """Frozen description of a block assembly (nb blocks).
+    """Frozen description of a block assembly (nb blocks); its arrays are read-only.
 
     block_name : names. block_shape : geometry as given (this is the body frame: a block's
     body coordinates are its model-file coordinates minus its centroid). block_density : (nb,)
@@ -115,6 +115,11 @@ class Model:
     contact_tolerance: float
     in_plane: bool
     source: str = "<python>"
+
+    def __post_init__(self):
+        # frozen means its arrays too: a block mass of -5 set through model.block_mass[1] ran
+        for name in ("block_density", "block_mass", "block_inertia", "block_fixed", "block_radius"):
+            getattr(self, name).flags.writeable = False
 
     @property
     def n_blocks(self) -> int:
@@ -200,6 +205,9 @@ class Model:
         :meth:`~drydem.model.parameters.JointMaterial.changed`), contacts points_per_length,
         solver criterion. Building them checks each value (ModelError naming it and its range)
         without building a model."""
+        if not (joint_law is None or isinstance(joint_law, Mapping)):
+            raise ModelError(f"{self.source}: joint_law = {shown(joint_law)}: must be a mapping of [joint] keys, e.g. "
+                             "{'model': 'power', 'kn_exponent': 0.5, 'stress_ref': 1e4, 'kn_min': 1e6}")
         joint = {k: v for k, v in (("kn", kn), ("ks", ks), ("friction", friction)) if v is not None} | dict(joint_law or {})
         changes = {"joint": self.joint.changed(**joint)} if joint else {}
         if points is not None:

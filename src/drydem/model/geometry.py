@@ -49,7 +49,7 @@ MAX_BLOCK_VERTICES = 2000
 
 @dataclass(frozen=True, eq=False)
 class ConvexPolyhedron:
-    """A convex polyhedron in world coordinates (m).
+    """A convex polyhedron in world coordinates (m), frozen (its arrays are read-only).
 
     Attributes
     ----------
@@ -76,6 +76,8 @@ class ConvexPolyhedron:
         problem = _polyhedron_problem(self)
         if problem is not None:
             raise GeometryError(f"ConvexPolyhedron: {problem} (drydem.box and drydem.convex_hull make a block's polyhedron)")
+        for array in (self.vertices, self.face_normals, self.centroid, self.second_moment, *self.faces):
+            array.flags.writeable = False  # frozen, its arrays too (a model's blocks share them)
 
     @cached_property
     def size(self) -> float:
@@ -217,6 +219,7 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
     four, coplanar, collinear) or if a point lies strictly inside the hull of the
     others, i.e. the vertex set does not describe a convex block.
     """
+    _check_name(name)
     pts = real_array(points)
     if pts is None:
         raise GeometryError(f"{name}: vertices must be a list of [x, y, z] numbers")
@@ -254,6 +257,12 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
     faces = tuple(remap[f] for f in faces)
     volume, centroid, second = _mass_properties(vertices, faces)
     return ConvexPolyhedron(vertices, faces, normals, volume, centroid, second)
+
+
+def _check_name(name) -> None:
+    """GeometryError unless ``name``, the block's name in messages, is a text."""
+    if not isinstance(name, str):
+        raise GeometryError(f"name = {shown(name)}: must be a text (the block's name in messages)")
 
 
 def _block_scale(pts: np.ndarray, name: str) -> float:
@@ -300,6 +309,7 @@ def box(lower, upper, *, name: str = "block") -> ConvexPolyhedron:
     second moment about it a b c / 12 diag(a^2, b^2, c^2). GeometryError naming ``name`` and the
     corner (min, max) that is not [x, y, z], three finite numbers, or the rule of
     :func:`convex_hull` that the box breaks (too far, too small, too flat)."""
+    _check_name(name)
     lo, hi = real_array(lower), real_array(upper)
     for corner, given, key in ((lo, lower, "min"), (hi, upper, "max")):
         if corner is None or corner.shape != (3,) or not np.isfinite(corner).all():

@@ -50,11 +50,14 @@ def is_integer(value) -> bool:
 
 
 def plain(value):
-    """A NumPy number or boolean as the Python int, float or bool it equals (JSON and TOML
-    writers take those, a Python int does not overflow, and messages show ``0.5``, not
-    ``np.float64(0.5)``); any other value as it is."""
+    """A NumPy number, boolean or text as the Python int, float, bool or str it equals (JSON and
+    TOML writers take those, a Python int does not overflow, and messages and checkpoints'
+    settings show ``0.5`` and ``'x'``, not ``np.float64(0.5)`` and ``np.str_('x')``); any other
+    value as it is."""
     if _is_numpy_bool(value):
         return bool(value)
+    if isinstance(value, str):
+        return value if type(value) is str else str(value)
     if type(value) in (bool, int, float) or not isinstance(value, numbers.Real):
         return value
     return int(value) if isinstance(value, numbers.Integral) else float(value)
@@ -116,11 +119,13 @@ FLAG = Flag()
 
 @dataclass(frozen=True)
 class OneOf(Rule):
-    """One of ``options``, of the same type (``1`` is not ``True``, ``1.0`` not ``"1.0"``)."""
+    """One of ``options``, of the same type (``1`` is not ``True``, ``1.0`` not ``"1.0"``; a
+    NumPy value counts as the Python one it equals, :func:`plain`)."""
 
     options: tuple
 
     def __contains__(self, value) -> bool:
+        value = plain(value)
         return any(type(value) is type(option) and value == option for option in self.options)
 
     def __str__(self) -> str:
@@ -150,13 +155,20 @@ class InstanceOf(Rule):
 
 
 class Text(Rule):
-    """A text with a character other than white space (a name that messages and results show)."""
+    """A text with a character other than white space, in Unicode characters that UTF-8 can
+    write (a name that messages, results and model files show; a lone surrogate, U+D800 alone, is none)."""
 
     def __contains__(self, value) -> bool:
-        return isinstance(value, str) and bool(value.strip())
+        if not (isinstance(value, str) and value.strip()):
+            return False
+        try:
+            value.encode("utf-8")
+        except UnicodeEncodeError:
+            return False
+        return True
 
     def __str__(self) -> str:
-        return "must be a non-empty text"
+        return "must be a non-empty text of characters UTF-8 can write"
 
 
 #: the rule of every name
