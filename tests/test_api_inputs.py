@@ -153,6 +153,149 @@ def test_a_cycle_count_of_zero_or_a_numpy_integer_is_taken(model):
     assert sim.cycle(0).cycles == 0 and sim.cycle(np.int64(3)).cycles == 3
 
 
+def test_a_numpy_unsigned_cycle_count_or_budget_is_taken_as_a_python_int(model):
+    """np.uint64 passed the range check, then failed with a bare TypeError in the cycling's slices."""
+    sim = dd.Simulation(model)
+    assert sim.cycle(np.uint64(3)).cycles == 3
+    assert sim.cycle(2, ground_acceleration=np.zeros((2, 3))).cycles == 2
+    assert sim.cycle_to_equilibrium(max_cycles=np.uint64(5)).cycles <= 5
+
+
+GRAVITY_METHODS = {
+    "cycle": lambda sim, g: sim.cycle(5, gravity=g),
+    "cycle_to_equilibrium": lambda sim, g: sim.cycle_to_equilibrium(gravity=g, max_cycles=5),
+    "move": lambda sim, g: sim.move(np.zeros((2, 3)), np.zeros((2, 3)), gravity=g),
+    "energy": lambda sim, g: sim.energy(gravity=g),
+}
+
+
+@pytest.mark.parametrize("method", GRAVITY_METHODS)
+@pytest.mark.parametrize("gravity, words", [
+    ([False, False, True], "gravity = [False, False, True]: must be [gx, gy, gz], three real numbers in m/s2"),
+    (np.array([0, 0, 1], dtype=bool), "gravity = shape (3,) bool: must be [gx, gy, gz]"),
+    (["0", "0", "-9.81"], "gravity = ['0', '0', '-9.81']: must be [gx, gy, gz]"),
+    ("abc", "gravity = 'abc': must be [gx, gy, gz]"),
+    ([0, 0, -9.81 + 1j], "gravity = [0, 0, (-9.81+1j)]: must be [gx, gy, gz], three real numbers in m/s2 (not texts, booleans or complex"),
+    ({0: 0, 1: 0, 2: -9.81}, "gravity = {0: 0, 1: 0, 2: -9.81}: must be [gx, gy, gz]"),
+    ((x for x in [0, 0, -9.81]), "gravity = <generator object"),
+    ([0, 1], "gravity = [0, 1]: must be [gx, gy, gz]"),
+    ([[0, 0, -9.81]], "gravity = [[0, 0, -9.81]]: must be [gx, gy, gz]"),
+    (None, "gravity = None: must be [gx, gy, gz]"),
+    ([0, 0, np.nan], "gravity = [0.0, 0.0, nan]: must be three finite numbers in m/s2"),
+    ([np.inf, 0, -9.81], "gravity = [inf, 0.0, -9.81]: must be three finite numbers in m/s2"),
+    ([0, 0, -1e6], "gravity = [0.0, 0.0, -1000000.0]: its magnitude 1e+06 m/s2 must be at most 1000 m/s2"),
+    ([800, 0, -800], "gravity = [800.0, 0.0, -800.0]: its magnitude 1131 m/s2 must be at most 1000 m/s2"),
+])
+def test_a_gravity_that_is_no_vector_of_real_numbers_within_its_bound_is_refused(model, method, gravity, words):
+    """A gravity of booleans or texts was taken as numbers, complex ones or a dict failed with a
+    bare TypeError, a NaN gave a NaN energy, 1e6 m/s2 drove a brick 2e8 m through its base."""
+    sim = dd.Simulation(model)
+    before = sim.state.copy()
+    refused(dd.ModelError, f"{method} {words}", call=lambda: GRAVITY_METHODS[method](sim, gravity))
+    assert all(np.array_equal(a, b) for a, b in zip(before, sim.state)) and sim.cycles == 0
+
+
+@pytest.mark.parametrize("gravity", [(0.0, 0.0, -dd.G), [0, 0, -10], np.array([0.0, 0.0, -dd.G], dtype=np.float32),
+                                     [np.float64(1.0), np.int64(0), -9.81], [0.0, 0.0, -1000.0]])
+def test_a_gravity_of_real_numbers_in_a_list_tuple_or_array_is_taken(model, gravity):
+    sim = dd.Simulation(model)
+    assert sim.cycle(2, gravity=gravity).cycles == 2
+    assert np.isfinite(sim.energy(gravity=gravity)["gravitational"])
+
+
+def test_the_gravity_bound_is_that_of_a_ground_motion():
+    from drydem.analysis.shake.motion import MAX_ACCELERATION_M_S2
+    from drydem.engine import simulation
+
+    assert simulation.MAX_ACCELERATION_M_S2 == MAX_ACCELERATION_M_S2
+
+
+@pytest.mark.parametrize("ground, words", [
+    (np.ones((2, 3), complex), "got shape (2, 3) complex128"),
+    (np.ones((2, 3), bool), "got shape (2, 3) bool"),
+    ([[True, False, False], [0.0, 0.0, 0.0]], "got a list of shape (2, 3)"),
+    ([["a", "b", "c"]] * 2, "got a list of shape (2, 3)"),
+    ([[1, 2, 3], [1, 2]], "got a ragged list"),
+    (np.ones((3, 3)), "got shape (3, 3) float64"),
+    (np.array([[0.0, 0.0, 0.0], [np.nan, 0.0, 0.0]]), "got nan at (1, 0)"),
+    ("shake", "got 'shake'"),
+])
+def test_a_ground_acceleration_that_is_no_array_of_real_numbers_is_refused_naming_it(model, ground, words):
+    """A complex table acceleration lost its imaginary part with only a warning, booleans were
+    taken as numbers, texts and ragged lists failed with a bare ValueError."""
+    sim = dd.Simulation(model)
+    refused(dd.ModelError, "cycle ground_acceleration (m/s2) must be a (2, 3) array of finite numbers", words,
+            call=lambda: sim.cycle(2, ground_acceleration=ground))
+    assert sim.cycles == 0
+
+
+def test_a_ground_acceleration_beyond_a_ground_motion_s_bound_is_refused(model):
+    ground = np.zeros((2, 3))
+    ground[1, 0] = -2000.0
+    refused(dd.ModelError, "cycle ground_acceleration[1, 0] = -2000 m/s2: each component must be at most 1000 m/s2",
+            call=lambda: dd.Simulation(model).cycle(2, ground_acceleration=ground))
+
+
+@pytest.mark.parametrize("call, words", [
+    (lambda sim: sim.cycle(5, stop=5), "cycle stop = 5: must be None or a function"),
+    (lambda sim: sim.cycle_to_equilibrium(stop="yes"), "cycle_to_equilibrium stop = 'yes': must be None or a function"),
+    (lambda sim: sim.cycle_to_equilibrium(progress=3), "cycle_to_equilibrium progress = 3: must be None or a function"),
+], ids=["cycle stop", "equilibrium stop", "equilibrium progress"])
+def test_a_callback_that_is_no_function_is_refused_before_any_cycle(model, call, words):
+    """They failed with a bare TypeError ('int' object is not callable) after the cycling."""
+    sim = dd.Simulation(model)
+    refused(dd.ModelError, words, call=lambda: call(sim))
+    assert sim.cycles == 0
+
+
+def test_equilibrium_with_every_block_removed_says_no_movable_block_is_left(model):
+    """It said that the 'ratio' criterion needs gravity, which it had."""
+    sim = dd.Simulation(model)
+    sim.remove_blocks([0, 1])
+    refused(dd.ModelError, "cycle_to_equilibrium: no movable block is left in the analysis", "nothing to cycle",
+            call=sim.cycle_to_equilibrium)
+
+
+@pytest.mark.parametrize("snapshot, words", [
+    (None, "Simulation.restore snapshot = None: must be a Snapshot"),
+    ({"cycles": 0}, "Simulation.restore snapshot = {'cycles': 0}: must be a Snapshot"),
+])
+def test_restoring_what_is_no_snapshot_is_refused(model, snapshot, words):
+    refused(dd.ModelError, words, call=lambda: dd.Simulation(model).restore(snapshot))
+
+
+@pytest.mark.parametrize("change, words", [
+    ({"cycles": -5}, "snapshot cycles = -5: must be an integer in [0, inf)"),
+    ({"cycles": 2.5}, "snapshot cycles = 2.5: must be an integer"),
+    ({"cycles": True}, "snapshot cycles = True: must be an integer"),
+    ({"time_s": float("nan")}, "snapshot time_s = nan: must be a number in [0, inf) s"),
+    ({"time_s": -1.0}, "snapshot time_s = -1.0: must be a number in [0, inf) s"),
+    ({"scaled_timestep": 0.0}, "snapshot scaled_timestep = 0.0: must be a number in (0, inf) s"),
+    ({"scaled_timestep": float("inf")}, "snapshot scaled_timestep = inf: must be a number"),
+    ({"farthest_travel_kg_m": -1.0}, "snapshot farthest_travel_kg_m = -1.0: must be a number in [0, inf) kg m"),
+    ({"farthest_travel_kg_m": "0"}, "snapshot farthest_travel_kg_m = '0': must be a number"),
+])
+def test_a_snapshot_whose_counts_or_times_are_out_of_range_is_refused_naming_the_field(model, change, words):
+    """cycles = -5 and time_s = nan were restored as they were."""
+    sim = dd.Simulation(model)
+    sim.cycle(3)
+    saved = sim.snapshot()
+    refused(dd.ModelError, "Simulation.restore: " + words, call=lambda: sim.restore(dataclasses.replace(saved, **change)))
+    fresh = dd.Simulation(model)
+    fresh.restore(dataclasses.replace(saved, cycles=np.int64(3), scaled_timestep=sim.timestep))
+    assert type(fresh.cycles) is int and fresh.cycles == 3
+
+
+def test_a_refused_snapshot_leaves_the_simulation_as_it_was(model):
+    sim = dd.Simulation(model)
+    saved = sim.snapshot()
+    sim.cycle(3)
+    before = sim.state.copy()
+    broken = dataclasses.replace(saved, broad_state=saved.broad_state._replace(position=np.zeros((3, 3))))
+    refused(dd.ModelError, "broad state.position must be a (2, 3) array", call=lambda: sim.restore(broken))
+    assert all(np.array_equal(a, b) for a, b in zip(before, sim.state)) and sim.cycles == 3
+
+
 @pytest.mark.parametrize("displacement, rotation, words", [
     (np.zeros((3, 3)), np.zeros((2, 3)), "move displacement must be a (2, 3) array of finite numbers, got shape (3, 3)"),
     (np.zeros((2, 3)), np.zeros(3), "move rotation must be a (2, 3) array"),

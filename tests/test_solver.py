@@ -188,6 +188,41 @@ def test_a_checkpoint_keeps_the_divergence_test_s_farthest_travel(tmp_path):
         load_checkpoint(path)
 
 
+@pytest.mark.parametrize("name", ["checkpoint.json", "checkpoint", "checkpoint.partial", "ck.tar.gz"])
+def test_a_checkpoint_at_any_file_name_is_saved_there_and_resumed(tmp_path, name):
+    """np.savez appended ".npz" to the temporary name of a checkpoint not named .npz: the save
+    failed with "cannot write: No such file or directory" and left .ck.partial.json.npz behind."""
+    from drydem.engine.checkpoint import load_checkpoint, save_checkpoint
+
+    sim = dd.Simulation(stack_model([0.0055] * 2))
+    sim.cycle(50)
+    saved = sim.snapshot()
+    path = tmp_path / name
+    save_checkpoint(path, saved, {"step": 7})
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+    save_checkpoint(path, saved, {"step": 8})  # over the one there
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+    snapshot, progress = load_checkpoint(path)
+    assert int(progress["step"]) == 8 and snapshot.cycles == 50
+    fresh = dd.Simulation(sim.model)
+    fresh.restore(snapshot)
+    sim.cycle(20)
+    fresh.cycle(20)
+    np.testing.assert_array_equal(sim.state.position, fresh.state.position)
+
+
+def test_a_tilt_analysis_checkpointed_to_a_json_name_runs_and_resumes(tmp_path):
+    from drydem.analysis.tilt import TiltSettings, tilt_analysis
+
+    model = stack_model([0.0055])
+    settings = TiltSettings(increment_deg=2.0, max_angle_deg=10.0)
+    path = tmp_path / "ck.json"
+    first = tilt_analysis(model, settings, checkpoint=path, checkpoint_every_s=0.0)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ck.json"]
+    again = tilt_analysis(model, settings, checkpoint=path, resume=True)
+    assert again.ended_by == first.ended_by and len(again.records) == len(first.records)
+
+
 def spoiled(snapshot, part: str, field: str, change):
     """``snapshot`` with ``part.field`` (a NamedTuple's field) replaced by ``change`` of a copy of it."""
     tuple_ = getattr(snapshot, part)

@@ -356,6 +356,18 @@ def test_a_block_turned_45_deg_topples_about_its_corner(axis):
     assert within_one_step_below(result.collapse_angle_deg, math.degrees(math.atan(math.sqrt(2.0) * 0.01 / 0.04)))
 
 
+def test_a_multiplier_protocol_ends_where_its_load_is_the_largest_acceleration_a_simulation_takes():
+    """g (tan theta, -1) passes MAX_ACCELERATION_M_S2 past atan(1000 / 9.81) = 89.44 deg: a
+    max_angle beyond it is refused up front, not met mid-run; tilting the gravity is bounded anyway."""
+    from drydem.model.parameters import MAX_ACCELERATION_M_S2, G
+
+    steepest = math.degrees(math.atan(MAX_ACCELERATION_M_S2 / G))
+    assert np.linalg.norm(TiltSettings(loading="multiplier", max_angle_deg=89.4).gravity(89.4)) <= MAX_ACCELERATION_M_S2
+    with pytest.raises(dd.ModelError, match=rf"max_angle_deg = 89.5: with loading = 'multiplier' at most {steepest:.2f} deg"):
+        TiltSettings(loading="multiplier", max_angle_deg=89.5)
+    assert TiltSettings(max_angle_deg=89.9).max_angle_deg == 89.9
+
+
 def test_tilt_axis_sets_the_gravity_direction_and_is_checked():
     t = math.radians(30.0)
     np.testing.assert_allclose(TiltSettings(tilt_axis="x").gravity(30.0), dd.G * np.array([0.0, math.sin(t), -math.cos(t)]))

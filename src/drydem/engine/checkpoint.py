@@ -29,7 +29,8 @@ _PARTS = {"state": State, "contacts": SubContacts, "neighbours": NeighbourList, 
 
 
 def save_checkpoint(path: Path, snapshot: Snapshot, progress: dict) -> None:
-    """Write ``snapshot`` and ``progress`` (name -> array or scalar) to ``path`` atomically."""
+    """Write ``snapshot`` and ``progress`` (name -> array or scalar) to ``path`` atomically, at
+    that very name whatever its suffix (``.npz`` or another, or none)."""
     arrays = {f"{part}.{name}": value for part in _PARTS for name, value in getattr(snapshot, part)._asdict().items()}
     arrays |= {"active": snapshot.active, "cycles": snapshot.cycles, "time_s": snapshot.time_s,
                "scaled_timestep": np.nan if snapshot.scaled_timestep is None else snapshot.scaled_timestep,
@@ -37,8 +38,10 @@ def save_checkpoint(path: Path, snapshot: Snapshot, progress: dict) -> None:
     arrays = {name: np.asarray(value) for name, value in arrays.items()}
     arrays |= {f"progress.{name}": np.asarray(value) for name, value in progress.items()}
     arrays[DIGEST] = np.asarray(digest(arrays))
-    with uninterrupted(), replaced_atomically(path) as partial:
-        np.savez(partial, **arrays)
+    with uninterrupted(), replaced_atomically(path) as partial, open(partial, "wb") as file:
+        # to an open file: np.savez appends ".npz" to a file name without that suffix, and the
+        # file would then not be at the partial name that replaces ``path`` (ck.json, ck)
+        np.savez(file, **arrays)
 
 
 #: the name of the array holding the SHA-256 digest of a checkpoint's other arrays (:func:`digest`)

@@ -31,7 +31,8 @@ from drydem.engine.threads import threads_for, using_threads
 from drydem.engine.tracker import ContactTracker
 from drydem.errors import DivergenceError, ModelError
 from drydem.model.assembly import Model
-from drydem.model.parameters import DAMPING, MAX_CYCLES, G, InstanceOf, Range, check_fields
+from drydem.model.geometry import described, real_array
+from drydem.model.parameters import DAMPING, MAX_ACCELERATION_M_S2, MAX_CYCLES, G, InstanceOf, Range, check_fields, shown
 from drydem.model.rotation import matrices
 from drydem.model.state import QUATERNION_TOLERANCE, State, block_array, checked_state
 
@@ -57,6 +58,11 @@ TABLE_CHUNK = 256
 IMMOVABLE_INVERSE_MASS = 1e-300
 #: the ground acceleration of a table at rest (LoopSettings.ground_acceleration)
 AT_REST = np.zeros((0, 3))
+#: the rule of the scalars of a Snapshot given to Simulation.restore (it may come from a file):
+#: cycles run and model time, none or more; the timestep kept by mass scaling (None: none yet),
+#: above 0; the divergence test's farthest travel, none or more (each finite)
+SNAPSHOT_RULES = {"cycles": Range(0, None, integer=True), "time_s": Range(0.0, None, unit="s"),
+                  "scaled_timestep": Range(0.0, None, low_open=True, unit="s"), "farthest_travel_kg_m": Range(0.0, None, unit="kg m")}
 
 
 class StepStats(NamedTuple):
@@ -249,17 +255,21 @@ class Simulation:
         """Go back to a :meth:`snapshot` (its arrays are copied, so it can be restored again;
         its state is checked as :class:`Simulation`'s: a snapshot may come from a file,
         :mod:`drydem.engine.checkpoint`)."""
+        InstanceOf(Snapshot).check(snapshot, f"{self.model.source}: Simulation.restore snapshot")
         where = f"{self.model.source}: Simulation.restore: snapshot"
+        check_fields(snapshot, SNAPSHOT_RULES, where, optional=("scaled_timestep",))
         problem = snapshot_problem(snapshot.contacts, snapshot.neighbours, snapshot.active, self.model.n_blocks)
         if problem is not None:
             raise ModelError(f"{where} {problem}")
-        self.state = self.fit_state(snapshot.state)
+        # every part checked before any is taken: a refused snapshot leaves the simulation as it was
+        state, broad_state = self.fit_state(snapshot.state), self.fit_state(snapshot.broad_state, f"{where} broad")
+        self.state = state
         t = self.tracker
         t.contacts, t.neighbours = snapshot.contacts.copy(), snapshot.neighbours.copy()
-        t.broad_state, t.active = self.fit_state(snapshot.broad_state, f"{where} broad"), snapshot.active.copy()
-        self.cycles, self.time_s = snapshot.cycles, snapshot.time_s
-        self._farthest_travel_kg_m = snapshot.farthest_travel_kg_m
-        self._scaled_timestep = snapshot.scaled_timestep
+        t.broad_state, t.active = broad_state, snapshot.active.copy()
+        self.cycles, self.time_s = int(snapshot.cycles), float(snapshot.time_s)
+        self._farthest_travel_kg_m = float(snapshot.farthest_travel_kg_m)
+        self._scaled_timestep = None if snapshot.scaled_timestep is None else float(snapshot.scaled_timestep)
         self._update_inertia()
         self._first_velocity_dt = self.timestep  # the snapshot's velocities are of its own timestep
 
@@ -279,6 +289,7 @@ class Simulation:
         where = f"{self.model.source}: move"
         displacement = block_array(displacement, shape, f"{where} displacement")
         rotation = block_array(rotation, shape, f"{where} rotation")
+        gravity = self._gravity(gravity, "move")
         blocks = self.blocks
         self.state.velocity[:] = displacement * blocks.free[:, :3] / self.timestep
         self.state.angular_velocity[:] = rotation * blocks.free[:, 3:] / self.timestep
@@ -297,13 +308,17 @@ class Simulation:
 
         ``ground_acceleration`` (n, 3) m/s2: the table's acceleration at each of the cycles; the
         blocks then move in the frame of the table (:func:`drydem.engine.loop.cycle_loop`), so
-        their positions and velocities are relative to it. ModelError for ``n`` not in
-        :data:`CYCLE_COUNT`."""
-        CYCLE_COUNT.check(n, f"{self.model.source}: cycle n")
+        their positions and velocities are relative to it, each component at most
+        :data:`~drydem.model.parameters.MAX_ACCELERATION_M_S2` in magnitude. ModelError for ``n`` not in
+        :data:`CYCLE_COUNT`, and for each other argument of the wrong kind (``gravity``:
+        :meth:`_gravity`; ``stop``: None or a function)."""
+        where = f"{self.model.source}: cycle"
+        CYCLE_COUNT.check(n, f"{where} n")
+        n = int(n)  # a NumPy integer (np.uint64) does not mix with Python's ints in the slices below
+        gravity = self._gravity(gravity, "cycle")
+        _check_callable(stop, f"{where} stop", "called with no arguments; True ends the call")
         if ground_acceleration is not None:
-            ground_acceleration = np.ascontiguousarray(ground_acceleration, dtype=float)
-            if ground_acceleration.shape != (n, 3) or not np.all(np.isfinite(ground_acceleration)):
-                raise ModelError(f"ground_acceleration must be a finite ({n}, 3) array in m/s2, got shape {ground_acceleration.shape}")
+            ground_acceleration = _ground(ground_acceleration, n, f"{where} ground_acceleration")
         return self._run(gravity, n, criterion=loop.RATIO, limit=-1.0, criterion_name="none", ground=ground_acceleration, stop=stop)
 
     def cycle_to_equilibrium(
@@ -316,31 +331,57 @@ class Simulation:
         ``progress(cycles, stats)`` is called every few thousand cycles. ``stop()`` is asked
         whenever the compiled loop hands back (at every re-detection, so every few cycles
         while blocks move fast, and at least every CHUNK cycles): True ends the call there,
-        unconverged. Raises DivergenceError if the integration blows up.
+        unconverged. Raises DivergenceError if the integration blows up; ModelError for an
+        argument of the wrong kind (``gravity``: :meth:`_gravity`; ``progress`` and ``stop``:
+        None or a function) and when no movable block is left in the analysis.
         """
         solver = self.model.solver
+        where = f"{self.model.source}: cycle_to_equilibrium"
         if max_cycles is None:
             max_cycles = solver.max_cycles
-        MAX_CYCLES.check(max_cycles, f"{self.model.source}: cycle_to_equilibrium max_cycles")
+        MAX_CYCLES.check(max_cycles, f"{where} max_cycles")
+        max_cycles = int(max_cycles)  # a NumPy integer (np.uint64) does not mix with Python's ints in _run
+        gravity = self._gravity(gravity, "cycle_to_equilibrium")
+        _check_callable(progress, f"{where} progress", "called as progress(cycles, stats)")
+        _check_callable(stop, f"{where} stop", "called with no arguments; True ends the call")
+        if not (self.model.block_movable & self.active).any():
+            raise ModelError(f"{where}: no movable block is left in the analysis (every block is fixed or taken out by "
+                             "remove_blocks): there is nothing to cycle to equilibrium")
         criterion, limit = (loop.RATIO, solver.ratio) if solver.criterion == "ratio" else (loop.VELOCITY, solver.max_velocity)
         return self._run(
             gravity, max_cycles, criterion=criterion, limit=limit, criterion_name=solver.criterion, progress=progress, stop=stop
         )
 
+    def _gravity(self, gravity, method: str) -> np.ndarray:
+        """``gravity`` (m/s2) as a float64 (3,) array; ModelError naming ``method`` and gravity
+        unless it is three finite real numbers (an array, a list or a tuple: no texts, booleans
+        or complex numbers) of magnitude at most :data:`~drydem.model.parameters.MAX_ACCELERATION_M_S2`."""
+        where = f"{self.model.source}: {method} gravity"
+        g = real_array(gravity)
+        if g is None or g.shape != (3,):
+            given = described(gravity) if isinstance(gravity, np.ndarray) else shown(gravity)
+            raise ModelError(f"{where} = {given}: must be [gx, gy, gz], three real numbers in m/s2 "
+                             "(not texts, booleans or complex numbers)")
+        if not np.isfinite(g).all():
+            raise ModelError(f"{where} = {shown(g.tolist())}: must be three finite numbers in m/s2")
+        magnitude = float(np.linalg.norm(g))
+        if magnitude > MAX_ACCELERATION_M_S2:
+            raise ModelError(f"{where} = {shown(g.tolist())}: its magnitude {magnitude:.4g} m/s2 must be at most "
+                             f"{MAX_ACCELERATION_M_S2:g} m/s2 (about 100 g, past any earthquake record or shaking table)")
+        return g
+
     def _run(
-        self, gravity, max_cycles: int, *, criterion: int, limit: float, criterion_name: str, progress=None,
+        self, gravity: np.ndarray, max_cycles: int, *, criterion: int, limit: float, criterion_name: str, progress=None,
         energy_slack_j: float | None = None, blocks: BlockConstants | None = None, stop: Callable[[], bool] | None = None,
         ground: np.ndarray | None = None,
     ) -> EquilibriumResult:
         m = self.model
-        g = np.asarray(gravity, dtype=float)
-        if g.shape != (3,) or not np.all(np.isfinite(g)):
-            raise ModelError(f"gravity must be a finite [gx, gy, gz] in m/s2, got {gravity!r}")
+        g = gravity  # checked by the caller (_gravity)
         moving = m.block_movable & self.active
         moving_mass = float(m.block_mass[moving].sum())
         weight = float(np.linalg.norm(g)) * moving_mass / max(int(moving.sum()), 1)
         if criterion_name == "ratio" and weight == 0.0:
-            raise ModelError("the 'ratio' criterion needs gravity (it divides by the mean weight); use 'velocity'")
+            raise ModelError(f"{m.source}: the 'ratio' criterion needs gravity (it divides by the mean weight); use 'velocity'")
         joint = kernel_joint(m.joint)
         done, detections = 0, 0
         code, stats = loop.RUNNING, StepStats(np.inf, np.inf)
@@ -422,8 +463,9 @@ class Simulation:
 
     # -- diagnostics ----------------------------------------------------------------------
     def energy(self, *, gravity=(0.0, 0.0, -G)) -> dict[str, float]:
-        """Kinetic, gravitational and elastic energy, J (:func:`drydem.engine.diagnostics.energies`)."""
-        return diagnostics.energies(self.model, self.state, self.contacts, self.timestep, np.asarray(gravity, dtype=float))
+        """Kinetic, gravitational and elastic energy, J (:func:`drydem.engine.diagnostics.energies`);
+        ``gravity`` as :meth:`cycle` takes it (:meth:`_gravity`)."""
+        return diagnostics.energies(self.model, self.state, self.contacts, self.timestep, self._gravity(gravity, "energy"))
 
     def reactions(self, block: int) -> np.ndarray:
         """Total contact force (N, world frame) that the other blocks exert on ``block`` (its
@@ -443,6 +485,27 @@ def _checked(damping: Damping, model: Model) -> Damping:
                          f"joint ({model.joint.model} law): the dashpots are sized for a constant kn, and neither their damping ratio "
                          "nor the timestep's bound for them would hold as kn follows the stress; not supported yet")
     return Damping(*(float(value) for value in damping))
+
+
+def _check_callable(function, where: str, use: str) -> None:
+    """ModelError ``WHERE = VALUE: must be None or a function (USE)`` unless ``function`` is
+    None or callable: checked before the work, not found wrong when first called after it."""
+    if function is not None and not callable(function):
+        raise ModelError(f"{where} = {shown(function)}: must be None or a function ({use})")
+
+
+def _ground(acceleration, n: int, where: str) -> np.ndarray:
+    """The table's ``acceleration`` (m/s2) at each of ``n`` cycles as a float64 (n, 3) array
+    (:func:`~drydem.model.state.block_array`: finite real numbers, no texts, booleans or
+    complex numbers); ModelError naming ``where`` otherwise, or for a component beyond
+    :data:`~drydem.model.parameters.MAX_ACCELERATION_M_S2` (a ground motion's bound)."""
+    array = block_array(acceleration, (n, 3), f"{where} (m/s2)")
+    peak = np.abs(array)
+    if peak.size and peak.max() > MAX_ACCELERATION_M_S2:
+        i, k = np.unravel_index(int(np.argmax(peak)), peak.shape)
+        raise ModelError(f"{where}[{i}, {k}] = {array[i, k]:g} m/s2: each component must be at most {MAX_ACCELERATION_M_S2:g} m/s2 "
+                         "in magnitude (about 100 g, past any earthquake record or shaking table)")
+    return array
 
 
 def _planar(model: Model, engine: str | Callable) -> bool:

@@ -28,6 +28,14 @@ from drydem.errors import ModelError
 
 #: standard gravity, m/s2
 G = 9.81
+#: m/s2: the largest acceleration anything applies to the blocks, about 100 g: a ground motion's
+#: along each axis (past any earthquake record, whose largest peaks are about 4 g, and any
+#: shaking table, about 10 g; a record of 1e300 m/s2 overflowed the integration, which was then
+#: called diverged) and a Simulation's gravity (at the bound the own weight of a 1 m tall masonry
+#: block, 2e6 Pa, closes a joint of 3e7 Pa/m by 67 mm; a gravity of 1e6 m/s2 drove a 5 cm brick
+#: 2e8 m through its base). A tilt by load multiplier asks for g (tan theta, -1): within the bound
+#: up to theta = atan(1000 / 9.81) = 89.4 deg (TiltSettings.max_angle_deg)
+MAX_ACCELERATION_M_S2 = 1000.0
 #: the axes a tilting table may turn about (tilt and limit analyses' tilt_axis), and for each, the
 #: horizontal direction the lateral load acts along (0: x, 1: y)
 TILT_AXES = ("y", "x")

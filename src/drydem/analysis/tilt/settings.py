@@ -15,7 +15,7 @@ from drydem.analysis.drift import drift_limit_angles
 from drydem.engine.contacts import SubContacts
 from drydem.errors import ModelError
 from drydem.model.assembly import Model
-from drydem.model.parameters import FLAG, G, LOAD_DIRECTION, TILT_AXES, OneOf, Range, check_fields
+from drydem.model.parameters import FLAG, MAX_ACCELERATION_M_S2, G, LOAD_DIRECTION, TILT_AXES, OneOf, Range, check_fields
 from drydem.model.state import State
 
 LOADINGS = ("tilt", "multiplier")
@@ -102,6 +102,11 @@ class TiltSettings:
                 f"tilt setting increment_deg = {self.increment_deg!r} exceeds max_angle_deg = {self.max_angle_deg!r}: "
                 "no step would be taken"
             )
+        steepest = math.degrees(math.atan(MAX_ACCELERATION_M_S2 / G))
+        if self.loading == "multiplier" and self.max_angle_deg > steepest:
+            raise ModelError(f"tilt setting max_angle_deg = {self.max_angle_deg!r}: with loading = 'multiplier' at most "
+                             f"{steepest:.2f} deg (atan of a multiplier of {MAX_ACCELERATION_M_S2 / G:.0f}: a lateral load "
+                             f"g tan(theta) of at most {MAX_ACCELERATION_M_S2:g} m/s2, drydem.model.parameters.MAX_ACCELERATION_M_S2)")
 
     @property
     def load_direction(self) -> int:
