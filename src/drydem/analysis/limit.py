@@ -68,10 +68,11 @@ from scipy.spatial.transform import Rotation
 
 from drydem.engine.contacts import world_points
 from drydem.engine.tracker import ContactTracker
-from drydem.errors import DrydemError
+from drydem.errors import DrydemError, ModelError
 from drydem.model.assembly import Model
-from drydem.model.parameters import (FLAG, G, LOAD_DIRECTION, TILT_AXES, ContactSettings, InstanceOf, OneOf, Range, check_arguments,
+from drydem.model.parameters import (CALLBACK, FLAG, G, LOAD_DIRECTION, TILT_AXES, ContactSettings, InstanceOf, OneOf, Range, check_arguments,
                                      check_fields)
+from drydem.model.geometry import MAX_COORDINATE_M
 from drydem.model.state import State
 
 #: sides of the linearised friction pyramid for 3D contacts
@@ -106,6 +107,9 @@ SOLVER_NAMES = {"highs": "HiGHS's choice", "highs-ds": "dual simplex", "highs-ip
 #: equilibrium coefficients below this (round-off of the cross products, in the LP's units) are
 #: left out: HiGHS ignores |values| <= 1e-9 anyway, with a warning
 ZERO = 1e-9
+#: m, the displacement of a mechanism's fastest point that :meth:`LimitResult.mechanism_state`
+#: draws: finite, either way, within the coordinates a model may have (MAX_COORDINATE_M)
+MECHANISM_DISPLACEMENT = Range(-MAX_COORDINATE_M, MAX_COORDINATE_M, unit="m")
 
 
 class LimitAnalysisError(DrydemError):
@@ -165,7 +169,14 @@ class LimitResult:
         return math.degrees(math.atan(self.load_multiplier))
 
     def mechanism_state(self, model: Model, displacement_m: float) -> State:
-        """The blocks moved along the mechanism so that the fastest point moves ``displacement_m``."""
+        """The blocks moved along the mechanism so that the fastest point moves ``displacement_m``
+        (:data:`MECHANISM_DISPLACEMENT`; negative: the other way), ``model`` the one analysed (its
+        block count checked). ModelError naming the argument that is not what it must be."""
+        check_arguments("LimitResult.mechanism_state", {"model": InstanceOf(Model), "displacement_m": MECHANISM_DISPLACEMENT},
+                        model=model, displacement_m=displacement_m)
+        if model.n_blocks != len(self.velocity):
+            raise ModelError(f"LimitResult.mechanism_state model: {model.source} has {model.n_blocks} blocks, the result is of a "
+                             f"model of {len(self.velocity)}: give the model that was analysed")
         position = model.block_centroid + self.velocity * displacement_m
         quaternion = np.roll(Rotation.from_rotvec(self.angular_velocity * displacement_m).as_quat(), 1, axis=1)  # (w, x, y, z)
         return State(position, quaternion, np.zeros_like(position), np.zeros_like(position))
@@ -199,7 +210,8 @@ def limit_analysis(model: Model, settings: LimitSettings = LimitSettings(), *,
     nearly all the time is in the LP (a 60 x 60 brick wall, 3,631 blocks, 2 shared cores:
     contacts and assembly ~1 s, the associative LP ~90 s; it took ~15 min in the facet form; the
     3D building SMALL, 1,936 blocks: ~6 s by Clarabel, LARGE, 19,853 blocks: ~4 min)."""
-    check_arguments("limit_analysis", {"model": InstanceOf(Model), "settings": InstanceOf(LimitSettings)}, model=model, settings=settings)
+    check_arguments("limit_analysis", {"model": InstanceOf(Model), "settings": InstanceOf(LimitSettings), "on_progress": CALLBACK},
+                    model=model, settings=settings, on_progress=on_progress)
     progress = on_progress or (lambda stage: None)
     problem = _assemble(model, settings.tilt_axis, progress)
     joint, weight = model.joint, problem.weight

@@ -32,7 +32,9 @@ from drydem.engine.tracker import ContactTracker
 from drydem.errors import DivergenceError, ModelError
 from drydem.model.assembly import Model
 from drydem.model.geometry import described, real_array
-from drydem.model.parameters import DAMPING, MAX_ACCELERATION_M_S2, MAX_CYCLES, G, InstanceOf, Range, check_fields, shown
+from drydem.model.parameters import (
+    CALLBACK, DAMPING, MAX_ACCELERATION_M_S2, MAX_CYCLES, G, InstanceOf, Range, check_arguments, check_fields, shown,
+)
 from drydem.model.rotation import matrices
 from drydem.model.state import QUATERNION_TOLERANCE, State, block_array, checked_state
 
@@ -316,7 +318,7 @@ class Simulation:
         CYCLE_COUNT.check(n, f"{where} n")
         n = int(n)  # a NumPy integer (np.uint64) does not mix with Python's ints in the slices below
         gravity = self._gravity(gravity, "cycle")
-        _check_callable(stop, f"{where} stop", "called with no arguments; True ends the call")
+        CALLBACK.check(stop, f"{where} stop")
         if ground_acceleration is not None:
             ground_acceleration = _ground(ground_acceleration, n, f"{where} ground_acceleration")
         return self._run(gravity, n, criterion=loop.RATIO, limit=-1.0, criterion_name="none", ground=ground_acceleration, stop=stop)
@@ -342,8 +344,7 @@ class Simulation:
         MAX_CYCLES.check(max_cycles, f"{where} max_cycles")
         max_cycles = int(max_cycles)  # a NumPy integer (np.uint64) does not mix with Python's ints in _run
         gravity = self._gravity(gravity, "cycle_to_equilibrium")
-        _check_callable(progress, f"{where} progress", "called as progress(cycles, stats)")
-        _check_callable(stop, f"{where} stop", "called with no arguments; True ends the call")
+        check_arguments(where, {"progress": CALLBACK, "stop": CALLBACK}, progress=progress, stop=stop)
         if not (self.model.block_movable & self.active).any():
             raise ModelError(f"{where}: no movable block is left in the analysis (every block is fixed or taken out by "
                              "remove_blocks): there is nothing to cycle to equilibrium")
@@ -485,13 +486,6 @@ def _checked(damping: Damping, model: Model) -> Damping:
                          f"joint ({model.joint.model} law): the dashpots are sized for a constant kn, and neither their damping ratio "
                          "nor the timestep's bound for them would hold as kn follows the stress; not supported yet")
     return Damping(*(float(value) for value in damping))
-
-
-def _check_callable(function, where: str, use: str) -> None:
-    """ModelError ``WHERE = VALUE: must be None or a function (USE)`` unless ``function`` is
-    None or callable: checked before the work, not found wrong when first called after it."""
-    if function is not None and not callable(function):
-        raise ModelError(f"{where} = {shown(function)}: must be None or a function ({use})")
 
 
 def _ground(acceleration, n: int, where: str) -> np.ndarray:

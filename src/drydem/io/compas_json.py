@@ -54,11 +54,11 @@ from pathlib import Path
 
 import numpy as np
 
-from drydem.errors import ModelError
-from drydem.files import read_text
-from drydem.io.mesh import closed_convex_block
+from drydem.errors import DrydemError, ModelError
+from drydem.files import read_text, writable
+from drydem.io.mesh import check_reader_arguments, closed_convex_block
 from drydem.model.assembly import Block, Model
-from drydem.model.parameters import DENSITY, shown
+from drydem.model.parameters import DENSITY, FILE_PATH, InstanceOf, check_arguments, shown
 
 MESH_DTYPE = "compas.datastructures/Mesh"
 MODEL_DTYPE = "compas_model.models/Model"
@@ -92,8 +92,9 @@ class _Part:
 
 
 def read_compas(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], list[str]]:
-    """The blocks of a compas JSON file (coordinates times ``unit_m``, m) and notes on what was
-    assumed (names made unique). See the module docstring for the formats."""
+    """The blocks of a compas JSON file (coordinates times ``unit_m``, m: drydem.io.mesh.UNIT) and
+    notes on what was assumed (names made unique). See the module docstring for the formats."""
+    check_reader_arguments("read_compas", path, unit_m)
     path = Path(path)
     text = read_text(path, f"drydem reads {READS}")
     try:
@@ -140,10 +141,14 @@ def _unique(pairs: list[tuple[str, object]], source: str) -> dict:
 def write_compas(model: Model, path: str | Path) -> None:
     """Every block as a compas Mesh in a JSON list (see the module docstring), coordinates to
     full double precision so that the blocks read back as they were."""
+    check_arguments("write_compas", {"model": InstanceOf(Model), "path": FILE_PATH}, model=model, path=path)
     fixed = model.block_fixed.all(axis=1)
     meshes = [_mesh_json(name, shape, bool(is_fixed))
               for name, shape, is_fixed in zip(model.block_name, model.block_shape, fixed)]
-    Path(path).write_text(json.dumps(meshes, indent=1) + "\n", encoding="utf-8")
+    try:
+        writable(path).write_text(json.dumps(meshes, indent=1) + "\n", encoding="utf-8")
+    except OSError as exc:
+        raise DrydemError(f"{path}: cannot write: {exc.strerror or exc}") from None
 
 
 def _mesh_json(name: str, shape, fixed: bool) -> dict:

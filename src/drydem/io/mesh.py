@@ -31,10 +31,11 @@ from pathlib import Path
 
 import numpy as np
 
-from drydem.errors import ModelError
+from drydem.errors import DrydemError, ModelError
+from drydem.files import writable
 from drydem.model.geometry import convex_hull, far_vertex_problem
 from drydem.model.assembly import Block, Model
-from drydem.model.parameters import shown
+from drydem.model.parameters import FILE_PATH, InstanceOf, Range, check_arguments, shown
 
 #: vertices closer than this fraction of the mesh's size are one vertex
 MERGE_FRACTION = 1e-9
@@ -46,6 +47,12 @@ FIXED_MATERIAL, MOVABLE_MATERIAL = "fixed", "block"
 FIXED_SOLID = " [fixed]"
 #: binary STL: an 80-byte header, the triangle count, then 50 bytes per triangle
 STL_TRIANGLE = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
+#: the size of a file's coordinate unit, m (``unit_m`` of the readers: 0.001 for millimetres): a
+#: finite number > 0 (0 would collapse the blocks, a negative one mirror the model, nan and a
+#: boolean are no size)
+UNIT = Range(0.0, None, low_open=True, unit="m")
+#: the suffixes :func:`write_mesh` writes, and the format of each
+WRITTEN_SUFFIXES = {".obj": "OBJ", ".stl": "ASCII STL"}
 #: a whole number as OBJ writes one (int() also takes blanks and underscores)
 _INTEGER = re.compile(r"[+-]?[0-9]+")
 
@@ -89,9 +96,16 @@ def _free(names, taken: frozenset[str]):
     return (name for name in names if name not in taken)
 
 
+def check_reader_arguments(where: str, path, unit_m) -> None:
+    """ModelError naming ``WHERE`` (a reader) and its argument that is not what it must be: ``path``
+    a file path, ``unit_m`` (:data:`UNIT`) a number > 0: each reader checks them where it starts."""
+    check_arguments(where, {"path": FILE_PATH, "unit_m": UNIT}, path=path, unit_m=unit_m)
+
+
 def read_mesh(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], list[str]]:
-    """The blocks of an OBJ or STL file (coordinates times ``unit_m``, m) and notes on what the
-    file does not say (block names). See the module docstring for names and fixed blocks."""
+    """The blocks of an OBJ or STL file (coordinates times ``unit_m``, m: :data:`UNIT`) and notes
+    on what the file does not say (block names). See the module docstring for names and fixed blocks."""
+    check_reader_arguments("read_mesh", path, unit_m)
     path = Path(path)
     try:
         data = path.read_bytes()
@@ -148,15 +162,24 @@ def _renamed(path: Path, solid: _Solid, names: list[str]) -> list[str]:
 def write_mesh(model: Model, path: str | Path) -> None:
     """Every block as a named solid in one OBJ (its faces as polygons) or ASCII STL file (as
     triangles), by the suffix; fixed blocks marked as the module docstring says. Coordinates
-    are written to full double precision, so the blocks read back as they were."""
+    are written to full double precision, so the blocks read back as they were. ModelError for
+    another suffix (:data:`WRITTEN_SUFFIXES`) or an argument that is not what it must be."""
+    check_arguments("write_mesh", {"model": InstanceOf(Model), "path": FILE_PATH}, model=model, path=path)
     path = Path(path)
+    if path.suffix.lower() not in WRITTEN_SUFFIXES:
+        raise ModelError(f"write_mesh path = {shown(str(path))}: the suffix {path.suffix!r} is no mesh format written here; "
+                         f"give one of {', '.join(WRITTEN_SUFFIXES)} ({', '.join(WRITTEN_SUFFIXES.values())})")
     fixed = model.block_fixed.all(axis=1)
     for name in model.block_name:
         if name != name.strip() or len(name.splitlines()) != 1 or name.endswith(FIXED_SOLID):
             raise ModelError(f"{model.source}: block {name!r}: a mesh file cannot keep this name (empty, surrounding "
                              f"blanks, a line break, or ending in {FIXED_SOLID.strip()!r}); rename the block")
     writer = _obj_text if path.suffix.lower() == ".obj" else _stl_text
-    path.write_text(writer(model, fixed))
+    text = writer(model, fixed)
+    try:
+        writable(path).write_text(text, encoding="utf-8")  # as the readers read it, whatever the locale
+    except OSError as exc:
+        raise DrydemError(f"{path}: cannot write: {exc.strerror or exc}") from None
 
 
 def closed_convex_block(points: np.ndarray, faces: list[list[int]], *, name: str, where: str) -> Block:

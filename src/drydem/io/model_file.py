@@ -32,26 +32,29 @@ to the default); so are wrong types. Messages name the file, table, block and ke
 
 from __future__ import annotations
 
+import json
 from dataclasses import asdict
 from pathlib import Path
 from types import SimpleNamespace
 
-import json
-
 import numpy as np
 
-from drydem.errors import ModelError
-from drydem.files import read_toml
+from drydem.errors import DrydemError, ModelError
+from drydem.files import read_toml, writable
 from drydem.model.geometry import ConvexPolyhedron, box, convex_hull, face_interior_points
 from drydem.model.assembly import BLOCK_RULES, Block, Model, build_model
-from drydem.model.parameters import field_problems, is_number, refuse, shown
+from drydem.model.parameters import FILE_PATH, InstanceOf, check_arguments, field_problems, is_number, refuse, shown
 from drydem.model.tables import SECTIONS, errors_naming, no_unknown, parameters_from_dict
 
 BLOCK_KEYS = {"name", "fixed", "density", "box", "vertices"}
 
 
+
+
 def load_model(path: str | Path) -> Model:
-    """Read and validate a model file; raises ModelError naming the file and the culprit."""
+    """Read and validate a model file; raises ModelError naming the file and the culprit
+    (and ``path`` itself if it is no path)."""
+    check_arguments("load_model", {"path": FILE_PATH}, path=path)
     path = Path(path)
     data, _ = read_toml(path)
     return model_from_dict(data, source=str(path))
@@ -148,14 +151,22 @@ def save_model(model: Model, path: str | Path, *, header: str = "") -> None:
 
     Written by hand rather than with a TOML library: the schema has only scalars and numeric
     arrays, and this keeps one line per block (tomli-w splits every array over many lines).
+    ModelError naming an argument that is not what it must be; DrydemError naming ``path`` if it
+    cannot be written (a folder, in a folder that does not exist, no permission).
     """
+    check_arguments("save_model", {"model": InstanceOf(Model), "path": FILE_PATH, "header": InstanceOf(str)},
+                    model=model, path=path, header=header)
+    path = writable(path)
     data = model_to_dict(model)
     lines = [f"# {line}" for line in header.splitlines()]
     for table in ("material", *SECTIONS):
         lines += ["", f"[{table}]"] + [f"{k} = {_toml(v)}" for k, v in data[table].items()]
     for entry in data["block"]:
         lines += ["", "[[block]]"] + [f"{k} = {_toml(v)}" for k, v in entry.items()]
-    Path(path).write_text("\n".join(lines).lstrip("\n") + "\n")
+    try:
+        path.write_text("\n".join(lines).lstrip("\n") + "\n", encoding="utf-8")
+    except OSError as exc:
+        raise DrydemError(f"{path}: cannot write: {exc.strerror or exc}") from None
 
 
 def _rounded(values) -> list[float]:

@@ -8,7 +8,9 @@ from pathlib import Path
 
 from drydem.masonry import designs
 from drydem.errors import ModelError
+from drydem.model.parameters import TEXT, check_arguments
 from drydem.files import read_toml
+from drydem.io.mesh import UNIT
 from drydem.io.model_file import model_from_dict
 from drydem.model.assembly import Model, base_under, build_model
 from drydem.masonry.building import BUILDINGS, builtin_building
@@ -42,7 +44,13 @@ def load_target(target: str, *, unit_m: float = 1.0) -> Target:
     :data:`drydem.masonry.building.BUILDINGS`), a wall file or a
     model file (.toml), or geometry to import (.wrl, .obj, .stl, compas .json; coordinates times ``unit_m``
     give metres). Imported blocks stand on a fixed base block (drydem.model.assembly.base_under) and
-    get the default material and options. ModelError says what was tried."""
+    get the default material and options. ModelError says what was tried (or names the argument
+    that is not what it must be: ``target`` a text, ``unit_m`` drydem.io.mesh.UNIT)."""
+    if isinstance(target, os.PathLike):
+        target = os.fspath(target)
+    check_arguments("load_target", {"unit_m": UNIT}, unit_m=unit_m)
+    if not isinstance(target, str):
+        check_arguments("load_target", {"target": TEXT}, target=target)
     if not target.strip():
         raise ModelError(f"{target!r}: an empty TARGET; give a built-in wall ({', '.join(designs.names())}), "
                          f"building ({', '.join(BUILDINGS)}) or a file")

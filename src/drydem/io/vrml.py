@@ -33,7 +33,7 @@ from scipy.spatial.transform import Rotation
 
 from drydem.errors import ModelError
 from drydem.files import read_text
-from drydem.io.mesh import closed_convex_block
+from drydem.io.mesh import check_reader_arguments, closed_convex_block
 from drydem.model.assembly import MAX_BLOCKS, Block
 from drydem.model.parameters import shown
 
@@ -73,7 +73,9 @@ class Node:
 
 
 def read_vrml(path: str | Path, *, unit_m: float = 1.0) -> list[Block]:
-    """The blocks of a VRML file, coordinates times ``unit_m``; ModelError naming the file and line."""
+    """The blocks of a VRML file, coordinates times ``unit_m`` (m: drydem.io.mesh.UNIT); ModelError
+    naming the file and line."""
+    check_reader_arguments("read_vrml", path, unit_m)
     path = Path(path)
     text = read_text(path, EXPECTED)
     if not text.startswith("#VRML V2.0"):

@@ -27,23 +27,28 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from drydem.engine.contacts import SubContacts, world_points
-from drydem.errors import DrydemError
-from drydem.files import read_text, replaced_atomically
+from drydem.errors import DrydemError, ModelError
+from drydem.files import read_text, replaced_atomically, writable
 from drydem.model.assembly import Model
-from drydem.model.parameters import Range
+from drydem.model.geometry import described
+from drydem.model.parameters import FILE_PATH, InstanceOf, Range, check_arguments
 from drydem.model.rotation import matrices
-from drydem.model.state import State
+from drydem.model.state import State, checked_state
 
 OPEN, STUCK, SLIDING = 0, 1, 2
 
 
 def write_vtu(model: Model, path: str | Path, state: State | None = None, active: np.ndarray | None = None) -> Path:
-    """Write the blocks at ``state`` (default: as in the model file) to ``path`` (.vtu)."""
+    """Write the blocks at ``state`` (default: as in the model file) to ``path`` (.vtu);
+    ``active`` (default: all) says, block by block, which are still in the analysis. ModelError
+    naming an argument that is not what it must be: ``state`` a State of the model's blocks
+    (:func:`~drydem.model.state.checked_state`), ``active`` one boolean per block."""
     import meshio
     from scipy.spatial.transform import Rotation
 
-    state = state or State.at_rest(model.block_centroid)
-    active = np.ones(model.n_blocks, dtype=bool) if active is None else active
+    check_arguments("write_vtu", {"model": InstanceOf(Model), "path": FILE_PATH}, model=model, path=path)
+    state = State.at_rest(model.block_centroid) if state is None else checked_state(state, model.n_blocks, "write_vtu")
+    active = np.ones(model.n_blocks, dtype=bool) if active is None else _flags(active, model.n_blocks, "write_vtu active")
     points, cells, offset = [], [], 0
     for b, shape in enumerate(model.block_shape):
         points.append(model.world_vertices(b, state.position[b], state.quaternion[b]))
@@ -65,8 +70,23 @@ def write_vtu(model: Model, path: str | Path, state: State | None = None, active
     }
     sizes = np.cumsum([0] + [len(faces) for _, faces in blocks])
     cell_data = {name: [values[a:b] for a, b in zip(sizes[:-1], sizes[1:])] for name, values in fields.items()}
-    meshio.write(Path(path), meshio.Mesh(np.vstack(points), blocks, cell_data=cell_data), file_format="vtu")
+    try:
+        meshio.write(writable(path), meshio.Mesh(np.vstack(points), blocks, cell_data=cell_data), file_format="vtu")
+    except OSError as exc:
+        raise DrydemError(f"{path}: cannot write: {exc.strerror or exc}") from None
     return Path(path)
+
+
+def _flags(value, count: int, where: str) -> np.ndarray:
+    """``value`` as a (count,) boolean array; ModelError naming ``where`` unless it is one (an
+    array or a list of True and False: 0 and 1 are numbers, not flags)."""
+    try:
+        array = np.asarray(value)
+    except (TypeError, ValueError):  # ragged lists
+        array = None
+    if array is None or array.dtype != np.bool_ or array.shape != (count,):
+        raise ModelError(f"{where} must be a ({count},) array of booleans, one per block (True: in the analysis), got {described(value)}")
+    return array
 
 
 def write_contacts_vtu(model: Model, path: str | Path, state: State, sub: SubContacts) -> Path:

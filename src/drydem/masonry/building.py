@@ -57,6 +57,7 @@ A building of any other size is built from Python with a :class:`BuildingSpec`::
 from __future__ import annotations
 
 from dataclasses import dataclass
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -64,7 +65,8 @@ from drydem.errors import ModelError
 from drydem.masonry.layout import BRICK_SIZE, BrickSize
 from drydem.model.assembly import MAX_BLOCKS, Block, Model, build_model
 from drydem.model.geometry import box
-from drydem.model.parameters import G, ContactSettings, JointMaterial, Range, SolverSettings, check_fields, refuse
+from drydem.model.parameters import (G, ContactSettings, InstanceOf, JointMaterial, Range, SolverSettings, check_arguments, check_fields,
+                                     field_problems, refuse)
 
 #: the narrowest pier, in bricks: room for a lintel's bearing and a bonded brick beside it
 MIN_PIER_BRICKS = 2
@@ -284,6 +286,7 @@ def base_slab(spec: BuildingSpec) -> Block:
 def building_blocks(spec: BuildingSpec) -> list[Block]:
     """The fixed base slab, then the walls' blocks storey by storey, wall by wall, course by
     course, along the wall (names in the module docstring)."""
+    check_arguments("building_blocks", {"spec": InstanceOf(BuildingSpec)}, spec=spec)
     blocks = [base_slab(spec)]
     for storey in range(spec.storeys):
         for wall in range(4):
@@ -310,9 +313,18 @@ def building_model(spec: BuildingSpec, *, density: float = 1800.0, joint: JointM
     """The building as a 3D :class:`Model`: no supports (only the base slab is fixed); density
     kg/m3; the joint :data:`BUILDING_JOINT` by default; contacts and solver default to their defaults; ``source`` names it in messages (and
     in a tilting checkpoint's fingerprint). Save it as a model file with
-    :func:`drydem.io.model_file.save_model`."""
-    return build_model(building_blocks(spec), density=density, joint=joint, contacts=contacts or ContactSettings(),
-                       solver=solver or SolverSettings(), source=source)
+    :func:`drydem.io.model_file.save_model`. ModelError naming each argument that is not what it
+    must be (:data:`ARGUMENT_RULES`; contacts and solver may be None, for their defaults)."""
+    refuse(field_problems(SimpleNamespace(spec=spec, joint=joint, contacts=contacts, solver=solver), ARGUMENT_RULES,
+                          "building_model {}".format, optional=("contacts", "solver")))
+    return build_model(building_blocks(spec), density=density, joint=joint,
+                       contacts=ContactSettings() if contacts is None else contacts,
+                       solver=SolverSettings() if solver is None else solver, source=source)
+
+
+#: the rule of each argument of :func:`building_model`
+ARGUMENT_RULES = {"spec": InstanceOf(BuildingSpec), "joint": InstanceOf(JointMaterial), "contacts": InstanceOf(ContactSettings),
+                  "solver": InstanceOf(SolverSettings)}
 
 
 #: ~2,000 blocks (1,936): a two-storey model-scale house, 1.5 m x 1.25 m in plan (15 x 12.5 bricks of

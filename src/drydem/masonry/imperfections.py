@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -52,7 +53,7 @@ from drydem.masonry.layout import BrickSize, unit_box
 from drydem.masonry.walls import Wall
 from drydem.model.assembly import Block, Model, base_under, build_model
 from drydem.model.geometry import box, convex_hull
-from drydem.model.parameters import InstanceOf, OneOf, Range, check_arguments, check_fields, refuse
+from drydem.model.parameters import InstanceOf, OneOf, Range, check_arguments, check_fields, is_number, refuse
 from drydem.model.tables import errors_naming
 
 #: amplitudes are given in millimetres; geometry is in metres
@@ -101,8 +102,14 @@ class Imperfections:
         return self.height_sd_mm == 0 and self.flatness_sd_mm == 0 and self.misalignment_sd_mm == 0
 
     def scaled(self, factor: float) -> Imperfections:
-        """Every amplitude times ``factor`` (>= 0): with the same seed, the same draws scaled."""
-        Range(0.0, None).check(factor, "imperfections scale factor")
+        """Every amplitude times ``factor`` (>= 0, and small enough that every amplitude stays a
+        finite number): with the same seed, the same draws scaled. ModelError naming the factor."""
+        largest = max(self.height_sd_mm, self.flatness_sd_mm, self.misalignment_sd_mm)
+        limit = Range(0.0, sys.float_info.max / largest if largest > 0 else None)
+        problem = limit.problem(factor, "Imperfections.scaled factor")
+        if problem is not None:
+            raise ModelError(problem + (f" (beyond it the largest amplitude, {largest:g} mm, times the factor is no finite number)"
+                                        if largest > 0 and is_number(factor) and factor > 0 else ""))
         return dataclasses.replace(self, height_sd_mm=factor * self.height_sd_mm, flatness_sd_mm=factor * self.flatness_sd_mm,
                                    misalignment_sd_mm=factor * self.misalignment_sd_mm)
 

@@ -14,6 +14,7 @@ from collections import Counter
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import ClassVar
 
 import numpy as np
 
@@ -115,6 +116,8 @@ class Model:
     contact_tolerance: float
     in_plane: bool
     source: str = "<python>"
+    #: how a Model is made (its fields are derived from the blocks)
+    MADE_BY: ClassVar[str] = "drydem.build_model(blocks, density=...), or drydem.io.model_file.load_model(path)"
 
     def __post_init__(self):
         # frozen means its arrays too: a block mass of -5 set through model.block_mass[1] ran

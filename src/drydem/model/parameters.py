@@ -19,6 +19,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import numbers
+import os
 import sys
 from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, fields
@@ -151,10 +152,11 @@ class InstanceOf(Rule):
         return isinstance(value, self.kind)
 
     def problem(self, value, where: str) -> str | None:
-        """As :meth:`Rule.problem`; for a dict given for a dataclass, how to make one of it."""
+        """As :meth:`Rule.problem`; for a dict given for a dataclass, how to make one of it (its
+        ``MADE_BY`` where its own constructor is not the way, as a Model's)."""
         found = super().problem(value, where)
         if found is not None and isinstance(value, Mapping) and dataclasses.is_dataclass(self.kind):
-            found += f" (make one of the dict: {self.kind.__name__}(**values))"
+            found += f" (make one of the dict: {getattr(self.kind, 'MADE_BY', f'{self.kind.__name__}(**values)')})"
         return found
 
     def __str__(self) -> str:
@@ -181,6 +183,43 @@ class Text(Rule):
 
 #: the rule of every name
 TEXT = Text()
+
+
+class FilePath(Rule):
+    """A file's path as the API takes one: a str or a pathlib.Path (any os.PathLike giving a
+    str), not blank and without a NUL character (no file has such a name); not bytes, nor None
+    or a number (``Path(5)`` fails deep inside, with a bare TypeError)."""
+
+    def __contains__(self, value) -> bool:
+        if isinstance(value, os.PathLike):
+            try:
+                value = os.fspath(value)
+            except TypeError:
+                return False
+        return isinstance(value, str) and bool(value.strip()) and "\0" not in value
+
+    def __str__(self) -> str:
+        return "must be a file path (a str or a pathlib.Path, not empty)"
+
+
+#: the rule of every file path argument of the API
+FILE_PATH = FilePath()
+
+
+class Callback(Rule):
+    """What an analysis calls as it goes (``on_record``, ``on_progress``, ``on_frame``): None
+    (nothing to call) or a function, any callable; checked before the work, so that a wrong
+    one does not fail at its first call, after minutes of cycling."""
+
+    def __contains__(self, value) -> bool:
+        return value is None or callable(value)
+
+    def __str__(self) -> str:
+        return "must be None or a function (a callable)"
+
+
+#: the rule of every callback argument (Simulation's, the analyses')
+CALLBACK = Callback()
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,8 @@ from scipy.integrate import cumulative_trapezoid, trapezoid
 
 from drydem.errors import ModelError
 from drydem.files import read_text
-from drydem.model.parameters import G, OneOf, Range, Rule, check_fields, is_number, shown
+from drydem.model.geometry import described, real_array
+from drydem.model.parameters import TEXT, G, OneOf, Range, Rule, check_fields, field_problems, is_number, refuse, shown
 
 #: the analytic pulses of :func:`pulse`
 PULSES = ("one-sine", "sine", "ricker")
@@ -105,6 +106,21 @@ def _check(where: str, rules: dict[str, Rule], **values) -> None:
     check_fields(SimpleNamespace(**values), rules, where)
 
 
+class Notes(Rule):
+    """A motion's notes: a tuple (or list) of texts, one a note (a text itself would be its
+    characters, one a note)."""
+
+    def __contains__(self, value) -> bool:
+        return isinstance(value, (tuple, list)) and all(isinstance(note, str) for note in value)
+
+    def __str__(self) -> str:
+        return "must be a tuple of texts, one a note"
+
+
+#: the rule of each field of :class:`GroundMotion` that says what it is (``source`` may be None)
+DESCRIPTION_RULES = {"name": TEXT, "notes": Notes(), "source": TEXT}
+
+
 @dataclass(frozen=True, eq=False)
 class GroundMotion:
     """The shaking table's acceleration history.
@@ -132,11 +148,12 @@ class GroundMotion:
     source: str | None = None
 
     def __post_init__(self):
-        try:
-            time = np.array(self.time_s, dtype=float)
-            acceleration = np.array(self.acceleration_m_s2, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise ModelError(f"{self.label}: the times and accelerations must be numbers ({exc})") from None
+        refuse(field_problems(self, DESCRIPTION_RULES, "GroundMotion {}".format, optional=("source",)))
+        time, acceleration = real_array(self.time_s), real_array(self.acceleration_m_s2)
+        for field, array in (("time_s", time), ("acceleration_m_s2", acceleration)):
+            if array is None:
+                raise ModelError(f"{self.label}: {field} must be an array of real numbers (no texts, booleans or complex "
+                                 f"numbers), got {_given(getattr(self, field))}")
         problem = _samples_problem(time, acceleration)
         if problem is not None:
             raise ModelError(f"{self.label}: {problem}")
@@ -281,6 +298,12 @@ def _final_state(acceleration: np.ndarray, time: np.ndarray) -> np.ndarray:
     and :meth:`GroundMotion.displacement_m` do."""
     velocity = cumulative_trapezoid(acceleration, time, axis=0, initial=0.0)
     return np.stack([velocity[-1], trapezoid(velocity, time, axis=0)])
+
+
+def _given(value) -> str:
+    """A motion's samples as given, for a message: an array by its shape and type, a list itself
+    (shortened: it may be a record of a million samples)."""
+    return described(value) if isinstance(value, np.ndarray) else shown(value)
 
 
 def _samples_problem(time: np.ndarray, acceleration: np.ndarray) -> str | None:

@@ -52,6 +52,7 @@ from drydem.engine.damping import Damping
 from drydem.engine.simulation import Simulation
 from drydem.errors import DrydemError, ModelError
 from drydem.model.assembly import Model
+from drydem.model.parameters import CALLBACK, InstanceOf, check_arguments
 from drydem.model.rotation import rotation_vectors, turn_angles
 
 
@@ -62,7 +63,10 @@ def shake_analysis(
     """The time history of ``model`` under ``settings.motion`` (module docstring).
 
     ``on_progress(time_s, cycles, rotation_rad)`` and ``on_frame(frame)`` are called at every
-    output interval."""
+    output interval. Every argument is checked first: ModelError naming each one that is not
+    what it must be (a model, settings, None or a function)."""
+    check_arguments("shake_analysis", {"model": InstanceOf(Model), "settings": InstanceOf(ShakeSettings), "on_progress": CALLBACK,
+                                       "on_frame": CALLBACK}, model=model, settings=settings, on_progress=on_progress, on_frame=on_frame)
     start = time.perf_counter()
     if model.solver.mass_scaling:
         model = model.replace(solver=replace(model.solver, mass_scaling=False))

@@ -60,7 +60,8 @@ cycles: a step to equilibrium, the predictor, the blocks that fall out),
 """
 
 from drydem.analysis.tilt.protocol import (
-    CHECKPOINT_EVERY_S, FRAME_SAMPLING, TiltProtocol, replay_collapse, stand_under_gravity, step_up, tilt_analysis, tilt_result,
+    CHECKPOINT_EVERY, CHECKPOINT_EVERY_S, FRAME_SAMPLING, TiltProtocol, replay_collapse, stand_under_gravity, step_up, tilt_analysis,
+    tilt_result,
 )
 from drydem.analysis.tilt.run import TiltRun, Trace, elastic_closure, trial_limit
 from drydem.analysis.tilt.settings import (
@@ -70,7 +71,8 @@ from drydem.analysis.tilt.settings import (
 )
 
 __all__ = [
-    "CHECKPOINT_EVERY_S", "EQUILIBRIUM", "FELL", "FRAME_SAMPLING", "GAVE_UP", "LOADINGS", "MAX_CYCLES", "MAXIMUM_ANGLE", "MONITOR_FELL",
+    "CHECKPOINT_EVERY", "CHECKPOINT_EVERY_S", "EQUILIBRIUM", "FELL", "FRAME_SAMPLING", "GAVE_UP", "LOADINGS",
+    "MAX_CYCLES", "MAXIMUM_ANGLE", "MONITOR_FELL",
     "NO_EQUILIBRIUM", "NO_EQUILIBRIUM_UNDER_GRAVITY", "SETTING_RANGES", "STOP_DISPLACEMENT", "TILT_AXES", "UNSTABLE_UNDER_GRAVITY",
     "Frame", "Record", "TiltProtocol", "TiltResult", "TiltRun", "TiltSettings", "Trace", "check_loading", "elastic_closure", "monitor_index",
     "monitored_block", "replay_collapse", "stand_under_gravity", "step_up", "tilt_analysis", "tilt_result", "trial_limit",

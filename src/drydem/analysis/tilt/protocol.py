@@ -12,6 +12,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import SimpleNamespace
 
 from drydem.analysis.tilt import checkpointing
 from drydem.analysis.tilt.run import Saved, TiltRun, Trace, trial_limit
@@ -20,7 +21,7 @@ from drydem.analysis.tilt.settings import (
     UNSTABLE_UNDER_GRAVITY, Frame, Record, TiltResult, TiltSettings,
 )
 from drydem.model.assembly import Model
-from drydem.model.parameters import InstanceOf, check_arguments
+from drydem.model.parameters import CALLBACK, FILE_PATH, FLAG, InstanceOf, Range, field_problems, refuse
 
 #: states past collapse are sampled this many times per chunk_cycles (drydem tilt --vtk)
 FRAME_SAMPLING = 10
@@ -28,6 +29,14 @@ FRAME_SAMPLING = 10
 #: first always). Saving every step took a quarter of a one-block tilt's 4 s; a kill now costs
 #: at most this much work again
 CHECKPOINT_EVERY_S = 5.0
+
+
+#: s between two checkpoints: 0 saves at every equilibrium
+CHECKPOINT_EVERY = Range(0.0, None, unit="s")
+#: the rule of each argument of :func:`tilt_analysis` (``checkpoint`` may also be None)
+ARGUMENT_RULES = {"model": InstanceOf(Model), "settings": InstanceOf(TiltSettings), "on_record": CALLBACK,
+                  "on_progress": CALLBACK, "on_frame": CALLBACK, "checkpoint": FILE_PATH,
+                  "checkpoint_every_s": CHECKPOINT_EVERY, "resume": FLAG}
 
 
 @dataclass
@@ -165,7 +174,7 @@ def tilt_analysis(
     on_record: Callable[[Record], None] | None = None,
     on_progress: Callable[[float, int, float], None] | None = None,
     on_frame: Callable[[Frame], None] | None = None,
-    checkpoint: Path | None = None,
+    checkpoint: str | Path | None = None,
     checkpoint_every_s: float = CHECKPOINT_EVERY_S,
     resume: bool = False,
 ) -> TiltResult:
@@ -182,8 +191,17 @@ def tilt_analysis(
     ``resume`` too, it goes on from that file instead of starting over (ModelError naming the
     settings that differ if it is of another model or protocol), and ``on_record`` is first
     called for the equilibria the checkpoint holds.
+    Every argument is checked before the work (:data:`ARGUMENT_RULES`): ModelError naming each
+    one that breaks its rule (a callback that is no function, a checkpoint that is no path, a
+    resume without a checkpoint).
     """
-    check_arguments("tilt_analysis", {"model": InstanceOf(Model), "settings": InstanceOf(TiltSettings)}, model=model, settings=settings)
+    arguments = SimpleNamespace(model=model, settings=settings, on_record=on_record, on_progress=on_progress, on_frame=on_frame,
+                                checkpoint=checkpoint, checkpoint_every_s=checkpoint_every_s, resume=resume)
+    problems = field_problems(arguments, ARGUMENT_RULES, "tilt_analysis {}".format, optional=("checkpoint",))
+    if resume in FLAG and resume and checkpoint is None:
+        problems.append("tilt_analysis resume = True needs a checkpoint (the file to go on from)")
+    refuse(problems)
+    checkpoint = None if checkpoint is None else Path(checkpoint)
     start = time.perf_counter()
     run = TiltRun(model, settings, on_progress)
     fingerprint = checkpointing.fingerprint(model, settings)
