@@ -203,13 +203,6 @@ def test_a_gravity_of_real_numbers_in_a_list_tuple_or_array_is_taken(model, grav
     assert np.isfinite(sim.energy(gravity=gravity)["gravitational"])
 
 
-def test_the_gravity_bound_is_that_of_a_ground_motion():
-    from drydem.analysis.shake.motion import MAX_ACCELERATION_M_S2
-    from drydem.engine import simulation
-
-    assert simulation.MAX_ACCELERATION_M_S2 == MAX_ACCELERATION_M_S2
-
-
 @pytest.mark.parametrize("ground, words", [
     (np.ones((2, 3), complex), "got shape (2, 3) complex128"),
     (np.ones((2, 3), bool), "got shape (2, 3) bool"),

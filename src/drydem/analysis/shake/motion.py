@@ -25,7 +25,7 @@ from scipy.integrate import cumulative_trapezoid, trapezoid
 from drydem.errors import ModelError
 from drydem.files import read_text
 from drydem.model.geometry import described, real_array
-from drydem.model.parameters import TEXT, G, OneOf, Range, Rule, check_fields, field_problems, is_number, refuse, shown
+from drydem.model.parameters import MAX_ACCELERATION_M_S2, TEXT, G, OneOf, Range, Rule, check_fields, field_problems, is_number, refuse, shown
 
 #: the analytic pulses of :func:`pulse`
 PULSES = ("one-sine", "sine", "ricker")
@@ -51,10 +51,6 @@ REAL = Range(None, None)
 MIN_SAMPLE_STEP_S = 1e-6
 #: s: the longest motion: the longest analysed time (ShakeSettings duration_s), 11.6 days
 MAX_DURATION_S = 1e6
-#: m/s2: the largest acceleration of a motion, about 100 g: past any earthquake record (the
-#: largest recorded peaks are about 4 g) and shaking table (about 10 g); a record of 1e300
-#: m/s2 overflowed the integration, which was then called diverged
-MAX_ACCELERATION_M_S2 = 1000.0
 #: the least timesteps of the analysis in a pulse's period 1/f, or in a record's duration: the
 #: same least sampling as a pulse's own (PULSE_RULES samples_per_period), below which a peak
 #: is missed by more than 1 - cos(pi / 20) = 1.2 %
