@@ -11,7 +11,7 @@ from drydem.analysis.tilt import TiltSettings
 from drydem.errors import ModelError
 from drydem.io.model_file import load_model, save_model
 
-FIELDS = ("block_density", "block_mass", "block_inertia", "block_fixed", "block_radius")
+FIELDS = ("block_density", "block_mass", "block_inertia", "block_fixed", "block_radius", "block_centroid")
 
 
 @pytest.mark.parametrize("field", FIELDS)
@@ -32,11 +32,25 @@ def test_a_block_s_polyhedron_is_read_only_and_the_model_still_cycles():
     assert result.converged
 
 
+def test_a_polyhedron_made_of_the_caller_s_arrays_leaves_them_writable_and_holds_its_own():
+    shape = dd.box([0, 0, 0], BRICK)
+    vertices, normals = shape.vertices.copy(), shape.face_normals.copy()
+    made = dd.ConvexPolyhedron(vertices, shape.faces, normals, shape.volume, shape.centroid.copy(), shape.second_moment.copy())
+    vertices[0] = 99.0  # the caller's array is still its own
+    assert made.vertices[0].tolist() == shape.vertices[0].tolist() and not made.vertices.flags.writeable
+
+
 def test_numpy_texts_are_the_texts_they_equal():
     # np.str_('x') was refused as "must be one of ('y', 'x')", and kept, would be written as np.str_('x')
     settings = TiltSettings(tilt_axis=np.str_("x"))
     assert settings.tilt_axis == "x" and type(settings.tilt_axis) is str
     assert type(dd.SolverSettings(criterion=np.str_("velocity")).criterion) is str
+
+
+def test_a_source_that_is_no_utf8_file_name_is_a_text():
+    # a Latin-1 file name read on Linux (s\xe9isme.toml as 's\udce9isme.toml') names a model
+    blocks = [dd.Block(name="base", shape=dd.box([0, 0, -0.01], [0.1, 0.1, 0]), fixed=True), dd.Block(name="b", shape=dd.box([0, 0, 0], BRICK))]
+    assert dd.build_model(blocks, density=1800.0, source="s\udce9isme.toml").source == "s\udce9isme.toml"
 
 
 def test_a_block_name_utf8_cannot_write_is_refused_before_any_file(tmp_path):

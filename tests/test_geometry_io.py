@@ -191,6 +191,10 @@ def test_an_obj_object_named_twice_is_noted_with_the_names_of_its_blocks(tmp_pat
     blocks, notes = read_mesh(path)
     assert [b.name for b in blocks] == ["A", "A-2", "B"]
     assert notes == [f"{path}: the object 'A' (line 1): its faces close 2 surfaces, read as 2 blocks named 'A', 'A-2'"]
+    path.write_text("g default\n" + "".join(cube_obj(k) for k in range(12)))  # as exporters write: one group
+    blocks, notes = read_mesh(path)
+    assert len(blocks) == 12 and notes == [f"{path}: the group 'default' (line 1): its faces close 12 surfaces, read as 12 blocks "
+                                           "named 'default', 'default-2', 'default-3', 'default-4', 'default-5', ... (7 more)"]
 
 
 def test_obj_texture_and_normal_indices_and_a_named_endsolid_are_read(tmp_path):
@@ -199,10 +203,13 @@ def test_obj_texture_and_normal_indices_and_a_named_endsolid_are_read(tmp_path):
     assert [b.name for b in read_mesh(path)[0]] == ["A"]
     stl = tmp_path / "named.stl"
     triangle = "facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n"
-    for end in ("endsolid", "endsolid  a [fixed] ", "ENDSOLID a [fixed]"):
+    for end in ("endsolid", "endsolid  a [fixed] ", "ENDSOLID a [fixed]", "endsolid a  [fixed]"):
         stl.write_text(f"solid a [fixed]\n{triangle}{end}\n")
         with pytest.raises(ModelError, match="'a' \\(from line 2\\) is not a closed surface"):  # read to the end
             read_mesh(stl)
+    stl.write_text(f"solid\n{triangle}endsolid Mesh\n")  # a nameless solid closed by a named endsolid
+    with pytest.raises(ModelError, match="is not a closed surface"):  # read to the end, not refused at endsolid
+        read_mesh(stl)
 
 
 def test_an_imported_mesh_stands_on_a_fixed_base(tmp_path):

@@ -141,7 +141,7 @@ def _unknown_lost_block(arrays):
     # block 10**9 in the checkpoint's contacts: the compiled cycle read out of bounds and the
     # interpreter died of a segmentation fault on --resume
     (_pair_to_a_missing_block, "snapshot contacts.pairs: block numbers 0 to 1000000000, not within 0 to 1"),
-    (_negative_step, "next step of -1.0 deg: must be in [0, 90) and (0, 90)"),
+    (_negative_step, "its next step of -1.0 deg: must be in (0, 0.1] deg (the first step)"),
     (_unknown_lost_block, "its lost blocks ['nosuch']: not blocks of the model"),
     # a remembered equilibrium (the predictor's) turned about x: the in-plane model's planar
     # cycle reads a quaternion as a turn about y, and would have gone on from a wrong state

@@ -76,7 +76,7 @@ def assert_left_out(results, bad, message: str, good_row: str) -> str:
 BAD_TILT_FIELDS = {
     "string DLS angle": (("drift_limit_angles_deg", "0.01"), "abc", "summary drift_limit_angles_deg 0.01 = 'abc': must be a number in [0, 90] deg"),
     "list DLS angle": (("drift_limit_angles_deg", "0.01"), [1], "summary drift_limit_angles_deg 0.01 = [1]: must be a number in [0, 90] deg"),
-    "string increment": (("analysis", "increment_deg"), "tiny", "summary analysis increment_deg = 'tiny': must be a number in [0.001, 90) deg"),
+    "string increment": (("analysis", "increment_deg"), "tiny", "summary analysis increment_deg = 'tiny': must be a number in (0, 90) deg"),
     "string adaptive": (("analysis", "adaptive"), "yes", "summary analysis adaptive = 'yes': must be true or false"),
     "string points": (("model", "contacts", "points_per_length"), "many",
                       "summary model contacts points_per_length = 'many': must be an integer in [1, 32]"),
@@ -114,6 +114,13 @@ def test_a_limit_summary_with_an_unknown_method_or_a_bad_number_is_named_corrupt
     bad = run_folder(tmp_path, "bad", limit_summary() | {field: value})
     text = assert_left_out(tmp_path, bad, message, GOOD_LIMIT_ROW)
     assert "limit analyses: 1;" in text
+
+
+def test_a_run_made_with_a_step_below_today_s_least_is_still_a_result():
+    # the least tilt step became 0.001 deg; a run recorded before with 1e-4 deg is no corrupt record
+    from drydem.parametric.records import collapse_problem
+
+    assert collapse_problem("tilt", changed(tilt_summary(), ("analysis", "increment_deg"), 1e-4)) is None
 
 
 def test_a_limit_analysis_with_cohesion_may_find_any_multiplier_and_is_reported(tmp_path):

@@ -255,6 +255,17 @@ def test_an_interrupted_run_resumes_to_the_same_result(tmp_path):
     np.testing.assert_array_equal([r.ux_m for r in resumed.records], [r.ux_m for r in whole.records])
 
 
+def test_an_adaptive_run_whose_first_step_passes_90_deg_resumes_from_its_checkpoint(tmp_path):
+    """The first checkpoint is written at the stage 1 equilibrium with the first adaptive step
+    next, 16 increments: 96 deg for 6 deg ones; it was refused as out of (0, 90) on resume."""
+    model = stack_model([0.0055], joint=dd.JointMaterial(kn=1e8, ks=1e8, friction=0.5))
+    settings = TiltSettings(increment_deg=6.0, adaptive=True)
+    checkpoint = tmp_path / "checkpoint.npz"
+    first = tilt_analysis(model, settings, checkpoint=checkpoint, checkpoint_every_s=1e9)  # only the stage 1 one is written
+    again = tilt_analysis(model, settings, checkpoint=checkpoint, resume=True)
+    assert again.collapse_angle_deg == first.collapse_angle_deg and again.ended_by == first.ended_by
+
+
 def test_a_checkpoint_of_another_protocol_is_refused(tmp_path):
     model = slender([0.04], kn=1e8)
     checkpoint = tmp_path / "checkpoint.npz"
@@ -357,14 +368,17 @@ def test_a_block_turned_45_deg_topples_about_its_corner(axis):
 
 
 def test_a_multiplier_protocol_ends_where_its_load_is_the_largest_acceleration_a_simulation_takes():
-    """g (tan theta, -1) passes MAX_ACCELERATION_M_S2 past atan(1000 / 9.81) = 89.44 deg: a
-    max_angle beyond it is refused up front, not met mid-run; tilting the gravity is bounded anyway."""
-    from drydem.model.parameters import MAX_ACCELERATION_M_S2, G
+    """g (tan theta, -1), of magnitude g / cos theta, reaches MAX_ACCELERATION_M_S2 at
+    acos(9.81 / 1000) = 89.4379 deg: a max_angle beyond it is refused up front, and the gravity
+    at any angle within it is one a Simulation cycles with (tilting the gravity is bounded anyway)."""
+    from drydem.analysis.tilt.settings import STEEPEST_MULTIPLIER_DEG
 
-    steepest = math.degrees(math.atan(MAX_ACCELERATION_M_S2 / G))
-    assert np.linalg.norm(TiltSettings(loading="multiplier", max_angle_deg=89.4).gravity(89.4)) <= MAX_ACCELERATION_M_S2
-    with pytest.raises(dd.ModelError, match=rf"max_angle_deg = 89.5: with loading = 'multiplier' at most {steepest:.2f} deg"):
-        TiltSettings(loading="multiplier", max_angle_deg=89.5)
+    model = stack_model([0.0055], joint=dd.JointMaterial(kn=1e8, ks=1e8, friction=0.5))
+    steepest = math.floor(STEEPEST_MULTIPLIER_DEG * 1e9) / 1e9
+    gravity = TiltSettings(loading="multiplier", max_angle_deg=steepest).gravity(steepest)
+    assert dd.Simulation(model).cycle(1, gravity=gravity).cycles == 1
+    with pytest.raises(dd.ModelError, match=rf"max_angle_deg = {steepest + 1e-6!r}: with loading = 'multiplier' at most 89.4379"):
+        TiltSettings(loading="multiplier", max_angle_deg=steepest + 1e-6)
     assert TiltSettings(max_angle_deg=89.9).max_angle_deg == 89.9
 
 

@@ -367,7 +367,7 @@ class Simulation:
             raise ModelError(f"{where} = {shown(g.tolist())}: must be three finite numbers in m/s2")
         magnitude = float(np.linalg.norm(g))
         if magnitude > MAX_ACCELERATION_M_S2:
-            raise ModelError(f"{where} = {shown(g.tolist())}: its magnitude {magnitude:.4g} m/s2 must be at most "
+            raise ModelError(f"{where} = {shown(g.tolist())}: its magnitude {magnitude:.9g} m/s2 must be at most "
                              f"{MAX_ACCELERATION_M_S2:g} m/s2 (about 100 g, past any earthquake record or shaking table)")
         return g
 

@@ -152,11 +152,18 @@ def _renamed(path: Path, solid: _Solid, names: list[str]) -> list[str]:
     faces to one object of that name) and what the blocks are named."""
     if solid.name is None or len(names) < 2:
         return []
-    lines = ", ".join(map(str, solid.named))
+    lines = _first_few(list(map(str, solid.named)))
     given = (f"is named on lines {lines} (the name occurs {len(solid.named)} times in the file)" if len(solid.named) > 1
              else f"(line {lines})")
     return [f"{path}: the {solid.kind} {solid.name!r} {given}: its faces close {len(names)} surfaces, "
-            f"read as {len(names)} blocks named {', '.join(map(repr, names))}"]
+            f"read as {len(names)} blocks named {_first_few(list(map(repr, names)))}"]
+
+
+def _first_few(items: list[str], shown_items: int = 5) -> str:
+    """The first ``shown_items`` of ``items`` joined, and how many more (a note on 5,000 cubes in
+    one group listed every line and name: 113 kB)."""
+    more = len(items) - shown_items
+    return ", ".join(items[:shown_items]) + (f", ... ({more} more)" if more > 0 else "")
 
 
 def write_mesh(model: Model, path: str | Path) -> None:
@@ -374,8 +381,9 @@ def _read_ascii_stl(path: Path, text: str) -> tuple[list[list[float]], list[_Sol
 
 def _check_endsolid(closing: str, opened: str | None, line: int, where: str) -> None:
     """The rule on ``endsolid NAME``: the name, when given, is the one of the solid it closes
-    (``opened``, given on ``line``; a file cut inside the line, or solids mixed up, differ)."""
-    if closing and closing != opened:
+    (``opened``, given on ``line``; a file cut inside the line, or solids mixed up, differ), its
+    spacing aside; after a nameless ``solid``, any name is taken."""
+    if closing and opened and closing.split() != opened.split():  # spacing aside; a nameless solid takes any
         raise ModelError(f"{where}: endsolid names {shown(closing)}, but it closes the solid {shown(opened or '')} of line "
                          f"{line}: the name after endsolid, when given, must be the solid's (is the file cut short?)")
 

@@ -20,9 +20,9 @@ import numpy as np
 
 from drydem.errors import ModelError
 from drydem.model.boxes import bounds, pair_chunks
-from drydem.model.geometry import PARALLEL_SINE, ConvexPolyhedron, FlatGeometry, box
+from drydem.model.geometry import PARALLEL_SINE, ConvexPolyhedron, FlatGeometry, box, frozen_array
 from drydem.model.parameters import (
-    DENSITY, FLAG, TEXT, ContactDensity, ContactSettings, InstanceOf, JointMaterial, SolverSettings, Supports, check_arguments,
+    DENSITY, FLAG, NAME, TEXT, ContactDensity, ContactSettings, InstanceOf, JointMaterial, SolverSettings, Supports, check_arguments,
     check_fields, is_integer, shown,
 )
 from drydem.model.rotation import matrices
@@ -61,7 +61,7 @@ class Block:
 #: the rule of each field of :class:`Block` (a model file's [[block]] is held to the same): a name
 #: that messages can show, a polyhedron (drydem.box, drydem.convex_hull), the density in its range
 #: (None: the model's), fixed a switch ("no" is not False)
-BLOCK_RULES = {"name": TEXT, "shape": InstanceOf(ConvexPolyhedron), "density": DENSITY, "fixed": FLAG}
+BLOCK_RULES = {"name": NAME, "shape": InstanceOf(ConvexPolyhedron), "density": DENSITY, "fixed": FLAG}
 
 
 def base_under(blocks: list[Block], *, overhang_m: float = 0.05, depth_m: float = 0.01) -> Block:
@@ -122,7 +122,7 @@ class Model:
     def __post_init__(self):
         # frozen means its arrays too: a block mass of -5 set through model.block_mass[1] ran
         for name in ("block_density", "block_mass", "block_inertia", "block_fixed", "block_radius"):
-            getattr(self, name).flags.writeable = False
+            object.__setattr__(self, name, frozen_array(getattr(self, name)))
 
     @property
     def n_blocks(self) -> int:
@@ -130,8 +130,10 @@ class Model:
 
     @cached_property
     def block_centroid(self) -> np.ndarray:
-        """(nb, 3) centroids in the model file, m (computed once: do not modify it)."""
-        return np.array([s.centroid for s in self.block_shape])
+        """(nb, 3) centroids in the model file, m (computed once; read-only: the tilt measures
+        displacements from it, and a Simulation starts there). The other cached arrays below are
+        the engine's, handed to the compiled kernels, which are built for writable arrays."""
+        return frozen_array(np.array([s.centroid for s in self.block_shape]))
 
     @cached_property
     def block_movable(self) -> np.ndarray:

@@ -76,8 +76,9 @@ class ConvexPolyhedron:
         problem = _polyhedron_problem(self)
         if problem is not None:
             raise GeometryError(f"ConvexPolyhedron: {problem} (drydem.box and drydem.convex_hull make a block's polyhedron)")
-        for array in (self.vertices, self.face_normals, self.centroid, self.second_moment, *self.faces):
-            array.flags.writeable = False  # frozen, its arrays too (a model's blocks share them)
+        object.__setattr__(self, "faces", tuple(map(frozen_array, self.faces)))
+        for name in ("vertices", "face_normals", "centroid", "second_moment"):
+            object.__setattr__(self, name, frozen_array(getattr(self, name)))
 
     @cached_property
     def size(self) -> float:
@@ -257,6 +258,16 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
     faces = tuple(remap[f] for f in faces)
     volume, centroid, second = _mass_properties(vertices, faces)
     return ConvexPolyhedron(vertices, faces, normals, volume, centroid, second)
+
+
+def frozen_array(array: np.ndarray) -> np.ndarray:
+    """``array`` if it is read-only already (shared, as :data:`BOX_FACES`), else a read-only
+    copy of it: a frozen object's arrays, which the caller's own array does not change."""
+    if not array.flags.writeable:
+        return array
+    array = array.copy()
+    array.flags.writeable = False
+    return array
 
 
 def _check_name(name) -> None:

@@ -165,11 +165,27 @@ class InstanceOf(Rule):
 
 
 class Text(Rule):
-    """A text with a character other than white space, in Unicode characters that UTF-8 can
-    write (a name that messages, results and model files show; a lone surrogate, U+D800 alone, is none)."""
+    """A text with a character other than white space (a name that messages and results show)."""
 
     def __contains__(self, value) -> bool:
-        if not (isinstance(value, str) and value.strip()):
+        return isinstance(value, str) and bool(value.strip())
+
+    def __str__(self) -> str:
+        return "must be a non-empty text"
+
+
+#: the rule of every text (a source, a title: a file's name as the system gave it, even one
+#: that is not UTF-8, such as a Latin-1 name read on Linux as 's\udce9isme.toml', is one)
+TEXT = Text()
+
+
+class Name(Text):
+    """A block's name: a :class:`Text` of characters that UTF-8 can write, as every file drydem
+    writes a model to (TOML, OBJ, STL, VTK, compas JSON) holds it (a lone surrogate, U+D800
+    alone, is none: save_model and write_mesh failed on it with a UnicodeEncodeError)."""
+
+    def __contains__(self, value) -> bool:
+        if not super().__contains__(value):
             return False
         try:
             value.encode("utf-8")
@@ -181,8 +197,8 @@ class Text(Rule):
         return "must be a non-empty text of characters UTF-8 can write"
 
 
-#: the rule of every name
-TEXT = Text()
+#: the rule of every block name
+NAME = Name()
 
 
 class FilePath(Rule):

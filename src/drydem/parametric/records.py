@@ -21,7 +21,6 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from types import SimpleNamespace
 
-from drydem.analysis.tilt.settings import SETTING_RANGES
 from drydem.errors import DrydemError, ModelError
 from drydem.files import regular_file
 from drydem.model.parameters import FLAG, FRICTION, JOINT_RULES, JOINT_STIFFNESS, POINTS, OneOf, Range, Rule, field_problems
@@ -76,8 +75,11 @@ SUMMARY_RULES = {"tilt": {"collapse_angle_deg": ANGLE, "last_equilibrium_deg": A
                           "stable_under_gravity": FLAG, "wall_height_m": HEIGHT},
                  "limit": {"collapse_angle_deg": ANGLE, "load_multiplier": LOAD_MULTIPLIER, "method": OneOf(ANALYSES["limit"])}}
 SUMMARY_NOT_NULL = ("wall_height_m", "method")
+#: deg: a recorded run's tilt step, in (0, 90): runs made before the least step of
+#: drydem.analysis.tilt.settings.SETTING_RANGES (0.001 deg) are results still
+RECORDED_INCREMENT = Range(0.0, 90.0, low_open=True, high_open=True, unit="deg")
 #: the rules of a tilt summary's settings (``analysis``) that a run folder's record takes
-TILT_SETTING_RULES = {"increment_deg": SETTING_RANGES["increment_deg"], "adaptive": FLAG}
+TILT_SETTING_RULES = {"increment_deg": RECORDED_INCREMENT, "adaptive": FLAG}
 #: the rules of the tables of a summary's model (:func:`drydem.io.results.model_summary`) the
 #: report reads: the joint's (kn, ks and friction never null; its law's fields where given) and
 #: the contacts' points per length (null: not recorded)
@@ -86,7 +88,7 @@ MODEL_NOT_NULL = ("kn", "ks", "friction")
 #: the rules of a finished run's parameters (:class:`RunSpec`; each null: the target's own), those
 #: its model obeyed (every analysis) and its tilting settings (a tilting run's increment alone)
 SPEC_RULES = {"kn": JOINT_STIFFNESS, "ks": JOINT_STIFFNESS, "friction": FRICTION, "points": POINTS,
-              "increment_deg": SETTING_RANGES["increment_deg"]}
+              "increment_deg": RECORDED_INCREMENT}
 
 
 def read_record(path: str | Path) -> dict:

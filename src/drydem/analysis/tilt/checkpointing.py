@@ -99,9 +99,11 @@ def resume(run: TiltRun, checkpoint: Path, fingerprint: dict[str, str], records:
 
 def _restored(run: TiltRun, snapshot, saved: dict, records: list[Record]) -> tuple[float, float]:
     """:func:`resume` once the file is read and its fingerprint matches."""
-    theta, step = float(saved["theta_deg"]), float(saved["step_deg"])
-    if not (0.0 <= theta < 90.0 and 0.0 < step < 90.0):
-        raise ModelError(f"its last equilibrium at {theta!r} deg and next step of {step!r} deg: must be in [0, 90) and (0, 90)")
+    theta, step, settings = float(saved["theta_deg"]), float(saved["step_deg"]), run.settings
+    if not 0.0 <= theta <= settings.max_angle_deg + 1e-9:  # the protocol's own slack at the maximum angle
+        raise ModelError(f"its last equilibrium at {theta!r} deg: must be in [0, {settings.max_angle_deg:g}] deg (max_angle_deg)")
+    if not 0.0 < step <= settings.first_step() * (1 + 1e-9):  # an adaptive run's first step may pass 90 deg
+        raise ModelError(f"its next step of {step!r} deg: must be in (0, {settings.first_step():g}] deg (the first step)")
     lost = list(zip(saved["lost_blocks"].tolist(), saved["lost_tilt_deg"].tolist()))
     unknown = sorted({name for name, _ in lost} - set(run.model.block_name))
     if unknown:

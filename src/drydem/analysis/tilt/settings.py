@@ -48,6 +48,9 @@ SETTING_RANGES = {
 }
 
 
+#: deg: the largest tilt-equivalent of the load multiplier protocol, where its gravity
+#: g (tan theta, -1), of magnitude g / cos theta, reaches the largest acceleration a Simulation takes
+STEEPEST_MULTIPLIER_DEG = math.degrees(math.acos(G / MAX_ACCELERATION_M_S2))
 #: the rule of every field of TiltSettings but the monitored block's name
 SETTING_RULES = SETTING_RANGES | {"adaptive": FLAG, "loading": OneOf(LOADINGS), "predictor": FLAG, "tilt_axis": OneOf(TILT_AXES)}
 
@@ -102,11 +105,10 @@ class TiltSettings:
                 f"tilt setting increment_deg = {self.increment_deg!r} exceeds max_angle_deg = {self.max_angle_deg!r}: "
                 "no step would be taken"
             )
-        steepest = math.degrees(math.atan(MAX_ACCELERATION_M_S2 / G))
-        if self.loading == "multiplier" and self.max_angle_deg > steepest:
+        if self.loading == "multiplier" and self.max_angle_deg > STEEPEST_MULTIPLIER_DEG:
             raise ModelError(f"tilt setting max_angle_deg = {self.max_angle_deg!r}: with loading = 'multiplier' at most "
-                             f"{steepest:.2f} deg (atan of a multiplier of {MAX_ACCELERATION_M_S2 / G:.0f}: a lateral load "
-                             f"g tan(theta) of at most {MAX_ACCELERATION_M_S2:g} m/s2, drydem.model.parameters.MAX_ACCELERATION_M_S2)")
+                             f"{STEEPEST_MULTIPLIER_DEG:.6f} deg, where the gravity g (tan theta, -1), of magnitude g / cos theta, "
+                             f"reaches {MAX_ACCELERATION_M_S2:g} m/s2 (drydem.model.parameters.MAX_ACCELERATION_M_S2)")
 
     @property
     def load_direction(self) -> int:
