@@ -35,6 +35,7 @@ def fails(args: list[str], *messages: str):
     ("short.obj", CUBE.replace("v 1 1 0\n", "v 1 1\n"), "line 3: vertex 3: '1 1': a vertex needs three finite numbers"),
     ("text.obj", CUBE.replace("v 1 1 0\n", "v 1 one 0\n"), "line 3: vertex 3: '1 one 0': the coordinates must be numbers"),
     ("underscore.obj", CUBE.replace("v 1 1 0\n", "v 1 1_0 0\n"), "line 3: vertex 3: '1 1_0 0': the coordinates must be numbers"),
+    ("arabic.obj", CUBE.replace("v 1 1 0\n", "v 1 \u0661 0\n"), "line 3: vertex 3: '1 \u0661 0': the coordinates must be numbers"),
     ("missing.obj", CUBE.replace("f 5 6 7 8", "f 5 6 7 9"), "line 10: the face refers to vertex 9; the file has 8"),
     ("zero.obj", CUBE.replace("f 5 6 7 8", "f 0 6 7 8"), "line 10: the face refers to vertex 0, which does not exist"),
     ("back.obj", CUBE.replace("f 5 6 7 8", "f -9 6 7 8"), "line 10: the face refers to vertex -9, which does not exist"),

@@ -1,9 +1,10 @@
 """Files: read a TOML input with a message naming it; refuse an output path that cannot be written
-before any work, and write each file whole or not at all."""
+before any work, and write each file whole or not at all; the numbers text files hold."""
 
 from __future__ import annotations
 
 import os
+import re
 import signal
 import stat
 import tempfile
@@ -13,6 +14,13 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from drydem.errors import DrydemError, ModelError
+
+#: a number as the text files drydem reads write one (motion records, OBJ, STL, VRML): ASCII
+#: digits with an optional sign, point and exponent (Python's float() also takes 1_0 for 10, and
+#: the digits of other scripts); nan and inf match, for the readers to refuse as not finite
+PLAIN_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
+#: a whole number as those files write one (int() also takes 1_0, and other scripts' digits)
+PLAIN_INTEGER = re.compile(r"[+-]?[0-9]+")
 
 
 def plain_name_problem(name) -> str | None:

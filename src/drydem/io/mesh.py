@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from drydem.errors import DrydemError, ModelError
-from drydem.files import writable
+from drydem.files import PLAIN_INTEGER, PLAIN_NUMBER, writable
 from drydem.model.geometry import convex_hull, far_vertex_problem
 from drydem.model.assembly import Block, Model
 from drydem.model.parameters import FILE_PATH, InstanceOf, Range, check_arguments, shown
@@ -53,8 +53,6 @@ STL_TRIANGLE = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("at
 UNIT = Range(0.0, None, low_open=True, unit="m")
 #: the suffixes :func:`write_mesh` writes, and the format of each
 WRITTEN_SUFFIXES = {".obj": "OBJ", ".stl": "ASCII STL"}
-#: a whole number as OBJ writes one (int() also takes blanks and underscores)
-_INTEGER = re.compile(r"[+-]?[0-9]+")
 
 
 @dataclass
@@ -293,12 +291,12 @@ def _vertex_reference(word: str, where: str) -> int:
     """The vertex number of a face's vertex reference ``v``, ``v/vt``, ``v/vt/vn`` or ``v//vn``:
     whole numbers, the texture and normal ones (not used) left out or empty."""
     parts = word.split("/")
-    if not _INTEGER.fullmatch(parts[0]):
+    if not PLAIN_INTEGER.fullmatch(parts[0]):
         raise ModelError(f"{where}: {shown(word)} is not a vertex number")
     if len(parts) > 3:
         raise ModelError(f"{where}: {shown(word)}: a face's vertex is v, v/vt, v/vt/vn or v//vn, not {len(parts)} numbers")
     for what, part in zip(("texture", "normal"), parts[1:]):
-        if part and not _INTEGER.fullmatch(part):
+        if part and not PLAIN_INTEGER.fullmatch(part):
             raise ModelError(f"{where}: {shown(word)}: the {what} index {shown(part)} is not a whole number "
                              "(a face's vertex is v, v/vt, v/vt/vn or v//vn; vt and vn may be left out)")
     try:
@@ -390,9 +388,9 @@ def _check_endsolid(closing: str, opened: str | None, line: int, where: str) -> 
 
 def _coordinates(words: list[str], where: str) -> list[float]:
     """x, y, z: three finite numbers (an OBJ vertex may add w or a colour, which are not used),
-    written as numbers are (float() also takes 1_0 for 10)."""
+    each a :data:`~drydem.files.PLAIN_NUMBER` (float() also takes 1_0 for 10)."""
     try:
-        if any("_" in w for w in words[:3]):
+        if not all(PLAIN_NUMBER.fullmatch(w) for w in words[:3]):
             raise ValueError
         xyz = [float(w) for w in words[:3]]
     except ValueError:

@@ -32,7 +32,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from drydem.errors import ModelError
-from drydem.files import read_text
+from drydem.files import PLAIN_INTEGER, PLAIN_NUMBER, read_text
 from drydem.io.mesh import check_reader_arguments, closed_convex_block
 from drydem.model.assembly import MAX_BLOCKS, Block
 from drydem.model.parameters import shown
@@ -367,7 +367,7 @@ class _Parser:
 def _number(token: str) -> int | float:
     """A number token's value: an int where it is written as a whole number (an index, kept as
     written; past Python's limit on an integer's digits, a float), else a float."""
-    if re.fullmatch(r"[+-]?[0-9]+", token):
+    if PLAIN_INTEGER.fullmatch(token):
         try:
             return int(token)
         except ValueError:
@@ -381,9 +381,5 @@ def _is_value_number(value) -> bool:
 
 
 def _is_number(token: str) -> bool:
-    """Whether ``token`` is a number as VRML writes one (float() also takes 1_0 for 10)."""
-    try:
-        float(token)
-    except ValueError:
-        return False
-    return "_" not in token
+    """Whether ``token`` is a number as VRML writes one (:data:`~drydem.files.PLAIN_NUMBER`)."""
+    return PLAIN_NUMBER.fullmatch(token) is not None

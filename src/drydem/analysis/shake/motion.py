@@ -23,7 +23,7 @@ import numpy as np
 from scipy.integrate import cumulative_trapezoid, trapezoid
 
 from drydem.errors import ModelError
-from drydem.files import read_text
+from drydem.files import PLAIN_NUMBER, read_text
 from drydem.model.geometry import described, real_array
 from drydem.model.parameters import MAX_ACCELERATION_M_S2, TEXT, G, OneOf, Range, Rule, check_fields, field_problems, is_number, refuse, shown
 
@@ -36,10 +36,6 @@ TIME_COLUMN = "time_s"
 ACCELERATION_COLUMNS = ("acc_x_m_s2", "acc_y_m_s2", "acc_z_m_s2")
 #: the suffixes :func:`read_motion` knows (lower case)
 SUFFIXES = (".csv", ".at2")
-#: a number in a motion file: a plain decimal, ASCII digits with an optional sign, point and
-#: exponent (float() also takes 1_0 for 10, and digits of other scripts); nan and inf are read,
-#: then refused as not finite
-PLAIN_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
 
 #: any finite real: a negative scale factor or amplitude flips the motion
 REAL = Range(None, None)
@@ -342,7 +338,7 @@ def _read_text(path: Path, kind: str, encoding: str) -> str:
 
 def _number(text: str, where: str) -> float:
     """``text`` as a finite float; else a ModelError ``WHERE: 'TEXT' is not a (finite) number``:
-    a number of a motion file is a plain decimal (:data:`PLAIN_NUMBER`: not 1_0, 0x10, 1.0D-3)."""
+    a number of a motion file is a plain decimal (:data:`drydem.files.PLAIN_NUMBER`: not 1_0, 0x10, 1.0D-3)."""
     if not PLAIN_NUMBER.fullmatch(text.strip()):
         raise ModelError(f"{where}: {shown(text.strip())} is not a number (a plain decimal such as 0.01, -2 or 1.5e-3)")
     value = float(text)
