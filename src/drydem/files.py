@@ -102,6 +102,16 @@ def _missing_link(path: Path) -> str | None:
     return None
 
 
+def write_text(path: str | Path, text: str) -> Path:
+    """``text`` written to ``path`` in UTF-8 (as drydem's readers read it, whatever the locale),
+    once :func:`writable` says it can be, and whole or not at all (:func:`replaced_atomically`:
+    a DrydemError naming ``path`` and the reason if the system refuses)."""
+    path = writable(path)
+    with replaced_atomically(path) as partial:
+        partial.write_text(text, encoding="utf-8")
+    return path
+
+
 @contextmanager
 def replaced_atomically(path: str | Path):
     """Yield a temporary file name beside ``path`` (:func:`partial_name`; same suffix: writers

@@ -54,8 +54,8 @@ from pathlib import Path
 
 import numpy as np
 
-from drydem.errors import DrydemError, ModelError
-from drydem.files import read_text, writable
+from drydem.errors import ModelError
+from drydem.files import read_text, write_text
 from drydem.io.mesh import check_reader_arguments, closed_convex_block
 from drydem.model.assembly import Block, Model
 from drydem.model.parameters import DENSITY, FILE_PATH, InstanceOf, check_arguments, shown
@@ -145,10 +145,7 @@ def write_compas(model: Model, path: str | Path) -> None:
     fixed = model.block_fixed.all(axis=1)
     meshes = [_mesh_json(name, shape, bool(is_fixed))
               for name, shape, is_fixed in zip(model.block_name, model.block_shape, fixed)]
-    try:
-        writable(path).write_text(json.dumps(meshes, indent=1) + "\n", encoding="utf-8")
-    except OSError as exc:
-        raise DrydemError(f"{path}: cannot write: {exc.strerror or exc}") from None
+    write_text(path, json.dumps(meshes, indent=1) + "\n")
 
 
 def _mesh_json(name: str, shape, fixed: bool) -> dict:

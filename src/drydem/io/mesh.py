@@ -31,8 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-from drydem.errors import DrydemError, ModelError
-from drydem.files import PLAIN_INTEGER, PLAIN_NUMBER, writable
+from drydem.errors import ModelError
+from drydem.files import PLAIN_INTEGER, PLAIN_NUMBER, write_text
 from drydem.model.geometry import convex_hull, far_vertex_problem
 from drydem.model.assembly import Block, Model
 from drydem.model.parameters import FILE_PATH, InstanceOf, Range, check_arguments, shown
@@ -181,10 +181,7 @@ def write_mesh(model: Model, path: str | Path) -> None:
                              f"blanks, a line break, or ending in {FIXED_SOLID.strip()!r}); rename the block")
     writer = _obj_text if path.suffix.lower() == ".obj" else _stl_text
     text = writer(model, fixed)
-    try:
-        writable(path).write_text(text, encoding="utf-8")  # as the readers read it, whatever the locale
-    except OSError as exc:
-        raise DrydemError(f"{path}: cannot write: {exc.strerror or exc}") from None
+    write_text(path, text)
 
 
 def closed_convex_block(points: np.ndarray, faces: list[list[int]], *, name: str, where: str) -> Block:

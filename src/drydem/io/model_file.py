@@ -39,8 +39,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from drydem.errors import DrydemError, ModelError
-from drydem.files import read_toml, writable
+from drydem.errors import ModelError
+from drydem.files import read_toml, writable, write_text
 from drydem.model.geometry import ConvexPolyhedron, box, convex_hull, face_interior_points
 from drydem.model.assembly import BLOCK_RULES, Block, Model, build_model
 from drydem.model.parameters import FILE_PATH, InstanceOf, check_arguments, field_problems, is_number, refuse, shown
@@ -163,10 +163,7 @@ def save_model(model: Model, path: str | Path, *, header: str = "") -> None:
         lines += ["", f"[{table}]"] + [f"{k} = {_toml(v)}" for k, v in data[table].items()]
     for entry in data["block"]:
         lines += ["", "[[block]]"] + [f"{k} = {_toml(v)}" for k, v in entry.items()]
-    try:
-        path.write_text("\n".join(lines).lstrip("\n") + "\n", encoding="utf-8")
-    except OSError as exc:
-        raise DrydemError(f"{path}: cannot write: {exc.strerror or exc}") from None
+    write_text(path, "\n".join(lines).lstrip("\n") + "\n")
 
 
 def _rounded(values) -> list[float]:

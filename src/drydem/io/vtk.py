@@ -70,10 +70,8 @@ def write_vtu(model: Model, path: str | Path, state: State | None = None, active
     }
     sizes = np.cumsum([0] + [len(faces) for _, faces in blocks])
     cell_data = {name: [values[a:b] for a, b in zip(sizes[:-1], sizes[1:])] for name, values in fields.items()}
-    try:
-        meshio.write(writable(path), meshio.Mesh(np.vstack(points), blocks, cell_data=cell_data), file_format="vtu")
-    except OSError as exc:
-        raise DrydemError(f"{path}: cannot write: {exc.strerror or exc}") from None
+    with replaced_atomically(writable(path)) as partial:
+        meshio.write(partial, meshio.Mesh(np.vstack(points), blocks, cell_data=cell_data), file_format="vtu")
     return Path(path)
 
 
