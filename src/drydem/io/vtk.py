@@ -31,7 +31,7 @@ from drydem.errors import DrydemError, ModelError
 from drydem.files import read_text, replaced_atomically, writable
 from drydem.model.assembly import Model
 from drydem.model.geometry import described
-from drydem.model.parameters import FILE_PATH, InstanceOf, Range, check_arguments
+from drydem.model.parameters import FILE_PATH, InstanceOf, Range, check_arguments, shown
 from drydem.model.rotation import matrices
 from drydem.model.state import State, checked_state
 
@@ -208,6 +208,23 @@ def frames_csv_rows(index: Path) -> list[dict]:
         raise DrydemError(f"{index}: line {reader.line_num}: not CSV ({exc})") from None
 
 
+#: the largest frame number: 9 digits, more frames than any series holds (each is a file)
+MAX_FRAME = 999_999_999
+
+
+def frame_number(text: str) -> int:
+    """The frame number ``text`` of a row of ``frames.csv``: digits 0-9 (int() also takes +1, 1_0
+    and digits of other scripts), at most :data:`MAX_FRAME`; a ValueError saying the rule."""
+    frame = int(text)
+    if frame < 0:
+        raise ValueError(f"frame {shown(frame)}: must be an integer >= 0")
+    if not (text.isascii() and text.isdigit()):
+        raise ValueError(f"frame {shown(text)}: must be written in the digits 0-9, as drydem writes it")
+    if frame > MAX_FRAME:
+        raise ValueError(f"frame {shown(text)}: must be at most {MAX_FRAME} (more frames than any series holds)")
+    return frame
+
+
 def _equilibrium_rows(index: Path) -> list[tuple[int, str, float, float]]:
     """The equilibrium frames listed in a series' ``frames.csv`` (none if it is missing);
     DrydemError naming the file and line if it is not one drydem wrote (:func:`frames_csv_rows`)."""
@@ -216,7 +233,7 @@ def _equilibrium_rows(index: Path) -> list[tuple[int, str, float, float]]:
     rows = []
     for line, row in enumerate(frames_csv_rows(index), start=2):
         try:
-            frame = (int(row["frame"]), row["kind"], float(row["tilt_deg"]), float(row["ux_m"]))
+            frame = (frame_number(row["frame"]), row["kind"], float(row["tilt_deg"]), float(row["ux_m"]))
         except (KeyError, TypeError, ValueError) as exc:
             raise DrydemError(f"{index}: line {line}: not a frame of drydem tilt --vtk ({exc!r})") from None
         if frame[1] == "equilibrium" and frame[0] == len(rows):

@@ -33,7 +33,7 @@ import numpy as np
 
 from drydem.errors import DrydemError
 from drydem.files import regular_file, replaceable, replaced_atomically
-from drydem.io.vtk import FRAME_KINDS, LOAD_AXES, frames_csv_rows
+from drydem.io.vtk import FRAME_KINDS, LOAD_AXES, frame_number, frames_csv_rows
 from drydem.model.parameters import shown
 from drydem.report.plots import draw_displacements, draw_faces_3d, frame_3d, new_figure, one_deep, xz_outline
 
@@ -72,8 +72,6 @@ FRAME_FILE = re.compile(r"blocks_\d{4,}\.vtu")
 #: is missing from a series written before it was recorded
 FRAMES_COLUMNS = {"tilt": ("frame", "kind", "tilt_deg", "ux_m", "load_direction"),
                   "shake": ("frame", "time_s", "ux_m", "load_direction")}
-#: the largest frame number: 9 digits, more frames than any series holds (each is a file)
-MAX_FRAME = 999_999_999
 
 
 def series_frames(folder: Path, *, note: Callable[[str], None] | None = None) -> list[VideoFrame]:
@@ -122,7 +120,7 @@ def _check_columns(index: Path, header: list[str]) -> None:
 
 def _check_increasing(index: Path, rows: list[dict]) -> None:
     """A DrydemError naming the line of ``frames.csv`` whose frame number is not after the one
-    before (each checked by :func:`_frame_number`): drydem numbers a series' frames 0, 1, 2, ...,
+    before (each checked by :func:`~drydem.io.vtk.frame_number`): drydem numbers a series' frames 0, 1, 2, ...,
     so a frame listed twice or out of order is not a series it wrote."""
     for line, (before, row) in enumerate(zip(rows, rows[1:]), start=3):
         if int(row["frame"]) <= int(before["frame"]):
@@ -130,28 +128,15 @@ def _check_increasing(index: Path, rows: list[dict]) -> None:
                               "frame numbers must increase strictly, as drydem numbers a series' frames (0, 1, 2, ...)")
 
 
-def _frame_number(text: str) -> int:
-    """The frame number ``text`` of a row of ``frames.csv``: digits 0-9 (int() also takes +1, 1_0
-    and digits of other scripts), at most :data:`MAX_FRAME`; a ValueError saying the rule."""
-    frame = int(text)
-    if frame < 0:
-        raise ValueError(f"frame {shown(frame)}: must be an integer >= 0")
-    if not (text.isascii() and text.isdigit()):
-        raise ValueError(f"frame {shown(text)}: must be written in the digits 0-9, as drydem writes it")
-    if frame > MAX_FRAME:
-        raise ValueError(f"frame {shown(text)}: must be at most {MAX_FRAME} (more frames than any series holds)")
-    return frame
-
-
 def _listed_frame(index: Path, line: int, row: dict) -> tuple[Path, str, int]:
     """A row of ``frames.csv`` (at ``line``): its frame's file, caption and load direction; a
     DrydemError naming the file and line if the row is not one drydem writes (as many values
-    as the header has columns, a frame number of :func:`_frame_number`)."""
+    as the header has columns, a frame number of :func:`~drydem.io.vtk.frame_number`)."""
     try:
         if None in row or None in row.values():  # csv.DictReader: values past the header, or too few
             values = sum(value is not None for name, value in row.items() if name is not None) + len(row.get(None, []))
             raise ValueError(f"{values} values; the header has {len(row) - (None in row)} columns")
-        frame = _frame_number(row["frame"])
+        frame = frame_number(row["frame"])
         load_direction = _load_direction(row)
         return index.parent / f"blocks_{frame:04d}.vtu", _caption(row, load_direction), load_direction
     except (KeyError, TypeError, ValueError) as exc:
