@@ -31,7 +31,7 @@ from drydem.engine.threads import threads_for, using_threads
 from drydem.engine.tracker import ContactTracker
 from drydem.errors import DivergenceError, ModelError
 from drydem.model.assembly import Model
-from drydem.model.geometry import described, real_array
+from drydem.model.geometry import given, real_array
 from drydem.model.parameters import (
     CALLBACK, DAMPING, MAX_ACCELERATION_M_S2, MAX_CYCLES, G, InstanceOf, Range, check_arguments, check_fields, shown,
 )
@@ -360,8 +360,7 @@ class Simulation:
         where = f"{self.model.source}: {method} gravity"
         g = real_array(gravity)
         if g is None or g.shape != (3,):
-            given = described(gravity) if isinstance(gravity, np.ndarray) else shown(gravity)
-            raise ModelError(f"{where} = {given}: must be [gx, gy, gz], three real numbers in m/s2 "
+            raise ModelError(f"{where} = {given(gravity)}: must be [gx, gy, gz], three real numbers in m/s2 "
                              "(not texts, booleans or complex numbers)")
         if not np.isfinite(g).all():
             raise ModelError(f"{where} = {shown(g.tolist())}: must be three finite numbers in m/s2")

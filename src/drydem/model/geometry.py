@@ -170,6 +170,12 @@ def _floats(value) -> bool:
     return isinstance(value, np.ndarray) and value.dtype.kind == "f" and bool(np.isfinite(value).all())
 
 
+def given(value) -> str:
+    """``value`` as given, for a message: an array by its shape and dtype (:func:`described`),
+    anything else itself, shortened (a list of three numbers is better shown than shaped)."""
+    return described(value) if isinstance(value, np.ndarray) else shown(value)
+
+
 def described(value) -> str:
     """What ``value`` is, for a message: an array's shape and dtype, a list's shape, another
     value itself (shortened: it may be a megabyte of numbers)."""

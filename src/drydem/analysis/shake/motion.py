@@ -24,7 +24,7 @@ from scipy.integrate import cumulative_trapezoid, trapezoid
 
 from drydem.errors import ModelError
 from drydem.files import PLAIN_NUMBER, read_text
-from drydem.model.geometry import described, real_array
+from drydem.model.geometry import given, real_array
 from drydem.model.parameters import MAX_ACCELERATION_M_S2, TEXT, G, OneOf, Range, Rule, check_fields, field_problems, is_number, refuse, shown
 
 #: the analytic pulses of :func:`pulse`
@@ -145,7 +145,7 @@ class GroundMotion:
         for field, array in (("time_s", time), ("acceleration_m_s2", acceleration)):
             if array is None:
                 raise ModelError(f"{self.label}: {field} must be an array of real numbers (no texts, booleans or complex "
-                                 f"numbers), got {_given(getattr(self, field))}")
+                                 f"numbers), got {given(getattr(self, field))}")
         problem = _samples_problem(time, acceleration)
         if problem is not None:
             raise ModelError(f"{self.label}: {problem}")
@@ -290,12 +290,6 @@ def _final_state(acceleration: np.ndarray, time: np.ndarray) -> np.ndarray:
     and :meth:`GroundMotion.displacement_m` do."""
     velocity = cumulative_trapezoid(acceleration, time, axis=0, initial=0.0)
     return np.stack([velocity[-1], trapezoid(velocity, time, axis=0)])
-
-
-def _given(value) -> str:
-    """A motion's samples as given, for a message: an array by its shape and type, a list itself
-    (shortened: it may be a record of a million samples)."""
-    return described(value) if isinstance(value, np.ndarray) else shown(value)
 
 
 def _samples_problem(time: np.ndarray, acceleration: np.ndarray) -> str | None:
