@@ -61,6 +61,7 @@ def _threads(ctx, param, value):
 threads_option = click.option("--threads", type=int, callback=_threads, expose_value=False,
                               help="Most threads for the compiled kernels (default: all cores; a small model takes fewer).")
 
+
 def ruled(rule: Rule | Callable[[], Rule], sets: str):
     """An option's callback: its value if ``rule`` (drydem.model.parameters; or a function
     giving it, for a rule whose module imports NumPy, which ``drydem --help`` does not) allows

@@ -49,8 +49,6 @@ from drydem.model.tables import SECTIONS, errors_naming, no_unknown, parameters_
 BLOCK_KEYS = {"name", "fixed", "density", "box", "vertices"}
 
 
-
-
 def load_model(path: str | Path) -> Model:
     """Read and validate a model file; raises ModelError naming the file and the culprit
     (and ``path`` itself if it is no path)."""
