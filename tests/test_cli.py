@@ -21,6 +21,33 @@ def test_check_settle_converges_and_reports_the_settlement():
     assert "equilibrium     converged" in result.output and "settlement" in result.output
 
 
+SIZES = """
+[[block]]
+name = "base"
+fixed = true
+box = { min = [-6, -6, -1], max = [6, 6, 0] }
+[[block]]
+name = "big"
+box = { min = [-5, -5, 0], max = [5, 5, 10] }
+[[block]]
+name = "small"
+box = { min = [0, 0, 10], max = [SIDE, SIDE, 10.SIDE_Z] }
+"""
+
+
+@pytest.mark.parametrize("side, warned", [("0.001", True), ("0.5", False)])
+def test_check_warns_when_block_masses_span_more_than_the_ratio_criterion_resolves(tmp_path, side, warned):
+    """A 10 m block under a 1 mm one (masses 1e12 apart): the ratio test, over the heavy block's
+    weight with the light one's timestep, called such a model at rest while it moved at 0.11 m/s
+    (README, "Equilibrium"); the warning names the spread and the velocity criterion."""
+    path = tmp_path / "sizes.toml"
+    path.write_text(SIZES.replace("10.SIDE_Z", str(10 + float(side))).replace("SIDE", side))
+    result = CliRunner().invoke(main, ["check", str(path)])
+    assert result.exit_code == 0, result.output
+    assert ("the movable blocks' masses span 1.0e+12" in result.output and 'criterion = "velocity"' in result.output) == warned
+    assert ("masses span" in result.output) == warned
+
+
 def test_bad_model_exits_with_its_message(tmp_path):
     path = tmp_path / "broken.toml"
     path.write_text("[joint]\nkn = -1.0\n[[block]]\nbox = { min = [0, 0, 0], max = [1, 1, 1] }\n")

@@ -65,8 +65,29 @@ def check(target: str, settle: bool, strict: bool, unit: str) -> None:
     if not model.block_fixed[:, 2].any():  # as a floating block above, a warning: tilt says the model cannot stand
         click.echo("unsupported     no fixed block (none marked fixed nor held vertically by [supports]): nothing holds the model up "
                    "under gravity (tilt: cannot stand; limit: unstable); mark a support block fixed = true", err=True)
+    spread = _mass_spread(model)
+    if spread is not None and model.solver.criterion == "ratio":
+        click.echo(spread, err=True)
     if settle:
         _settle(sim)
+
+
+#: the ratio of the heaviest movable block's mass to the lightest's beyond which ``drydem check``
+#: warns that the ratio criterion may call a moving model at rest (README, "Equilibrium")
+MASS_SPREAD_WARNING = 1e6
+
+
+def _mass_spread(model) -> str | None:
+    """A warning if the movable blocks' masses span more than :data:`MASS_SPREAD_WARNING`: the
+    ratio criterion divides by the mean weight, which the heaviest set, while the timestep
+    follows the lightest, so a heavy block's oscillation spans many cycles and passes its
+    equilibrium at speed (a 10 m block under a 1e-6 m one was called at rest at 0.11 m/s)."""
+    mass = model.block_mass[model.block_movable]
+    if mass.size < 2 or mass.max() <= MASS_SPREAD_WARNING * mass.min():
+        return None
+    return (f"warning         the movable blocks' masses span {mass.max() / mass.min():.1e} ({mass.min():.3g} to {mass.max():.3g} kg): "
+            "the ratio criterion divides by the mean weight, which the heaviest set, while the timestep follows the lightest, "
+            "so a heavy block may pass its equilibrium at speed and be called at rest; use [solver] criterion = \"velocity\"")
 
 
 def _strict_needs_a_wall(strict: bool, found: Target) -> None:
