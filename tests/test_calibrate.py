@@ -188,7 +188,7 @@ def test_an_interrupted_calibration_goes_on_from_its_file_and_a_foreign_file_is_
     search = StiffnessSearch(("WD1", "WD6"), kn_min=1e5)
     write_calibration(path, calibration_content(search, []))  # what a calibration killed before its first kn leaves
     assert calibrate_command(tmp_path).exit_code == 0
-    for foreign in ("not a calibration", "[]", '{"finished": false, "settings": []}', '{"finished": 0, "settings": {}}'):
+    for foreign in ("not a calibration", "[]", '{"finished": false, "settings": []}', '{"finished": 0, "settings": {}}', "[" * 100_000):
         path.write_text(foreign)
         refused = calibrate_command(tmp_path)
         assert refused.exit_code == 1 and f"{path}: exists and is not a drydem calibration; pass --overwrite" in refused.output

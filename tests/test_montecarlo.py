@@ -201,12 +201,17 @@ def test_a_recorded_sample_with_an_angle_out_of_range_is_corrupt_not_averaged_in
     assert len(again.corrupt) == 1 and all(0.0 <= s["collapse_angle_deg"] <= 90.0 for s in again.summary["samples"])
 
 
-def test_a_summary_whose_settings_are_not_a_table_is_no_run_to_resume(tall_brick, tmp_path):
-    # "settings": "x" was an AttributeError traceback on --resume
+@pytest.mark.parametrize("content", [json.dumps({"settings": "x"}), "[" * 100_000])
+def test_a_summary_whose_settings_are_not_a_table_is_no_run_to_resume(tall_brick, tmp_path, content):
+    # "settings": "x" was an AttributeError traceback on --resume, JSON nested 100,000 deep a RecursionError
     wall = load_wall(tall_brick)
-    (tmp_path / "summary.json").write_text(json.dumps({"settings": "x"}))
+    (tmp_path / "summary.json").write_text(content)
     with pytest.raises(MonteCarloError, match="summary.json: not the summary of a drydem montecarlo run"):
         check_resumable(tmp_path, settings(2), wall)
+    (tmp_path / "samples" / "0000").mkdir(parents=True)
+    (tmp_path / "samples" / "0000" / "summary.json").write_text("[" * 100_000)
+    with pytest.raises(MonteCarloError, match="not a sample's record \\(RecursionError"):
+        read_sample(tmp_path, settings(2), 0)
 
 
 def test_a_run_asked_for_fewer_samples_than_it_holds_is_refused_and_keeps_them(tall_brick, tmp_path):

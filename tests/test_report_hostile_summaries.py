@@ -116,6 +116,19 @@ def test_a_limit_summary_with_an_unknown_method_or_a_bad_number_is_named_corrupt
     assert "limit analyses: 1;" in text
 
 
+def test_a_pushover_csv_with_a_field_past_the_csv_limit_is_named_corrupt():
+    # a 200,000-character field was a csv.Error traceback from drydem report
+    import pathlib
+    import tempfile
+
+    from drydem.parametric.records import RecordError, _pushover_csv
+
+    path = pathlib.Path(tempfile.mkdtemp()) / "pushover.csv"
+    path.write_text(",".join(PUSHOVER_COLUMNS) + "\n" + '"' + "1" * 200_000 + '"\n')
+    with pytest.raises(RecordError, match="pushover.csv: not a pushover curve"):
+        _pushover_csv(path)
+
+
 def test_a_run_made_with_a_step_below_today_s_least_is_still_a_result():
     # the least tilt step became 0.001 deg; a run recorded before with 1e-4 deg is no corrupt record
     from drydem.parametric.records import collapse_problem

@@ -129,6 +129,17 @@ def test_bad_study_files_name_the_grid_and_key(study_file, change, message):
     assert str(caught.value).startswith(str(study_file))
 
 
+def test_a_run_id_keeps_a_file_name_within_255_bytes_whatever_the_target_s_name():
+    # a 240-character target name made record and lock file names past 255 bytes: an OSError traceback
+    long = RunSpec(analysis="tilt", target="w" * 240 + ".toml", protocol="fixed", kn=None, ks=None, friction=None, points=None,
+                   increment_deg=5.0)
+    other = RunSpec(analysis="tilt", target="w" * 239 + "x.toml", protocol="fixed", kn=None, ks=None, friction=None, points=None,
+                    increment_deg=5.0)
+    assert len((long.id + ".lock").encode()) < 255 and long.id != other.id
+    short = RunSpec(analysis="tilt", target="WD1", protocol="fixed", kn=None, ks=None, friction=None, points=None, increment_deg=5.0)
+    assert short.id.startswith("tilt-WD1-fixed-")  # a short name's id is as it was: records made before are found
+
+
 def test_a_record_holds_parameters_summary_and_curve(study_file, tmp_path):
     spec = load_study(study_file).runs[0]
     with local(1) as executor:

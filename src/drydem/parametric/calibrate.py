@@ -357,7 +357,7 @@ def check_calibration_file(path: Path, search: StiffnessSearch, *, overwrite: bo
     try:
         recorded = json.loads(regular_file(Path(path), "a calibration").read_text(encoding="utf-8"))  # a pipe would hang
         finished, settings = recorded["finished"], recorded["settings"]
-    except (ModelError, OSError, ValueError, TypeError, KeyError):
+    except (ModelError, OSError, ValueError, TypeError, KeyError, RecursionError):  # RecursionError: JSON nested 100,000 deep
         finished = settings = None
     if not (isinstance(finished, bool) and isinstance(settings, dict)):
         raise DrydemError(f"{path}: exists and is not a drydem calibration; pass --overwrite to replace it, or another --out")

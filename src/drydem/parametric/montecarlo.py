@@ -191,7 +191,7 @@ def read_sample(folder: Path, settings: MonteCarloSettings, index: int) -> dict:
         raise MonteCarloError(str(exc)) from None
     except OSError as exc:
         raise MonteCarloError(f"{path}: cannot read the record ({exc.strerror})") from None
-    except (ValueError, TypeError, KeyError) as exc:
+    except (ValueError, TypeError, KeyError, RecursionError) as exc:  # RecursionError: JSON nested 100,000 deep
         raise MonteCarloError(f"{path}: not a sample's record ({type(exc).__name__}: {exc})") from None
 
 
@@ -252,7 +252,7 @@ def check_resumable(folder: Path, settings: MonteCarloSettings, wall: Wall) -> N
     path = Path(folder) / "summary.json"
     try:
         recorded = json.loads(regular_file(path, "a Monte Carlo summary").read_text(encoding="utf-8"))["settings"]
-    except (ModelError, OSError, ValueError, TypeError, KeyError):
+    except (ModelError, OSError, ValueError, TypeError, KeyError, RecursionError):
         recorded = None
     if not isinstance(recorded, dict):  # "settings": "x" was an AttributeError
         raise MonteCarloError(f"{path}: not the summary of a drydem montecarlo run; --resume needs the --out of one")

@@ -318,7 +318,7 @@ def _pushover_csv(path: Path) -> list[list[float]]:
         return [[float(row[k]) for k in CURVE_FROM_CSV] for row in rows]
     except OSError as exc:
         raise RecordError(f"{path}: cannot read the run's pushover curve ({exc.strerror})") from None
-    except (ValueError, IndexError):
+    except (ValueError, IndexError, csv.Error):  # csv.Error: a field past the csv module's limit (131,072 characters)
         raise RecordError(f"{path}: not a pushover curve (rows of numbers: tilt_deg, load_multiplier, ux_m, uz_m, drift, "
                           "cycles)") from None
 

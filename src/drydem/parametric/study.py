@@ -76,6 +76,10 @@ SHAKE_KEYS = {"motions", "scales", "duration_s", "restitution", "contact_damping
 GRID_KEYS = {"tilt": COMMON_KEYS | {"protocol", "increment_deg"}, "limit": COMMON_KEYS | {"protocol", "increment_deg"},
              "shake": COMMON_KEYS | SHAKE_KEYS}
 DEFAULT_KEYS = {"friction", "points", "increment_deg", "duration_s", "restitution", "contact_damping_ratio"}
+#: the most characters of a target's or motion's name a run id shows (the hash tells runs apart):
+#: the id names the run's record and lock files, and a 240-character target name made them past
+#: the 255 bytes a file name may have (an OSError traceback)
+ID_PART_CHARACTERS = 60
 #: the RunSpec fields that override the target's parameters
 OVERRIDES = ("kn", "ks", "friction", "points")
 #: the rule of each of the OVERRIDES, checked under the grid's own key (its message names that key)
@@ -134,10 +138,12 @@ class RunSpec:
         digest = hashlib.sha1(json.dumps(fields, sort_keys=True).encode()).hexdigest()[:10]
         law = "" if self.joint_law is None else f"-{json.loads(self.joint_law).get('model', 'law')}"
         stiffness = law + ("" if self.kn is None else f"-kn{self.kn:.3g}-ks{self.ks:.3g}")
+        target = Path(self.target).stem[:ID_PART_CHARACTERS]
         if self.analysis == "shake":
             scale = "" if self.scale is None else f"-x{self.scale:.4g}"
-            return f"{self.analysis}-{Path(self.target).stem}-{motion_label(str(self.motion), compact=True)}{scale}{stiffness}-{digest}"
-        return f"{self.analysis}-{Path(self.target).stem}{stiffness}-{self.protocol}-{digest}"
+            motion = motion_label(str(self.motion), compact=True)[:ID_PART_CHARACTERS]
+            return f"{self.analysis}-{target}-{motion}{scale}{stiffness}-{digest}"
+        return f"{self.analysis}-{target}{stiffness}-{self.protocol}-{digest}"
 
     @property
     def overrides(self) -> dict:
