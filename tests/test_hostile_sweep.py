@@ -112,7 +112,7 @@ def test_a_study_with_bad_values_names_every_one_and_runs_nothing(folder):
             f"{grid}: points = 0: must be an integer in [1, 32]",
             f"{grid}: points = 2.5: must be an integer",
             f"{grid}: tilt setting increment_deg = 95.0: must be a number in [0.001, 90) deg",
-            f"{grid}: targets: nowhere.toml: no such file, and not a built-in wall",
+            f"{grid}: targets: {folder / 'nowhere.toml'}: no such file, and not a built-in wall",
             f"{study}: [[grid]] #1 ('limit'): analysis = ['limit']: must be one of ['tilt', 'limit', 'shake']",
             f"{study}: [[grid]] #2 ('empty'): kn = []: needs at least one value",
             f"{study}: [[grid]] #3 ('numbers'): targets [1]: each must be a built-in wall's name or a file")

@@ -129,6 +129,17 @@ def test_bad_study_files_name_the_grid_and_key(study_file, change, message):
     assert str(caught.value).startswith(str(study_file))
 
 
+def test_a_target_file_is_looked_for_beside_the_study_not_in_the_current_folder(study_file, tmp_path, monkeypatch):
+    # a study in sub/ naming stack.toml, which only the current folder held, analysed that file
+    sub = tmp_path / "sub"
+    sub.mkdir()
+    (sub / "small.toml").write_text(STUDY)
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ModelError, match=f"{sub / 'stack.toml'}: no such file"):
+        load_study(sub / "small.toml")
+    assert {spec.target for spec in load_study(study_file).runs} == {str(tmp_path / name) for name in WALLS}
+
+
 def test_a_run_id_keeps_a_file_name_within_255_bytes_whatever_the_target_s_name():
     # a 240-character target name made record and lock file names past 255 bytes: an OSError traceback
     long = RunSpec(analysis="tilt", target="w" * 240 + ".toml", protocol="fixed", kn=None, ks=None, friction=None, points=None,

@@ -378,11 +378,17 @@ def _grid_runs(grid: dict, folder: Path, where: str, models: dict, problems: lis
 
 
 def _targets(targets: list, folder: Path, where: str) -> list[str]:
-    """The grid's targets: built-in walls' names, or files relative to the study's folder."""
+    """The grid's targets: files relative to the study's folder, or the names of built-in walls
+    and buildings; any other name is a file there too, which the run then finds missing (it was
+    looked for in the current folder, so that a study run from elsewhere analysed another file)."""
+    from drydem.masonry import designs
+    from drydem.masonry.building import BUILDINGS
+
     names = [t for t in targets if not isinstance(t, str)]
     if names:
         raise ModelError(f"{where}: targets {names}: each must be a built-in wall's name or a file (a string)")
-    return [t if not (folder / t).is_file() else str(folder / t) for t in targets]
+    built_in = set(designs.names()) | set(BUILDINGS)
+    return [t if t in built_in and not (folder / t).is_file() else str(folder / t) for t in targets]
 
 
 def _overrides(grid: dict, values: dict, where: str) -> list[tuple]:
