@@ -116,6 +116,13 @@ def test_a_limit_summary_with_an_unknown_method_or_a_bad_number_is_named_corrupt
     assert "limit analyses: 1;" in text
 
 
+def test_a_link_to_a_run_folder_is_the_same_run_not_a_second(tmp_path):
+    run_folder(tmp_path, "good", tilt_summary())
+    (tmp_path / "link").symlink_to(tmp_path / "good")
+    _, text = report(tmp_path)
+    assert text.count(GOOD_TILT_ROW) == 1 and "tilting runs: 1;" in text
+
+
 def test_a_pushover_csv_with_a_field_past_the_csv_limit_is_named_corrupt():
     # a 200,000-character field was a csv.Error traceback from drydem report
     import pathlib

@@ -324,9 +324,13 @@ def _pushover_csv(path: Path) -> list[list[float]]:
 
 
 def run_folders(results: Path) -> list[Path]:
-    """The folders where a command's run may be: ``results`` and its sub-folders, in name order."""
+    """The folders where a command's run may be: ``results`` and its sub-folders, in name order,
+    each once (a link to another of them is the same run, not a second one)."""
     results = Path(results)
-    return [results, *sorted(p for p in results.iterdir() if p.is_dir())]
+    found: dict[Path, Path] = {}
+    for folder in [results, *sorted(p for p in results.iterdir() if p.is_dir())]:
+        found.setdefault(folder.resolve(), folder)
+    return list(found.values())
 
 
 def load_run_folders(results: Path) -> Records:
