@@ -202,6 +202,8 @@ def test_a_file_named_after_a_paper_wall_or_a_paper_wall_at_another_friction_is_
     text = build_report(tmp_path).markdown.read_text()
     # Table 3 takes the paper's WD3 alone: int(5 + 3 log10(3) + 3) = 9 deg (tilt_record)
     assert "| WD3 | 19.8 | 20.1 | 9.0 |" in section(text, "Table 3")
+    # its mean error is of one wall, said so beside the paper's of seven: |9.0 - 19.8| / 19.8
+    assert "| mean absolute |  |  |  | " in section(text, "Table 3") and " | 54.5 (1 of 7 walls) |" in section(text, "Table 3")
     yours = section(text, "Your targets: tilting runs")
     assert "| WD3.toml | kn 3e+07 Pa/m, ks 3e+07 Pa/m | - | - | adaptive | 0.1 | 9.0 |" in yours
     assert "| WD3 | kn 3e+07 Pa/m, ks 3e+07 Pa/m | 0.7 | - | adaptive | 0.1 | 9.0 |" in yours

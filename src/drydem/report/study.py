@@ -555,7 +555,9 @@ def _table3(runs: Runs, paper: dict) -> str:
         rows.append([d, _cell(experiment[d]), _cell(published["numerical_collapse_angle_deg"][d]), _cell(ours),
                      _cell(published["relative_error_percent"][d], "{:+.1f}"), _cell(error, "{:+.1f}")])
     mean = np.mean(errors) if errors else None
-    rows.append(["mean absolute", "", "", "", _cell(published["mean_abs_error_percent"]), _cell(mean)])
+    # over the walls with a run only: a mean of one wall beside the paper's of seven read as a better fit
+    over = "" if len(errors) in (0, len(DESIGNS)) else f" ({len(errors)} of {len(DESIGNS)} walls)"
+    rows.append(["mean absolute", "", "", "", _cell(published["mean_abs_error_percent"]), _cell(mean) + over])
     return _table("Table 3: kn = ks = 3e7 against the experiments",
                   ["wall", "experiment (deg)", "paper (deg)", "drydem (deg)", "paper error (%)", "drydem error (%)"], rows)
 
