@@ -48,6 +48,16 @@ def test_check_warns_when_block_masses_span_more_than_the_ratio_criterion_resolv
     assert ("masses span" in result.output) == warned
 
 
+def test_check_settle_stops_when_a_block_falls_out(tmp_path):
+    # a brick beside its base, touching nothing: settling cycled it on for up to 2,000,000 cycles
+    path = tmp_path / "beside.toml"
+    path.write_text(SIZES.replace('box = { min = [-5, -5, 0], max = [5, 5, 10] }', 'box = { min = [7, 0, 0], max = [7.1, 0.1, 0.05] }')
+                    .split('[[block]]\nname = "small"')[0])
+    result = CliRunner().invoke(main, ["check", str(path), "--settle"])
+    assert result.exit_code == 1, result.output
+    assert "equilibrium     NOT converged" in result.output and "fell out        1 blocks dropped more than two of their heights: 'big'" in result.output
+
+
 def test_bad_model_exits_with_its_message(tmp_path):
     path = tmp_path / "broken.toml"
     path.write_text("[joint]\nkn = -1.0\n[[block]]\nbox = { min = [0, 0, 0], max = [1, 1, 1] }\n")

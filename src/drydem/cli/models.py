@@ -105,10 +105,23 @@ def _fail_if_strict(strict: bool, violations: list[str], found: Target) -> None:
 
 
 def _settle(sim: Simulation) -> None:
+    """Cycle ``sim`` to equilibrium under gravity and print it; stopped, unconverged, as soon as a
+    block falls out of the model (the tilt's rule, drydem.analysis.support.dropped_out: two of
+    its heights below where it was drawn), which otherwise fell on for up to max_cycles."""
     import numpy as np
     from tqdm import tqdm
 
+    from drydem.analysis.support import dropped_out, lost_drops
+    from drydem.analysis.tilt import TiltSettings
+
     model = sim.model
+    lost_drop = lost_drops(model, TiltSettings().lost_drop_heights)
+    fallen: list[int] = []
+
+    def fell() -> bool:
+        fallen[:] = np.flatnonzero(dropped_out(model, sim.state, sim.contacts, sim.active, lost_drop)).tolist()
+        return bool(fallen)
+
     start = time.perf_counter()
     with tqdm(desc="settling under gravity", unit=" cycles", leave=False) as bar:
 
@@ -116,11 +129,14 @@ def _settle(sim: Simulation) -> None:
             bar.update(cycles - bar.n)
             bar.set_postfix(ratio=f"{stats.ratio:.2e}", speed=f"{stats.max_speed:.2e} m/s")
 
-        result = sim.cycle_to_equilibrium(progress=progress)
+        result = sim.cycle_to_equilibrium(progress=progress, stop=fell)
     elapsed = time.perf_counter() - start
     drop = model.block_centroid[:, 2] - sim.state.position[:, 2]
     status = "converged" if result.converged else "NOT converged"
     click.echo(f"equilibrium     {status} after {result.cycles} cycles ({result.criterion} {result.ratio:.2e}), {elapsed:.2f} s")
+    if fallen:
+        click.echo(f"fell out        {len(fallen)} blocks dropped more than two of their heights: "
+                   + ", ".join(repr(model.block_name[b]) for b in fallen[:10]) + (", ..." if len(fallen) > 10 else ""), err=True)
     top = int(np.argmax(model.block_centroid[:, 2]))
     click.echo(f"settlement      {drop.max() * 1e3:.4g} mm max, top block {model.block_name[top]!r} {drop[top] * 1e3:.4g} mm")
     if not result.converged:
