@@ -136,6 +136,11 @@ def test_a_bad_value_anywhere_is_an_error_naming_the_file_and_rule(folder, chang
     assert message in str(caught.value) and str(caught.value).startswith(str(study))
 
 
+def test_a_study_path_that_is_a_folder_is_said_to_be_one(folder):
+    (folder / "g2.toml").mkdir()  # it was "no such study file", though the path exists
+    refused(invoke("sweep", folder / "g2.toml"), f"{folder / 'g2.toml'}: is a folder, not a study file")
+
+
 @pytest.mark.parametrize("name", ['"../../x"', '"{folder}/elsewhere"', '""', '" "', '"."', '".."', '"a\\\\b"', "5"],
                          ids=["parent path", "absolute path", "empty", "blank", "dot", "dot dot", "backslash", "integer"])
 def test_a_study_name_that_is_not_a_plain_file_name_is_refused_before_any_folder_is_made(folder, name, monkeypatch):

@@ -30,6 +30,8 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
     from drydem.parametric.sweep import sweep as run_sweep
     from drydem.parametric.workers import open_workers
 
+    if Path(study_file).is_dir():
+        raise click.ClickException(f"{study_file}: is a folder, not a study file (a TOML file: README, \"Parametric studies\")")
     path = Path(study_file) if Path(study_file).is_file() else studies.find(study_file)
     if path is None:
         raise click.ClickException(f"{study_file}: no such study file, and not a shipped study (savalle2022)")

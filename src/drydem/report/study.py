@@ -519,7 +519,8 @@ def _cov_bars(ax, found: list[MonteCarloRun], experiment: dict) -> bool:
 def _corrupt(errors: list[RecordError]) -> str:
     """The paragraph naming the records left out, each with its file and fault."""
     lines = "\n".join(f"- `{error}`" for error in errors)
-    return f"{len(errors)} corrupt records left out (the same `drydem sweep` runs them again):\n\n{lines}"
+    return (f"{len(errors)} corrupt records left out (a sweep's are run again by the same `drydem sweep`; a run folder's, by "
+            f"its command with --overwrite):\n\n{lines}")
 
 
 def _cell(value: float | None, fmt: str = "{:.1f}") -> str:
