@@ -116,6 +116,14 @@ def test_a_limit_summary_with_an_unknown_method_or_a_bad_number_is_named_corrupt
     assert "limit analyses: 1;" in text
 
 
+def test_a_run_that_stood_to_its_maximum_angle_shows_as_no_collapse_up_to_it():
+    # it showed as '-', which the legend explained only for the DLS column
+    from drydem.report.study import angle_text
+
+    stood = tilt_summary() | {"collapse_angle_deg": None, "last_equilibrium_deg": 10.0, "ended_by": "maximum angle"}
+    assert angle_text(stood) == "none up to 10.0" and angle_text(tilt_summary()) == "24.0"
+
+
 def test_a_link_to_a_run_folder_is_the_same_run_not_a_second(tmp_path):
     run_folder(tmp_path, "good", tilt_summary())
     (tmp_path / "link").symlink_to(tmp_path / "good")
