@@ -241,9 +241,9 @@ def at(index, value):
     ("contacts", "pairs", at((0, 1), 10**9), r"contacts.pairs: block numbers 0 to 1000000000, not within 0 to 3"),
     ("contacts", "pairs", at((0, 0), -1), r"contacts.pairs: block numbers -1 to \d, not within 0 to 3"),
     ("contacts", "start", at(-1, 10**6), r"contacts.start: must rise from 0 to the \d+ sub-contacts"),
-    ("contacts", "start", lambda a: a[:-1], r"contacts.start: must be an int64 array of shape \(\d+,\), not int64 \(\d+,\)"),
-    ("contacts", "pairs", lambda a: a.astype(np.int32), r"contacts.pairs: must be an int64 array of shape \(\d+, 2\), not int32"),
-    ("contacts", "area", lambda a: a[:-1], r"contacts.area: must be a float64 array of shape \(\d+,\), not float64"),
+    ("contacts", "start", lambda a: a[:-1], r"contacts.start: must be an int64 array of shape \(\d+,\), not shape \(\d+,\) int64"),
+    ("contacts", "pairs", lambda a: a.astype(np.int32), r"contacts.pairs: must be an int64 array of shape \(\d+, 2\), not shape \(\d+, 2\) int32"),
+    ("contacts", "area", lambda a: a[:-1], r"contacts.area: must be a float64 array of shape \(\d+,\), not shape \(\d+,\) float64"),
     ("contacts", "normal_force", at(0, np.nan), r"contacts.normal_force: not all finite numbers"),
     ("contacts", "intact", lambda a: a.astype(np.float64), r"contacts.intact: must be a bool array"),
     ("neighbours", "pairs", at((0, 1), 99), r"neighbours.pairs: block numbers 0 to 99, not within 0 to 3"),
@@ -268,7 +268,7 @@ def test_a_snapshot_whose_contacts_the_kernels_would_index_out_of_bounds_is_refu
 def test_a_snapshot_whose_active_flags_do_not_fit_the_model_is_refused():
     sim = dd.Simulation(stack_model([0.0055] * 3))
     saved = sim.snapshot()
-    for active, found in ((saved.active[:-1], "bool (3,)"), (saved.active.astype(np.int64), "int64 (4,)")):
+    for active, found in ((saved.active[:-1], "shape (3,) bool"), (saved.active.astype(np.int64), "shape (4,) int64")):
         with pytest.raises(dd.ModelError, match=rf"Simulation.restore: snapshot active: must be a bool array of shape \(4,\), not {re.escape(found)}"):
             dd.Simulation(sim.model).restore(dataclasses.replace(saved, active=active))
 

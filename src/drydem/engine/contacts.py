@@ -14,6 +14,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from drydem.model.geometry import described
+
 
 class SubContacts(NamedTuple):
     """Struct-of-arrays of the contacts (face pairs, nc) and their sub-contacts (ns), CSR-style:
@@ -116,7 +118,7 @@ def snapshot_problem(contacts: SubContacts, neighbours: NeighbourList, active: n
         expected = tuple(counts.get(n, n) for n in shape)
         if not (isinstance(array, np.ndarray) and array.dtype == _DTYPES[kind] and array.shape == expected):
             dtype = np.dtype(_DTYPES[kind]).name
-            return f"{where}: must be {'an' if dtype[0] in 'aeiou' else 'a'} {dtype} array of shape {expected}, not {_described(array)}"
+            return f"{where}: must be {'an' if dtype[0] in 'aeiou' else 'a'} {dtype} array of shape {expected}, not {described(array)}"
         if kind == "f" and not np.isfinite(array).all():
             return f"{where}: not all finite numbers"
     for part, pairs in (("contacts", contacts.pairs), ("neighbours", neighbours.pairs)):
@@ -137,11 +139,6 @@ def _common_length(arrays: list) -> int:
     """The length most of ``arrays`` have (so that the one that differs is the one named)."""
     lengths = [len(a) if isinstance(a, np.ndarray) and a.ndim else -1 for a in arrays]
     return max(set(lengths), key=lengths.count)
-
-
-def _described(value) -> str:
-    """An array's dtype and shape, or the type of what is not an array."""
-    return f"{value.dtype} {value.shape}" if isinstance(value, np.ndarray) else type(value).__name__
 
 
 def pair_keys(pairs: np.ndarray, n_blocks: int) -> np.ndarray:

@@ -57,7 +57,6 @@ A building of any other size is built from Python with a :class:`BuildingSpec`::
 from __future__ import annotations
 
 from dataclasses import dataclass
-from types import SimpleNamespace
 
 import numpy as np
 
@@ -66,7 +65,7 @@ from drydem.masonry.layout import BRICK_SIZE, BrickSize
 from drydem.model.assembly import MAX_BLOCKS, Block, Model, build_model
 from drydem.model.geometry import box
 from drydem.model.parameters import (G, ContactSettings, InstanceOf, JointMaterial, Range, SolverSettings, check_arguments, check_fields,
-                                     field_problems, refuse)
+                                     refuse)
 
 #: the narrowest pier, in bricks: room for a lintel's bearing and a bonded brick beside it
 MIN_PIER_BRICKS = 2
@@ -315,8 +314,8 @@ def building_model(spec: BuildingSpec, *, density: float = 1800.0, joint: JointM
     in a tilting checkpoint's fingerprint). Save it as a model file with
     :func:`drydem.io.model_file.save_model`. ModelError naming each argument that is not what it
     must be (:data:`ARGUMENT_RULES`; contacts and solver may be None, for their defaults)."""
-    refuse(field_problems(SimpleNamespace(spec=spec, joint=joint, contacts=contacts, solver=solver), ARGUMENT_RULES,
-                          "building_model {}".format, optional=("contacts", "solver")))
+    check_arguments("building_model", ARGUMENT_RULES, optional=("contacts", "solver"), spec=spec, joint=joint, contacts=contacts,
+                    solver=solver)
     return build_model(building_blocks(spec), density=density, joint=joint,
                        contacts=ContactSettings() if contacts is None else contacts,
                        solver=SolverSettings() if solver is None else solver, source=source)

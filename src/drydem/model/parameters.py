@@ -299,11 +299,18 @@ def check_fields(settings, rules: Mapping[str, Rule], where: str, *, optional: C
                 object.__setattr__(settings, field, plain(value))
 
 
-def check_arguments(where: str, rules: Mapping[str, Rule], **arguments) -> None:
+def argument_problems(where: str, rules: Mapping[str, Rule], *, optional: Collection[str] = (), **arguments) -> list[str]:
+    """``WHERE NAME = VALUE: must be ...`` for every argument of ``where`` (a function) that
+    breaks its rule (one in ``optional`` may also be None)."""
+    return field_problems(SimpleNamespace(**arguments), rules, f"{where} {{}}".format, optional=optional)
+
+
+def check_arguments(where: str, rules: Mapping[str, Rule], *, optional: Collection[str] = (), **arguments) -> None:
     """One ModelError naming, for every argument of ``where`` (a function) that breaks its rule,
     ``WHERE NAME``, its value and the rule: ``tilt_analysis settings = None: must be a
-    TiltSettings`` (with :class:`InstanceOf`), before a wrong object fails where it is first used."""
-    refuse(field_problems(SimpleNamespace(**arguments), rules, f"{where} {{}}".format))
+    TiltSettings`` (with :class:`InstanceOf`), before a wrong object fails where it is first used
+    (:func:`argument_problems`)."""
+    refuse(argument_problems(where, rules, optional=optional, **arguments))
 
 
 #: joint stiffness, Pa/m: below 1e4 the own weight of a 1 m masonry wall (~2e4 Pa) would close

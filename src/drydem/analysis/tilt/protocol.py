@@ -12,7 +12,6 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import SimpleNamespace
 
 from drydem.analysis.tilt import checkpointing
 from drydem.analysis.tilt.run import Saved, TiltRun, Trace, trial_limit
@@ -21,7 +20,7 @@ from drydem.analysis.tilt.settings import (
     UNSTABLE_UNDER_GRAVITY, Frame, Record, TiltResult, TiltSettings,
 )
 from drydem.model.assembly import Model
-from drydem.model.parameters import CALLBACK, FILE_PATH, FLAG, InstanceOf, Range, field_problems, refuse
+from drydem.model.parameters import CALLBACK, FILE_PATH, FLAG, InstanceOf, Range, argument_problems, refuse
 
 #: states past collapse are sampled this many times per chunk_cycles (drydem tilt --vtk)
 FRAME_SAMPLING = 10
@@ -195,9 +194,9 @@ def tilt_analysis(
     one that breaks its rule (a callback that is no function, a checkpoint that is no path, a
     resume without a checkpoint).
     """
-    arguments = SimpleNamespace(model=model, settings=settings, on_record=on_record, on_progress=on_progress, on_frame=on_frame,
-                                checkpoint=checkpoint, checkpoint_every_s=checkpoint_every_s, resume=resume)
-    problems = field_problems(arguments, ARGUMENT_RULES, "tilt_analysis {}".format, optional=("checkpoint",))
+    problems = argument_problems("tilt_analysis", ARGUMENT_RULES, optional=("checkpoint",), model=model, settings=settings,
+                                 on_record=on_record, on_progress=on_progress, on_frame=on_frame, checkpoint=checkpoint,
+                                 checkpoint_every_s=checkpoint_every_s, resume=resume)
     if resume in FLAG and resume and checkpoint is None:
         problems.append("tilt_analysis resume = True needs a checkpoint (the file to go on from)")
     refuse(problems)
