@@ -17,7 +17,6 @@ import math
 import re
 from dataclasses import dataclass, replace
 from pathlib import Path
-from types import SimpleNamespace
 
 import numpy as np
 from scipy.integrate import cumulative_trapezoid, trapezoid
@@ -25,7 +24,9 @@ from scipy.integrate import cumulative_trapezoid, trapezoid
 from drydem.errors import ModelError
 from drydem.files import PLAIN_NUMBER, read_text
 from drydem.model.geometry import given, real_array
-from drydem.model.parameters import MAX_ACCELERATION_M_S2, TEXT, G, OneOf, Range, Rule, check_fields, field_problems, is_number, refuse, shown
+from drydem.model.parameters import (
+    MAX_ACCELERATION_M_S2, TEXT, G, OneOf, Range, Rule, check_arguments, field_problems, is_number, refuse, shown,
+)
 
 #: the analytic pulses of :func:`pulse`
 PULSES = ("one-sine", "sine", "ricker")
@@ -91,11 +92,6 @@ class NonZero(Rule):
 
 #: the rule of a motion's factor asked for on the command line
 NONZERO = NonZero()
-
-
-def _check(where: str, rules: dict[str, Rule], **values) -> None:
-    """One ModelError naming ``WHERE NAME = VALUE`` and the rule for each value breaking its rule."""
-    check_fields(SimpleNamespace(**values), rules, where)
 
 
 class Notes(Rule):
@@ -277,7 +273,7 @@ class GroundMotion:
         starting at ``start_s`` s first). The record is interpolated linearly between samples
         (exact at the sample times) and is zero after its end, where the table moves freely.
         """
-        _check("per_cycle", {"dt_s": TIMESTEP, "cycles": COUNT, "start_s": START},
+        check_arguments("per_cycle", {"dt_s": TIMESTEP, "cycles": COUNT, "start_s": START},
                dt_s=dt_s, cycles=cycles, start_s=start_s)
         times = start_s + np.arange(cycles) * dt_s
         return np.stack([np.interp(times, self.time_s, component, right=0.0)
@@ -523,7 +519,7 @@ def pulse(kind: str, *, amplitude_m_s2: float, frequency_hz: float, cycles: int 
     2 u0^2 exp(-u0^2) A / (pi f)^2: both within 2e-8 of their peaks, it ends at rest.
     ``cycles`` must be 1.
     """
-    _check("pulse", PULSE_RULES, kind=kind, amplitude_m_s2=amplitude_m_s2, frequency_hz=frequency_hz,
+    check_arguments("pulse", PULSE_RULES, kind=kind, amplitude_m_s2=amplitude_m_s2, frequency_hz=frequency_hz,
            cycles=cycles, direction=direction, samples_per_period=samples_per_period)
     if kind != "sine" and cycles != 1:
         raise ModelError(f"pulse cycles = {cycles}: a {kind} pulse has no cycles to repeat (cycles = 1); "
