@@ -15,6 +15,8 @@ import drydem as dd
 from drydem.analysis.tilt import TiltSettings, tilt_analysis
 from drydem.cli import main
 from drydem.engine.checkpoint import DIGEST, digest
+from drydem.files import lock_exclusively, unlock
+from drydem.io.results import FOLDER_LOCK
 
 #: a brick on a base: the cheapest model that tilts (slides at atan 0.5 = 26.6 deg)
 BRICK_ON_BASE = """\
@@ -101,6 +103,48 @@ def test_a_results_folder_holding_a_run_is_never_replaced_silently(tmp_path):
     assert run("tilt", path, "--out", out, "--increment", "2", "--overwrite").exit_code == 0
     assert not (out / "vtk").exists() and not (out / "collapse.mp4").exists() and (out / "summary.json").is_file()
     assert refused(run("tilt", path, "--out", out, "--resume", "--overwrite"), "give one of them")
+
+
+def test_a_results_folder_another_run_is_writing_in_is_refused_and_left_alone(tmp_path):
+    """Two runs given one --out, both started before either wrote, used to both pass the
+    "already holds a run" check and replace each other's files (last one wins)."""
+    path, out = model_file(tmp_path), tmp_path / "run"
+    out.mkdir()
+    (out / "checkpoint.npz").write_bytes(b"the other run's")
+    lock = out / FOLDER_LOCK
+    held = lock_exclusively(lock)  # another run (a lock is per open file, so one in this process is another's)
+    try:
+        for options in ([], ["--overwrite"], ["--resume"]):
+            assert refused(run("tilt", path, "--out", out, "--increment", "2", *options), "run: another drydem run is writing there")
+        assert refused(run("limit", path, "--out", out), "another drydem run is writing there")
+        assert sorted(p.name for p in out.iterdir()) == [FOLDER_LOCK, "checkpoint.npz"]
+        assert (out / "checkpoint.npz").read_bytes() == b"the other run's"
+    finally:
+        unlock(lock, held)
+    # the holder gone, the folder is free; a run leaves no lock behind
+    assert run("tilt", path, "--out", out, "--increment", "2", "--overwrite").exit_code == 0
+    assert (out / "summary.json").is_file() and not lock.exists()
+
+
+def test_default_results_folders_are_never_shared(tmp_path, monkeypatch):
+    """Two runs started in the same second take results/NAME-TIME and NAME-TIME-2: each folder is
+    made exclusively, not looked for and then made (two processes could both find it free)."""
+    import drydem.cli.common as common
+
+    class Frozen(common.datetime):
+        @classmethod
+        def now(cls, tz=None):
+            return cls(2026, 1, 2, 3, 4, 5)
+
+    monkeypatch.setattr(common, "datetime", Frozen)
+    path = model_file(tmp_path)
+    for _ in range(2):
+        assert run("tilt", path, "--increment", "2").exit_code == 0
+    made = sorted(p.name for p in (tmp_path / "results").iterdir())
+    assert made == ["brick-20260102-030405", "brick-20260102-030405-2"], made
+    (tmp_path / "results").rename(tmp_path / "moved")
+    (tmp_path / "results").symlink_to(tmp_path / "nowhere")  # a link to nothing: said, not looped on
+    assert refused(run("tilt", path, "--increment", "2"), "results is a link to the missing")
 
 
 def test_a_results_folder_that_cannot_be_one_is_refused(tmp_path):

@@ -7,8 +7,11 @@ from click.testing import CliRunner
 
 import drydem as dd
 from drydem.analysis.support import elastic_settlement, load_paths, own_weight_closures, too_soft_joints
-from drydem.analysis.tilt import NO_EQUILIBRIUM_UNDER_GRAVITY, TiltSettings, tilt_analysis
+from drydem.analysis.tilt import NO_EQUILIBRIUM_UNDER_GRAVITY, STOP_DISPLACEMENT, UNSTABLE_UNDER_GRAVITY, TiltSettings, tilt_analysis
+from drydem.analysis.tilt.run import TiltRun
+from drydem.analysis.tilt.settings import FELL
 from drydem.cli import main
+from drydem.model.geometry import convex_hull
 from drydem.model.rotation import matrices
 from conftest import BRICK, stack_model
 
@@ -127,6 +130,46 @@ def test_tilting_a_brick_on_joints_too_soft_to_carry_it_says_why_it_cannot_stand
     assert result.exit_code == 0, result.output
     assert "the model cannot stand under its own weight: 'brick' fell" in result.output
     assert "'brick' closes its joint by 9.71 mm on its largest face (u(W / A) of the joint law), more than the 5.5 mm" in result.output
+
+
+def brick_on_a_slope(slope_deg: float, kn: float, ks: float) -> dd.Model:
+    """A brick (25 x 12 x 5.5 mm) resting on the face of a fixed wedge that rises along x at
+    ``slope_deg``, held in y, friction 1 (it does not slide: tan 20 deg = 0.36)."""
+    a = np.radians(slope_deg)
+    along, normal = np.array([np.cos(a), 0.0, np.sin(a)]), np.array([-np.sin(a), 0.0, np.cos(a)])
+    wedge = [[0, y, 0] for y in (-0.006, 0.006)] + [[0.1, y, 0] for y in (-0.006, 0.006)] + [[0.1, y, 0.1 * np.tan(a)] for y in (-0.006, 0.006)]
+    foot = 0.03 * along
+    brick = [foot + u * along + v * normal + [0, y, 0] for u in (0, 0.025) for v in (0, 0.0055) for y in (-0.006, 0.006)]
+    blocks = [dd.Block(name="wedge", shape=convex_hull(np.array(wedge, float)), fixed=True),
+              dd.Block(name="brick", shape=convex_hull(np.array(brick)))]
+    return dd.build_model(blocks, density=1800.0, joint=dd.JointMaterial(kn=kn, ks=ks, friction=1.0), supports=dd.Supports(fix_y=True))
+
+
+def test_a_brick_on_a_soft_slope_comes_to_rest_where_its_joints_closure_and_shear_put_it():
+    """Soft joints on a 20 deg slope: the brick's weight W = 0.029 N closes its joint (area A =
+    3e-4 m2) by W cos a / (kn A) and shears it down the slope by W sin a / (ks A), which moves it
+    along x by sin a cos a (W / A) (1 / ks - 1 / kn) = 0.28 mm with kn = 1e6, ks = 1e5 Pa/m (the
+    joint's two springs; friction 1 > tan 20 deg holds it). A stop displacement of 0.1 mm
+    makes that a fall under its own weight, not a standing model."""
+    model = brick_on_a_slope(20.0, 1e6, 1e5)
+    a, weight, area = np.radians(20.0), model.block_mass[1] * dd.G, 0.025 * 0.012
+    expected = np.sin(a) * np.cos(a) * weight / area * (1 / 1e5 - 1 / 1e6)
+    standing = tilt_analysis(model, TiltSettings(max_angle_deg=1.0, increment_deg=0.5))
+    assert standing.stable_under_gravity is True and -standing.records[0].ux_m == pytest.approx(expected, rel=0.02)
+    result = tilt_analysis(model, TiltSettings(stop_displacement_m=1e-4, max_angle_deg=1.0, increment_deg=0.5))
+    assert result.stable_under_gravity is False and result.ended_by == UNSTABLE_UNDER_GRAVITY
+    assert result.collapse_angle_deg is None and result.records == []
+
+
+def test_a_block_that_comes_to_rest_beyond_the_stop_displacement_under_its_own_weight_has_fallen():
+    """The rule itself, where the equilibrium is reached before the stop displacement is looked
+    at: a brick put down 20 um along x from where it was drawn (too little for a re-detection,
+    at which the stop displacement is also looked at) settles at once. With a stop displacement
+    of 10 um that counted as standing, and the first tilt step then "collapsed"."""
+    run = TiltRun(pier(1, 1e8), TiltSettings(stop_displacement_m=1e-5), None)
+    run.sim.state.position[run.monitor, 0] += 2e-5
+    assert run.equilibrate(0.0, vertical=True)[0] == FELL
+    assert run.equilibrate(1.0)[0] == STOP_DISPLACEMENT
 
 
 @pytest.mark.parametrize("solver", [dict(max_cycles=10), dict(damping=0.0, max_cycles=5_000)])

@@ -3,13 +3,17 @@ before any work, and write each file whole or not at all; the numbers text files
 
 from __future__ import annotations
 
+import fcntl
 import os
 import re
 import signal
+import socket
 import stat
 import tempfile
 import threading
+import time
 import tomllib
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -132,6 +136,59 @@ def replaced_atomically(path: str | Path):
     finally:
         if temporary.is_file() and not temporary.is_symlink():
             temporary.unlink()
+
+
+def lock_exclusively(path: Path) -> int | None:
+    """The descriptor of ``path`` locked exclusively (flock) for this process, created if
+    missing, held until :func:`unlock`; None if another process holds it. DrydemError naming
+    ``path`` if the file system refuses the lock.
+
+    A lock rather than a file created exclusively (O_EXCL): the kernel drops it when its process
+    ends, however it ends (kill -9, a crash), so there is no stale lock to detect and take over
+    by guessing from process ids and hosts, and no window in which two processes both take a
+    stale one over. (On NFS, Linux maps flock to the lock manager's locks, across hosts.) The
+    file only tells a person who holds it: host, pid, time. Its holder deletes it before
+    unlocking it (:func:`unlock`), so a process that opened it before that and locks it after
+    finds it is no longer the file at that path, and tries again on the new one. A lock belongs
+    to an open file, so a second lock of ``path`` in the same process is refused too."""
+    while True:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(fd)
+            return None
+        except OSError as exc:
+            os.close(fd)
+            raise DrydemError(f"{path}: cannot lock it ({exc.strerror}): does this file system support locks?") from None
+        try:
+            current = os.stat(path).st_ino == os.fstat(fd).st_ino
+        except FileNotFoundError:
+            current = False
+        if current:
+            os.ftruncate(fd, 0)
+            os.write(fd, f"held by {socket.gethostname()} pid {os.getpid()} since {time.strftime('%Y-%m-%d %H:%M:%S')}\n".encode())
+            return fd
+        os.close(fd)
+
+
+def unlock(path: Path, fd: int) -> None:
+    """End a lock of :func:`lock_exclusively`: delete its file, then unlock it (closing it)."""
+    Path(path).unlink(missing_ok=True)
+    os.close(fd)
+
+
+@contextmanager
+def held(path: Path, busy: str, error: type[DrydemError] = DrydemError) -> Iterator[None]:
+    """``path`` locked (:func:`lock_exclusively`) for the block; ``error(busy)`` if another
+    process holds it."""
+    fd = lock_exclusively(path)
+    if fd is None:
+        raise error(busy)
+    try:
+        yield
+    finally:
+        unlock(path, fd)
 
 
 #: bytes: the longest file name most file systems take (ext4, APFS, NTFS: 255)

@@ -9,6 +9,7 @@ from __future__ import annotations
 import functools
 import itertools
 import math
+import os
 import shutil
 import signal
 from collections.abc import Callable
@@ -187,19 +188,23 @@ RUN_OUTPUTS = ("summary.json", "pushover.csv", "pushover.png", "mechanism.png", 
 
 
 def results_folder(out: Path | None, name: str, *, resume: bool | None = False, overwrite: bool = False) -> Path:
-    """``out`` made ready for a run (drydem.io.results.prepare_folder; ``resume`` None for a
-    command that cannot resume), or by default a new results/NAME-TIME folder (numbered -2,
-    -3, ... if two runs start in the same second)."""
-    from drydem.io.results import prepare_folder
+    """``out`` made ready for a run and held until the command ends
+    (drydem.io.results.prepared_folder; ``resume`` None for a command that cannot resume), or by
+    default a new results/NAME-TIME folder (numbered -2, -3, ... if two runs start in the same
+    second: each is made exclusively, so two runs never share one)."""
+    from drydem.io.results import prepared_folder
 
     if out is None:
         stem = f"{name}-{datetime.now():%Y%m%d-%H%M%S}"
-        out = Path("results") / stem
-        for k in itertools.count(2):
-            if not out.exists():
+        for k in itertools.count(1):
+            out = Path("results") / (stem if k == 1 else f"{stem}-{k}")
+            try:
+                out.mkdir(parents=True)
                 break
-            out = Path("results") / f"{stem}-{k}"
-    return prepare_folder(out, RUN_OUTPUTS, resume=resume, overwrite=overwrite)
+            except OSError:  # taken (next number), or a reason prepared_folder says ("results" is a file, ...)
+                if not os.path.lexists(out):
+                    break
+    return click.get_current_context().with_resource(prepared_folder(out, RUN_OUTPUTS, resume=resume, overwrite=overwrite))
 
 
 def discard_unstarted(table: Path, series) -> None:

@@ -16,7 +16,8 @@ from __future__ import annotations
 import csv
 import json
 import shutil
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import asdict, fields
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -25,7 +26,7 @@ import numpy as np
 
 from drydem import __version__
 from drydem.errors import DrydemError
-from drydem.files import replaceable, replaced_atomically, writable_folder
+from drydem.files import held, replaceable, replaced_atomically, writable_folder
 
 if TYPE_CHECKING:  # annotations only: importing the limit analysis takes scipy.optimize, a third of a second
     from drydem.analysis.limit import LimitResult, LimitSettings
@@ -209,8 +210,15 @@ def model_summary(model: Model) -> dict:
     }
 
 
-def prepare_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | None = False, overwrite: bool = False) -> Path:
-    """Make ``folder`` ready for a run's ``outputs`` (file and folder names) and return it.
+#: the file a run holds its results folder by while it writes there (drydem.files.held): a
+#: second run given the same folder is refused, not mixed in (deleted when the run ends)
+FOLDER_LOCK = ".drydem.lock"
+
+
+@contextmanager
+def prepared_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | None = False, overwrite: bool = False) -> Iterator[Path]:
+    """``folder``, ready for a run's ``outputs`` (file and folder names) and held by this process
+    for the block (:data:`FOLDER_LOCK`): a DrydemError if another drydem process holds it.
 
     Nothing is lost: a folder that already holds files is refused (DrydemError naming them)
     unless the run goes on from it (``resume``; None for a run that cannot, so the message does
@@ -219,17 +227,19 @@ def prepare_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | Non
     the new results; other files are kept. A path that is not a folder, or cannot be made or
     written in, is refused with the reason (:func:`drydem.files.writable_folder`).
     """
-    present = sorted(p.name for p in writable_folder(folder).iterdir())
-    if present and not resume:
-        ours = [name for name in present if name in outputs]
-        if not overwrite:
-            what = f"another run ({', '.join(ours)})" if ours else f"other files ({', '.join(present[:5])}{', ...' if len(present) > 5 else ''})"
-            go_on = "" if resume is None else ", --resume to go on from its checkpoint"
-            raise DrydemError(f"{folder}: already holds {what}; pass --overwrite to replace it{go_on}, or another --out")
-        for name in ours:
-            path = folder / name
-            shutil.rmtree(path) if path.is_dir() and not path.is_symlink() else path.unlink()
-    return folder
+    folder = writable_folder(folder)
+    with held(folder / FOLDER_LOCK, f"{folder}: another drydem run is writing there; wait for it to end, or give another --out"):
+        present = sorted(p.name for p in folder.iterdir() if p.name != FOLDER_LOCK)
+        if present and not resume:
+            ours = [name for name in present if name in outputs]
+            if not overwrite:
+                what = f"another run ({', '.join(ours)})" if ours else f"other files ({', '.join(present[:5])}{', ...' if len(present) > 5 else ''})"
+                go_on = "" if resume is None else ", --resume to go on from its checkpoint"
+                raise DrydemError(f"{folder}: already holds {what}; pass --overwrite to replace it{go_on}, or another --out")
+            for name in ours:
+                path = folder / name
+                shutil.rmtree(path) if path.is_dir() and not path.is_symlink() else path.unlink()
+        yield folder
 
 
 def write_summary(folder: Path, content: dict) -> Path:

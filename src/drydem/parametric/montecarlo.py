@@ -29,7 +29,6 @@ works on a folder (:func:`hold_folder`). A run has at most
 
 from __future__ import annotations
 
-import fcntl
 import hashlib
 import json
 import os
@@ -48,7 +47,7 @@ from drydem import __version__
 from drydem.analysis.drift import DLS_DRIFT
 from drydem.analysis.tilt import TiltSettings, tilt_analysis
 from drydem.errors import DrydemError, ModelError
-from drydem.files import regular_file
+from drydem.files import held, regular_file
 from drydem.io.results import PushoverWriter, tilt_summary, write_summary
 from drydem.masonry.imperfections import Imperfections, imperfect_model
 from drydem.masonry.walls import Wall
@@ -310,19 +309,12 @@ def run_summary(target: dict, wall: Wall, settings: MonteCarloSettings, entries:
 
 @contextmanager
 def hold_folder(folder: Path) -> Iterator[None]:
-    """Hold ``folder`` for this run: an exclusive flock on ``folder/.montecarlo.lock`` (the
-    kernel drops it when the process ends, however it ends); MonteCarloError if another run
-    holds it."""
-    fd = os.open(Path(folder) / LOCK_FILE, os.O_RDWR | os.O_CREAT, 0o644)
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
-        os.close(fd)
-        raise MonteCarloError(f"{folder}: another drydem montecarlo is working on it; wait for it to end, or give another --out") from None
-    try:
+    """Hold ``folder`` for this run: ``folder/.montecarlo.lock`` locked exclusively
+    (:func:`drydem.files.held`: the kernel drops it when the process ends, however it ends);
+    MonteCarloError if another run holds it."""
+    busy = f"{folder}: another drydem montecarlo is working on it; wait for it to end, or give another --out"
+    with held(Path(folder) / LOCK_FILE, busy, MonteCarloError):
         yield
-    finally:
-        os.close(fd)
 
 
 @dataclass(frozen=True)

@@ -12,9 +12,7 @@ written (see :func:`claim`); the other sweep leaves it and says so.
 
 from __future__ import annotations
 
-import fcntl
 import os
-import socket
 import time
 import traceback
 from collections.abc import Callable, Iterable
@@ -23,6 +21,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from drydem.errors import DrydemError
+from drydem.files import lock_exclusively, unlock
 from drydem.parametric.records import RecordError, load_records, read_record, record_path, write_record
 from drydem.parametric.study import PULSE_PREFIX, RunSpec, ground_motion
 
@@ -131,41 +130,15 @@ def lock_path(results: Path, run_id: str) -> Path:
 
 def claim(results: Path, run_id: str) -> int | None:
     """Claim run ``run_id`` for this process: the descriptor of ``RESULTS/runs/ID.lock`` locked
-    exclusively (flock), held until :func:`release`; None if another process holds it.
-
-    A lock rather than a file created exclusively (O_EXCL): the kernel drops it when its process
-    ends, however it ends (kill -9, a crash), so there is no stale claim to detect and take
-    over by guessing from process ids and hosts, and no window in which two sweeps both take a
-    stale one over. (On NFS, Linux maps flock to the lock manager's locks, across hosts.) The
-    file only tells a person who holds it: host, pid, time. Its holder deletes it before
-    unlocking it, so a process that opened it before that and locks it after finds it is no
-    longer the file at that path, and tries again on the new one."""
-    path = lock_path(results, run_id)
-    while True:
-        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            os.close(fd)
-            return None
-        except OSError as exc:
-            os.close(fd)
-            raise SweepError(f"{path}: cannot lock the run's claim ({exc.strerror}): does this file system support locks?") from None
-        try:
-            current = os.stat(path).st_ino == os.fstat(fd).st_ino
-        except FileNotFoundError:
-            current = False
-        if current:
-            os.ftruncate(fd, 0)
-            os.write(fd, f"claimed by {socket.gethostname()} pid {os.getpid()} at {time.strftime('%Y-%m-%d %H:%M:%S')}\n".encode())
-            return fd
-        os.close(fd)
+    exclusively, held until :func:`release`; None if another process holds it
+    (:func:`drydem.files.lock_exclusively`: the kernel drops the lock when its process ends,
+    however it ends, so there is no stale claim)."""
+    return lock_exclusively(lock_path(results, run_id))
 
 
 def release(results: Path, run_id: str, fd: int) -> None:
     """End a claim: delete its file, then unlock it (closing it)."""
-    lock_path(results, run_id).unlink(missing_ok=True)
-    os.close(fd)
+    unlock(lock_path(results, run_id), fd)
 
 
 @dataclass(frozen=True)

@@ -176,12 +176,9 @@ class TiltRun:
             return FELL if vertical else MONITOR_FELL
         if give_up is not None and not converged and give_up():
             return GAVE_UP
-        beyond = abs(ux) >= self.settings.stop_displacement_m
-        if converged:  # at rest beyond the stop displacement: the run ends there too (it went on to the maximum angle)
-            return STOP_DISPLACEMENT if beyond and not vertical else EQUILIBRIUM
-        if beyond:
-            return FELL if vertical else STOP_DISPLACEMENT
-        return None
+        if abs(ux) >= self.settings.stop_displacement_m:  # at rest there or not: it went on to the maximum angle, or
+            return FELL if vertical else STOP_DISPLACEMENT  # stood in stage 1 and "collapsed" at the first step
+        return EQUILIBRIUM if converged else None
 
     def _dropped(self) -> np.ndarray:
         """(nb,) bool: the block, still in the analysis, has a rigid-body drop beyond its
