@@ -45,9 +45,9 @@ from types import SimpleNamespace
 
 from drydem import __version__
 from drydem.errors import DrydemError, ModelError
-from drydem.files import regular_file, replaced_atomically, writable, writable_folder
+from drydem.files import replaced_atomically, writable, writable_folder
 from drydem.model.parameters import JOINT_STIFFNESS, JointMaterial, Range, field_problems, refuse
-from drydem.parametric.records import RecordError, read_record, record_path
+from drydem.parametric.records import RecordError, read_json, read_record, record_path
 from drydem.parametric.study import RunSpec, joint_law_text
 from drydem.parametric.sweep import SweepOutcome, sweep
 
@@ -355,9 +355,9 @@ def check_calibration_file(path: Path, search: StiffnessSearch, *, overwrite: bo
     if overwrite or not Path(path).exists():
         return
     try:
-        recorded = json.loads(regular_file(Path(path), "a calibration").read_text(encoding="utf-8"))  # a pipe would hang
+        recorded = read_json(Path(path), "calibration")
         finished, settings = recorded["finished"], recorded["settings"]
-    except (ModelError, OSError, ValueError, TypeError, KeyError, RecursionError):  # RecursionError: JSON nested 100,000 deep
+    except (RecordError, TypeError, KeyError):
         finished = settings = None
     if not (isinstance(finished, bool) and isinstance(settings, dict)):
         raise DrydemError(f"{path}: exists and is not a drydem calibration; pass --overwrite to replace it, or another --out")

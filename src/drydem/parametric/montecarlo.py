@@ -47,14 +47,14 @@ from drydem import __version__
 from drydem.analysis.drift import DLS_DRIFT
 from drydem.analysis.tilt import TiltSettings, tilt_analysis
 from drydem.errors import DrydemError, ModelError
-from drydem.files import held, regular_file
+from drydem.files import held
 from drydem.io.results import PushoverWriter, tilt_summary, write_summary
 from drydem.masonry.imperfections import Imperfections, imperfect_model
 from drydem.masonry.walls import Wall
 from drydem.model.parameters import Range, field_problems, refuse
 from drydem.parametric.calibrate import wall_angle
 from drydem.parametric.limits import SAMPLES
-from drydem.parametric.records import collapse_problem
+from drydem.parametric.records import RecordError, collapse_problem, read_json
 
 #: the percentile reported as ``p05``
 PERCENTILE = 5.0
@@ -174,7 +174,7 @@ def read_sample(folder: Path, settings: MonteCarloSettings, index: int) -> dict:
     lacks a key, or is not that of this sample (another index, seed or imperfections)."""
     path = sample_folder(folder, index) / "summary.json"
     try:
-        summary = json.loads(regular_file(path, "a sample's record").read_text(encoding="utf-8"))  # a pipe would hang
+        summary = read_json(path, "sample's record")
         sample = summary["sample"]
         expected = {"index": index, "seed": sample_seed(settings.seed, index), "imperfections": asdict(settings.imperfections)}
         wrong = [key for key, value in expected.items() if sample[key] != json.loads(json.dumps(value))]
@@ -186,11 +186,9 @@ def read_sample(folder: Path, settings: MonteCarloSettings, index: int) -> dict:
         if problem is not None:  # an angle of -40 deg was averaged in
             raise MonteCarloError(f"{path}: {problem}")
         return sample_entry(summary)
-    except ModelError as exc:
+    except (ModelError, RecordError) as exc:
         raise MonteCarloError(str(exc)) from None
-    except OSError as exc:
-        raise MonteCarloError(f"{path}: cannot read the record ({exc.strerror})") from None
-    except (ValueError, TypeError, KeyError, RecursionError) as exc:  # RecursionError: JSON nested 100,000 deep
+    except (TypeError, KeyError) as exc:
         raise MonteCarloError(f"{path}: not a sample's record ({type(exc).__name__}: {exc})") from None
 
 
@@ -250,8 +248,8 @@ def check_resumable(folder: Path, settings: MonteCarloSettings, wall: Wall) -> N
     :func:`check_samples_kept`), naming those that differ."""
     path = Path(folder) / "summary.json"
     try:
-        recorded = json.loads(regular_file(path, "a Monte Carlo summary").read_text(encoding="utf-8"))["settings"]
-    except (ModelError, OSError, ValueError, TypeError, KeyError, RecursionError):
+        recorded = read_json(path, "Monte Carlo summary")["settings"]
+    except (RecordError, TypeError, KeyError):
         recorded = None
     if not isinstance(recorded, dict):  # "settings": "x" was an AttributeError
         raise MonteCarloError(f"{path}: not the summary of a drydem montecarlo run; --resume needs the --out of one")
