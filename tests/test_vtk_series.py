@@ -252,6 +252,7 @@ def _with_column(lines):
                    "(tilt --vtk) or frame, time_s, ux_m, load_direction (shake --vtk)"),
     (lambda lines: [",".join(lines[0].split(",")[:2] + lines[0].split(",")[3:]), *lines[1:]],
      "line 1: missing columns 'tilt_deg'"),
+    (lambda lines: [lines[0].replace("load_direction", "ux_m"), *lines[1:]], "line 1: columns named twice: 'ux_m'; drydem writes each once"),
     (lambda lines: [lines[0], lines[1], lines[2] + ",1", lines[3]],
      "line 3: not a frame of drydem tilt or shake --vtk (ValueError('6 values; the header has 5 columns'))"),
     (lambda lines: [lines[0], lines[1], _frame(lines[2], "+1"), lines[3]],
@@ -259,10 +260,11 @@ def _with_column(lines):
     (lambda lines: [lines[0], lines[1], _frame(lines[2], "9" * 400), lines[3]],
      "line 3: not a frame of drydem tilt or shake --vtk (ValueError(\"frame '99999999999999999...99999999999999999' "
      "(402 characters): must be at most 999999999"),
-], ids=["listed-twice", "out-of-order", "unknown-column", "missing-column", "extra-value", "plus-sign", "400-digits"])
+], ids=["listed-twice", "out-of-order", "unknown-column", "missing-column", "column-twice", "extra-value", "plus-sign", "400-digits"])
 def test_animate_refuses_a_frames_csv_not_as_drydem_writes_it_naming_the_line_and_the_rule(run, tmp_path, edit, message):
     """The findings: a frame listed twice (only noted: a frame on disk left out), frames listed
-    backwards, and an unknown column were drawn; a 400-digit frame number was echoed whole."""
+    backwards, an unknown column and a column named twice (the row kept its last value) were
+    drawn; a 400-digit frame number was echoed whole."""
     short = first_frames(run, tmp_path / "three")
     lines = (short / "frames.csv").read_text().splitlines()
     (short / "frames.csv").write_text("\n".join(edit(lines)) + "\n")

@@ -200,9 +200,13 @@ def _write_indexes(folder: Path, count: int, header: tuple[str, ...], rows: list
 def frames_csv_rows(index: Path) -> list[dict]:
     """The rows of a series' ``frames.csv`` (each a dict by column); a DrydemError naming it if it
     is not a regular file (drydem.files.read_text: a pipe there is not waited on) or not CSV text
-    (with the line)."""
+    (with the line), or a column is named twice (a row would hold only the last one's value)."""
     reader = csv.DictReader(io.StringIO(read_text(index, "frames.csv of drydem tilt or shake --vtk is CSV text"), newline=""))
     try:
+        header = reader.fieldnames or []
+        twice = list(dict.fromkeys(name for name in header if header.count(name) > 1))
+        if twice:
+            raise DrydemError(f"{index}: line 1: columns named twice: {', '.join(shown(name) for name in twice)}; drydem writes each once")
         return list(reader)
     except csv.Error as exc:
         raise DrydemError(f"{index}: line {reader.line_num}: not CSV ({exc})") from None
