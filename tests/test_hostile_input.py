@@ -15,6 +15,7 @@ import drydem as dd
 from drydem.analysis.tilt import TiltSettings, tilt_analysis
 from drydem.cli import main
 from drydem.engine.checkpoint import DIGEST, digest
+from drydem.errors import DrydemError
 from drydem.files import lock_exclusively, unlock
 from drydem.io.results import FOLDER_LOCK
 
@@ -124,6 +125,18 @@ def test_a_results_folder_another_run_is_writing_in_is_refused_and_left_alone(tm
     # the holder gone, the folder is free; a run leaves no lock behind
     assert run("tilt", path, "--out", out, "--increment", "2", "--overwrite").exit_code == 0
     assert (out / "summary.json").is_file() and not lock.exists()
+
+
+def test_a_lock_is_refused_by_name_where_its_file_cannot_be_made_and_taken_again_once_released(tmp_path):
+    with pytest.raises(DrydemError, match="missing/x.lock: cannot make the lock file \\(No such file or directory\\)"):
+        lock_exclusively(tmp_path / "missing" / "x.lock")
+    first = lock_exclusively(tmp_path / "x.lock")
+    assert lock_exclusively(tmp_path / "x.lock") is None and "held by" in (tmp_path / "x.lock").read_text()
+    unlock(tmp_path / "x.lock", first)
+    assert not (tmp_path / "x.lock").exists()
+    again = lock_exclusively(tmp_path / "x.lock")
+    assert again is not None
+    unlock(tmp_path / "x.lock", again)
 
 
 def test_default_results_folders_are_never_shared(tmp_path, monkeypatch):

@@ -152,7 +152,10 @@ def lock_exclusively(path: Path) -> int | None:
     finds it is no longer the file at that path, and tries again on the new one. A lock belongs
     to an open file, so a second lock of ``path`` in the same process is refused too."""
     while True:
-        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as exc:
+            raise DrydemError(f"{path}: cannot make the lock file ({exc.strerror})") from None
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
