@@ -7,6 +7,7 @@ import os
 import signal
 import stat
 from contextlib import contextmanager
+from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
@@ -14,6 +15,7 @@ from click.testing import CliRunner
 import drydem as dd
 from drydem.cli import main
 from drydem.errors import DrydemError
+from drydem.files import held, lock_exclusively, partial_name, replaced_atomically, unlock
 from drydem.io.model_file import save_model
 from drydem.io.vtk import write_vtu
 from conftest import layout_blocks
@@ -301,6 +303,64 @@ def test_a_link_left_at_the_partial_name_is_not_written_through(tmp_path, monkey
     assert (tmp_path / "important.txt").read_text() == "keep me"
     assert not (tmp_path / "y.obj").is_symlink() and (tmp_path / "y.obj").read_text().startswith("#")
     assert not os.path.lexists(tmp_path / ".y.partial.obj")
+
+
+def test_two_processes_writing_one_output_do_not_share_its_partial_file(tmp_path):
+    """Two `export`s to one file at once both wrote .STEM.partial.SUFFIX, each deleting the
+    other's, and one failed naming that temporary file (found by a hunt)."""
+    path = tmp_path / "x.vtu"
+    lock = partial_name(path, "writing")
+    held = lock_exclusively(lock)  # the other process, writing x.vtu
+    try:
+        with pytest.raises(DrydemError, match="x.vtu: another drydem process is writing it"):
+            with replaced_atomically(path) as partial:
+                partial.write_text("mine")
+    finally:
+        unlock(lock, held)
+    assert not path.exists() and not lock.exists()
+
+
+def test_a_file_written_by_another_process_meanwhile_is_kept_unless_replacing_was_asked(tmp_path):
+    """`export` and `show` look for an existing OUTPUT before their work; two started together
+    both found none, and the last to finish replaced the other's without --overwrite."""
+    path = tmp_path / "x.txt"
+    with pytest.raises(DrydemError, match="x.txt: was written by another process while drydem wrote it, and is kept; pass --overwrite"):
+        with replaced_atomically(path, replace=False) as partial:
+            partial.write_text("mine")
+            path.write_text("theirs")
+    assert path.read_text() == "theirs" and sorted(p.name for p in tmp_path.iterdir()) == ["x.txt"]
+    with replaced_atomically(path) as partial:
+        partial.write_text("mine")
+    assert path.read_text() == "mine"
+
+
+def test_a_lock_file_that_cannot_be_deleted_leaves_the_error_of_the_run(tmp_path, monkeypatch):
+    """A results folder made read-only mid-run: the checkpoint's error was followed by a
+    PermissionError traceback from deleting the folder's lock (found by a hunt)."""
+    original = Path.unlink
+
+    def refused_for_locks(self, missing_ok=False):
+        if self.name.endswith(".lock"):
+            raise PermissionError(13, "Permission denied", str(self))
+        return original(self, missing_ok=missing_ok)
+
+    monkeypatch.setattr(Path, "unlink", refused_for_locks)
+    with pytest.raises(DrydemError, match="the run's own error"):
+        with held(tmp_path / "run.lock", "busy"):
+            raise DrydemError("the run's own error")
+    monkeypatch.undo()
+    with held(tmp_path / "run.lock", "busy"):  # the file left is taken over
+        pass
+    assert not (tmp_path / "run.lock").exists()
+
+
+@pytest.mark.parametrize("command", [["tilt", "WD1"], ["limit", "WD1"], ["sweep", "study.toml"]])
+def test_an_out_name_longer_than_the_system_takes_is_named_not_a_traceback(tmp_path, monkeypatch, command):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "study.toml").write_text('[study]\nname = "s"\n[[grid]]\ntargets = ["WD1"]\n')
+    result = invoke(*command, "--out", "d" * 256)
+    assert result.exit_code == 1 and "Traceback" not in result.output, result.output
+    assert "File name too long" in result.output and not list(tmp_path.glob("d*"))
 
 
 def test_an_output_name_of_250_characters_is_written(tmp_path, monkeypatch):

@@ -139,6 +139,38 @@ def test_a_lock_is_refused_by_name_where_its_file_cannot_be_made_and_taken_again
     unlock(tmp_path / "x.lock", again)
 
 
+def test_a_folder_a_run_is_writing_in_is_neither_animated_nor_swept_into(tmp_path):
+    """Found by a hunt: `animate` rendered a run still being written (which then replaced the
+    video), and a sweep wrote its records beside a running tilt's files, or a finished one's."""
+    path, out = model_file(tmp_path), tmp_path / "run"
+    (tmp_path / "study.toml").write_text('[study]\nname = "s"\n[[grid]]\ntargets = ["brick.toml"]\n')
+    out.mkdir()
+    held = lock_exclusively(out / FOLDER_LOCK)
+    try:
+        assert refused(run("animate", out), "run: a drydem run is writing there; animate it once the run has ended")
+        assert refused(run("sweep", tmp_path / "study.toml", "--out", out), "run: a drydem run is writing there; give a sweep its own --out")
+    finally:
+        unlock(out / FOLDER_LOCK, held)
+    assert run("tilt", path, "--out", out, "--increment", "2", "--overwrite").exit_code == 0
+    assert refused(run("sweep", tmp_path / "study.toml", "--out", out), "run: holds a drydem run (summary.json), not a sweep's records")
+    assert not (out / "runs").exists()
+
+
+def test_a_lock_left_by_a_killed_run_is_no_file_of_the_folder(tmp_path):
+    """kill -9 leaves a Monte Carlo run's lock file (the system drops the lock, not the file):
+    the folder then counted as holding "other files (.montecarlo.lock)"."""
+    path, out = model_file(tmp_path), tmp_path / "run"
+    out.mkdir()
+    (out / ".montecarlo.lock").write_text("held by a run killed outright")
+    assert run("tilt", path, "--out", out, "--increment", "2").exit_code == 0
+    for finished in out.iterdir():  # the run's outputs gone, the user's notes and the old lock left
+        if finished.name != ".montecarlo.lock":
+            finished.unlink()
+    (out / "notes.txt").write_text("mine")
+    assert refused(run("tilt", path, "--out", out, "--increment", "2"),
+                   "run: already holds other files (notes.txt); pass --overwrite to write the run beside them (they are kept)")
+
+
 def test_default_results_folders_are_never_shared(tmp_path, monkeypatch):
     """Two runs started in the same second take results/NAME-TIME and NAME-TIME-2: each folder is
     made exclusively, not looked for and then made (two processes could both find it free)."""

@@ -236,6 +236,19 @@ def test_the_folders_of_tilt_and_limit_runs_are_reported_as_the_users_runs(tmp_p
     assert "No run of the paper's walls" in text and "## Table" not in text and "(figures/fig" not in text
 
 
+def test_a_target_of_a_long_name_gets_a_figure_name_the_system_takes(tmp_path):
+    """A run of a 245-character model file name was fine, and then no report could be made: its
+    figure's name passed the 255 bytes a file name may have (found by a hunt)."""
+    model = tmp_path / ("p" * 240 + ".toml")
+    model.write_text(PIER)
+    results = tmp_path / "results"
+    tilted = CliRunner().invoke(main, ["tilt", str(model), "--increment", "5.0", "--fixed", "--out", str(results / "one")])
+    assert tilted.exit_code == 0, tilted.output
+    reported = CliRunner().invoke(main, ["report", str(results)])
+    assert reported.exit_code == 0, reported.output
+    assert [p.name for p in (results / "report" / "figures").iterdir()] == ["yours1_" + "p" * 60 + "_pushover.png"]
+
+
 def test_a_run_folder_of_a_paper_wall_goes_to_the_papers_tables(tmp_path):
     """A run folder whose summary names a built-in paper wall (as `drydem tilt WD3` records it)
     at kn = 3e7 fills that wall's row of Table 3; its model file's path would make it the user's."""

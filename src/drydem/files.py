@@ -82,9 +82,9 @@ def writable_folder(folder: str | Path) -> Path:
     DrydemError naming it and the reason (it is a file or a device, a parent is a file, no
     permission, no space). Commands call it before their work, as :func:`writable`."""
     folder = Path(folder)
-    if folder.exists() and not folder.is_dir():
-        raise DrydemError(f"{folder}: exists and is not a folder; give a folder")
     try:
+        if folder.exists() and not folder.is_dir():
+            raise DrydemError(f"{folder}: exists and is not a folder; give a folder")
         folder.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=folder):
             pass
@@ -117,25 +117,52 @@ def write_text(path: str | Path, text: str) -> Path:
 
 
 @contextmanager
-def replaced_atomically(path: str | Path):
+def replaced_atomically(path: str | Path, *, replace: bool = True):
     """Yield a temporary file name beside ``path`` (:func:`partial_name`; same suffix: writers
     that go by it still work) to write to. When the block ends normally the file replaces
     ``path`` in one step (os.replace); when it raises, the file is removed. So ``path`` is never
     half-written: it is the old file or the whole new one. An OSError is re-raised as a
     DrydemError naming ``path`` and the reason. Whatever a killed run left at the temporary
-    name is removed first, a link included: a writer would write through it to its target."""
+    name is removed first, a link included: a writer would write through it to its target.
+
+    Two processes writing ``path`` at once would write the one temporary file: the second is
+    refused (DrydemError), ``path`` held by a lock beside it (:func:`held`, the name
+    ``.STEM.writing.SUFFIX``). With ``replace`` False (a command that replaces no file unless
+    asked, which looked before its work) the file is put in place only if nothing is there by
+    then (:func:`_put_in_place`)."""
     path = Path(path)
     temporary = partial_name(path)
-    try:
-        if temporary.is_symlink() or temporary.is_file():
-            temporary.unlink()
-        yield temporary
+    with held(partial_name(path, "writing"), f"{path}: another drydem process is writing it; wait for it to end, or give another name"):
+        try:
+            if temporary.is_symlink() or temporary.is_file():
+                temporary.unlink()
+            yield temporary
+            _put_in_place(temporary, path, replace)
+        except OSError as exc:
+            raise DrydemError(f"{path}: cannot write: {exc.strerror or exc}") from None
+        finally:
+            if temporary.is_file() and not temporary.is_symlink():
+                temporary.unlink()
+
+
+def _put_in_place(temporary: Path, path: Path, replace: bool) -> None:
+    """``temporary`` renamed to ``path``; with ``replace`` False only if nothing is at ``path``
+    (a hard link made, which fails if the name is taken, in one step), else a DrydemError: the
+    file another process wrote there meanwhile is kept. A file system without hard links (FAT)
+    is looked at, then renamed to."""
+    if replace:
         os.replace(temporary, path)
-    except OSError as exc:
-        raise DrydemError(f"{path}: cannot write: {exc.strerror or exc}") from None
-    finally:
-        if temporary.is_file() and not temporary.is_symlink():
-            temporary.unlink()
+        return
+    kept = DrydemError(f"{path}: was written by another process while drydem wrote it, and is kept; pass --overwrite to replace it, "
+                       "or give another name")
+    try:
+        os.link(temporary, path)
+    except FileExistsError:
+        raise kept from None
+    except OSError:
+        if os.path.lexists(path):
+            raise kept from None
+        os.replace(temporary, path)
 
 
 def lock_exclusively(path: Path) -> int | None:
@@ -176,9 +203,32 @@ def lock_exclusively(path: Path) -> int | None:
 
 
 def unlock(path: Path, fd: int) -> None:
-    """End a lock of :func:`lock_exclusively`: delete its file, then unlock it (closing it)."""
-    Path(path).unlink(missing_ok=True)
+    """End a lock of :func:`lock_exclusively`: delete its file, then unlock it (closing it). A
+    file that cannot be deleted (its folder made read-only meanwhile) is left: the lock goes
+    with the descriptor, and the next holder takes the file over."""
+    try:
+        Path(path).unlink(missing_ok=True)
+    except OSError:
+        pass
     os.close(fd)
+
+
+def locked_by_another(path: Path) -> bool:
+    """Whether another process holds the lock ``path`` (:func:`lock_exclusively`), looked at
+    without making or changing anything: False if there is no such file or it cannot be read."""
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        return False
+    except BlockingIOError:
+        return True
+    except OSError:
+        return False
+    finally:
+        os.close(fd)
 
 
 @contextmanager
@@ -198,14 +248,15 @@ def held(path: Path, busy: str, error: type[DrydemError] = DrydemError) -> Itera
 MAX_NAME_BYTES = 255
 
 
-def partial_name(path: Path) -> Path:
-    """``.STEM.partial.SUFFIX`` beside ``path``: the name drydem reserves for a file being
-    written (:func:`replaced_atomically`), its stem cut so that the name stays within
-    MAX_NAME_BYTES (a legal 250-character name would otherwise give one the system refuses)."""
+def partial_name(path: Path, tag: str = "partial") -> Path:
+    """``.STEM.TAG.SUFFIX`` beside ``path``: the names drydem reserves for a file being written
+    (:func:`replaced_atomically`: TAG partial, and writing for its lock), its stem cut so that
+    the name stays within MAX_NAME_BYTES (a legal 250-character name would otherwise give one
+    the system refuses)."""
     stem = path.stem
-    while stem and len(os.fsencode(f".{stem}.partial{path.suffix}")) > MAX_NAME_BYTES:
+    while stem and len(os.fsencode(f".{stem}.{tag}{path.suffix}")) > MAX_NAME_BYTES:
         stem = stem[:-1]
-    return path.with_name(f".{stem}.partial{path.suffix}")
+    return path.with_name(f".{stem}.{tag}{path.suffix}")
 
 
 @contextmanager

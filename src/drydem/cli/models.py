@@ -220,7 +220,7 @@ def show(target: str, out: Path | None, overwrite: bool, strict: bool, unit: str
     monitored = model.block_name[monitored_block(model)]
     kinds = wall.layout.kinds() if wall is not None else None
     try:
-        with replaced_atomically(out) as partial:
+        with replaced_atomically(out, replace=overwrite) as partial:
             layout_figure(model, partial, kinds=kinds, voids=voids, monitored=monitored, title=title)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
@@ -281,7 +281,7 @@ def export(target: str, output: Path, overwrite: bool, unit: str) -> None:
     try:
         replaceable(output, overwrite, other="another OUTPUT")
         found = resolve_target(target, unit)
-        with replaced_atomically(output) as partial:
+        with replaced_atomically(output, replace=overwrite) as partial:
             writer(found.model, partial)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None

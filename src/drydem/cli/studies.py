@@ -24,7 +24,7 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
     from tqdm import tqdm
 
     from drydem.masonry import studies
-    from drydem.files import writable_folder
+    from drydem.io.results import records_folder
     from drydem.parametric.study import load_study
     from drydem.parametric.sweep import pending
     from drydem.parametric.sweep import sweep as run_sweep
@@ -40,7 +40,7 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     try:
-        out = writable_folder(out or Path("results") / study.name)
+        out = records_folder(out or Path("results") / study.name)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     for note in study.notes:
@@ -125,7 +125,8 @@ def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, joint_l
     goes; an interrupted one goes on. With a stress-dependent joint law
     (--joint-model and its keys), the law's shape is kept and its kn (ks = ratio x kn) fitted."""
     from drydem.parametric.calibrate import CALIBRATION_FILE, NEIGHBOURHOOD, StiffnessSearch, calibrate_stiffness, check_calibration_file
-    from drydem.files import writable, writable_folder
+    from drydem.files import writable
+    from drydem.io.results import records_folder
     from drydem.parametric.workers import open_workers
 
     names = tuple(d.strip() for d in designs.split(",")) if designs.strip() else ()  # an empty name kept, to be refused
@@ -135,7 +136,7 @@ def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, joint_l
         raise click.ClickException("\n".join(problems))
     out = out or results_dir / CALIBRATION_FILE
     try:
-        writable_folder(results_dir)
+        records_folder(results_dir)
         check_calibration_file(writable(out), search, overwrite=overwrite)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None

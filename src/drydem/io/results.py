@@ -26,7 +26,7 @@ import numpy as np
 
 from drydem import __version__
 from drydem.errors import DrydemError
-from drydem.files import held, replaceable, replaced_atomically, writable_folder
+from drydem.files import held, locked_by_another, replaceable, replaced_atomically, writable_folder
 
 if TYPE_CHECKING:  # annotations only: importing the limit analysis takes scipy.optimize, a third of a second
     from drydem.analysis.limit import LimitResult, LimitSettings
@@ -213,6 +213,10 @@ def model_summary(model: Model) -> dict:
 #: the file a run holds its results folder by while it writes there (drydem.files.held): a
 #: second run given the same folder is refused, not mixed in (deleted when the run ends)
 FOLDER_LOCK = ".drydem.lock"
+#: the file a Monte Carlo run (drydem.parametric.montecarlo, from Python too) holds its folder by
+MONTECARLO_LOCK = ".montecarlo.lock"
+#: what a run killed by the system (kill -9) may leave in its folder besides its outputs: no result
+LOCK_FILES = (FOLDER_LOCK, MONTECARLO_LOCK)
 
 
 @contextmanager
@@ -229,17 +233,32 @@ def prepared_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | No
     """
     folder = writable_folder(folder)
     with held(folder / FOLDER_LOCK, f"{folder}: another drydem run is writing there; wait for it to end, or give another --out"):
-        present = sorted(p.name for p in folder.iterdir() if p.name != FOLDER_LOCK)
-        if present and not resume:
-            ours = [name for name in present if name in outputs]
-            if not overwrite:
-                what = f"another run ({', '.join(ours)})" if ours else f"other files ({', '.join(present[:5])}{', ...' if len(present) > 5 else ''})"
-                go_on = "" if resume is None else ", --resume to go on from its checkpoint"
-                raise DrydemError(f"{folder}: already holds {what}; pass --overwrite to replace it{go_on}, or another --out")
-            for name in ours:
-                path = folder / name
-                shutil.rmtree(path) if path.is_dir() and not path.is_symlink() else path.unlink()
+        present = sorted(p.name for p in folder.iterdir() if p.name not in LOCK_FILES)
+        ours = [name for name in present if name in outputs]
+        if present and not (resume or overwrite):
+            go_on = "" if resume is None else ", --resume to go on from its checkpoint"
+            others = f"{', '.join(present[:5])}{', ...' if len(present) > 5 else ''}"
+            raise DrydemError(f"{folder}: already holds another run ({', '.join(ours)}); pass --overwrite to replace it{go_on}, "
+                              "or another --out" if ours else
+                              f"{folder}: already holds other files ({others}); pass --overwrite to write the run beside them "
+                              "(they are kept), or another --out")
+        for name in ours if overwrite and not resume else ():
+            path = folder / name
+            shutil.rmtree(path) if path.is_dir() and not path.is_symlink() else path.unlink()
         yield folder
+
+
+def records_folder(folder: Path) -> Path:
+    """``folder`` made ready for a sweep's records (:func:`drydem.files.writable_folder`; sweeps
+    may share one), unless it is a single run's, in which the records would be mixed: one being
+    written (its :data:`FOLDER_LOCK` held by another process) or one written (its summary.json).
+    DrydemError naming it otherwise."""
+    folder = writable_folder(folder)
+    if locked_by_another(folder / FOLDER_LOCK):
+        raise DrydemError(f"{folder}: a drydem run is writing there; give a sweep its own --out")
+    if (folder / "summary.json").is_file():
+        raise DrydemError(f"{folder}: holds a drydem run (summary.json), not a sweep's records; give a sweep its own --out")
+    return folder
 
 
 def write_summary(folder: Path, content: dict) -> Path:

@@ -45,7 +45,8 @@ from types import SimpleNamespace
 
 from drydem import __version__
 from drydem.errors import DrydemError, ModelError
-from drydem.files import replaced_atomically, writable, writable_folder
+from drydem.files import replaced_atomically, writable
+from drydem.io.results import records_folder
 from drydem.model.parameters import JOINT_STIFFNESS, JointMaterial, Range, field_problems, refuse
 from drydem.parametric.records import RecordError, read_json, read_record, record_path
 from drydem.parametric.study import RunSpec, joint_law_text
@@ -388,7 +389,7 @@ def calibrate_stiffness(search: StiffnessSearch, results: Path, executor: Execut
     refuse(search.problems())
     experiment = experimental_angles()
     if out is not None:
-        writable_folder(results)
+        records_folder(results)
         check_calibration_file(writable(out), search, overwrite=overwrite)
     found: dict[float, Evaluation] = {}
 

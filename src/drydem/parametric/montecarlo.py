@@ -48,7 +48,7 @@ from drydem.analysis.drift import DLS_DRIFT
 from drydem.analysis.tilt import TiltSettings, tilt_analysis
 from drydem.errors import DrydemError, ModelError
 from drydem.files import held
-from drydem.io.results import PushoverWriter, tilt_summary, write_summary
+from drydem.io.results import MONTECARLO_LOCK, PushoverWriter, tilt_summary, write_summary
 from drydem.masonry.imperfections import Imperfections, imperfect_model
 from drydem.masonry.walls import Wall
 from drydem.model.parameters import Range, field_problems, refuse
@@ -59,7 +59,6 @@ from drydem.parametric.records import RecordError, collapse_problem, read_json
 #: the percentile reported as ``p05``
 PERCENTILE = 5.0
 SAMPLES_FOLDER = "samples"
-LOCK_FILE = ".montecarlo.lock"
 #: the rules of a run's number of samples (at most MAX_SAMPLES, :mod:`drydem.parametric.limits`
 #: says why) and of its seed (any whole number >= 0: numpy's SeedSequence takes any)
 SETTINGS_RULES = {"samples": SAMPLES, "seed": Range(0, None, integer=True)}
@@ -311,7 +310,7 @@ def hold_folder(folder: Path) -> Iterator[None]:
     (:func:`drydem.files.held`: the kernel drops it when the process ends, however it ends);
     MonteCarloError if another run holds it."""
     busy = f"{folder}: another drydem montecarlo is working on it; wait for it to end, or give another --out"
-    with held(Path(folder) / LOCK_FILE, busy, MonteCarloError):
+    with held(Path(folder) / MONTECARLO_LOCK, busy, MonteCarloError):
         yield
 
 

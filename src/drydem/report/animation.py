@@ -271,13 +271,13 @@ def render_video(folder: Path, path: Path, *, fps: float = 8.0, overwrite: bool 
     images = [_image(frame, norm, low - margin, high + margin, flat=flat) for frame in frames]
     if path.suffix.lower() == ".mp4":
         try:
-            with replaced_atomically(path) as partial, imageio.get_writer(partial, fps=fps, codec="libx264", macro_block_size=16) as writer:
+            with replaced_atomically(path, replace=overwrite) as partial, imageio.get_writer(partial, fps=fps, codec="libx264", macro_block_size=16) as writer:
                 for image in images:
                     writer.append_data(image)
             return path
         except (ImportError, RuntimeError, DrydemError):  # no ffmpeg, or it failed (an OSError): fall back to a GIF
             path = video_path(path.with_suffix(".gif"), overwrite=overwrite)
-    with replaced_atomically(path) as partial:
+    with replaced_atomically(path, replace=overwrite) as partial:
         imageio.mimsave(partial, images, duration=1000.0 / fps, loop=0)  # Pillow's duration: ms a frame
     return path
 

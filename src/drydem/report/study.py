@@ -37,6 +37,7 @@ from drydem.model.parameters import Range
 from drydem.parametric.limits import MAX_SAMPLES
 from drydem.parametric.records import (ANGLE, SUMMARY_FILE, RecordError, Records, load_records, load_run_folders, read_json, run_folders,
                                        table_problems)
+from drydem.parametric.study import ID_PART_CHARACTERS
 from drydem.files import replaceable, replaced_atomically, writable_folder
 from drydem.report.joints import joint_law, law_words, relative_error_percent
 from drydem.report.plots import new_figure
@@ -394,10 +395,17 @@ def _yours(records: list[dict], figures: Path, paper: dict) -> list[str]:
                                ["target", "friction", "method", "collapse angle (deg)", "load multiplier"], rows))
     for k, target in enumerate(dict.fromkeys(r["spec"]["target"] for r in tilts if r["pushover"])):
         curves = [r for r in tilts if r["spec"]["target"] == target and r["pushover"]]
-        name = "yours{}_{}_pushover".format(k + 1, "".join(c if c.isalnum() or c in "-_" else "-" for c in Path(target).name))
+        name = "yours{}_{}_pushover".format(k + 1, _file_part(Path(target).name))
         sections.append(_figure(figures, name, f"{YOURS}: pushover curves of {labels[target]}, EC8 drift limits dashed",
                                 lambda ax, curves=curves: _run_curves(ax, curves)))
     return sections
+
+
+def _file_part(name: str) -> str:
+    """``name`` as a part of a figure's file name: ASCII letters, digits, - and _ (anything else
+    a -), at most ID_PART_CHARACTERS of them, as in the runs' ids (a target of 245 characters
+    gave a figure name past the system's 255 bytes, and no report)."""
+    return "".join(c if (c.isascii() and c.isalnum()) or c in "-_" else "-" for c in name)[:ID_PART_CHARACTERS]
 
 
 def _run_curves(ax, runs: list[dict]) -> bool:
