@@ -15,7 +15,7 @@ from click.testing import CliRunner
 import drydem as dd
 from drydem.cli import main
 from drydem.errors import DrydemError
-from drydem.files import held, lock_exclusively, partial_name, replaced_atomically, unlock
+from drydem.files import held, lock_exclusively, locked_by_another, partial_name, replaced_atomically, unlock
 from drydem.io.model_file import save_model
 from drydem.io.vtk import write_vtu
 from conftest import layout_blocks
@@ -348,10 +348,24 @@ def test_a_lock_file_that_cannot_be_deleted_leaves_the_error_of_the_run(tmp_path
     with pytest.raises(DrydemError, match="the run's own error"):
         with held(tmp_path / "run.lock", "busy"):
             raise DrydemError("the run's own error")
-    monkeypatch.undo()
+    monkeypatch.setattr(Path, "unlink", original)
     with held(tmp_path / "run.lock", "busy"):  # the file left is taken over
         pass
     assert not (tmp_path / "run.lock").exists()
+
+
+def test_a_link_or_a_pipe_at_a_lock_name_is_refused_not_written_through_or_waited_on(tmp_path):
+    """Found by a review: a link planted at .drydem.lock had drydem empty its target and write
+    "held by ..." into it; a pipe there was a traceback, or a wait without end."""
+    (tmp_path / "victim.txt").write_text("precious")
+    os.symlink(tmp_path / "victim.txt", tmp_path / "link.lock")
+    os.mkfifo(tmp_path / "pipe.lock")
+    with pytest.raises(DrydemError, match="link.lock: cannot make the lock file \\(a link; a lock file is a regular file: remove it\\)"):
+        lock_exclusively(tmp_path / "link.lock")
+    with pytest.raises(DrydemError, match="pipe.lock: is not a regular file \\(a pipe or a device\\); a lock file is: remove it"):
+        lock_exclusively(tmp_path / "pipe.lock")
+    assert (tmp_path / "victim.txt").read_text() == "precious"
+    assert not locked_by_another(tmp_path / "pipe.lock") and not locked_by_another(tmp_path / "link.lock")
 
 
 @pytest.mark.parametrize("command", [["tilt", "WD1"], ["limit", "WD1"], ["sweep", "study.toml"]])

@@ -6,6 +6,7 @@ outputs: test_hostile_io.py.)"""
 
 import os
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -144,13 +145,19 @@ def test_a_folder_a_run_is_writing_in_is_neither_animated_nor_swept_into(tmp_pat
     video), and a sweep wrote its records beside a running tilt's files, or a finished one's."""
     path, out = model_file(tmp_path), tmp_path / "run"
     (tmp_path / "study.toml").write_text('[study]\nname = "s"\n[[grid]]\ntargets = ["brick.toml"]\n')
-    out.mkdir()
+    (out / "vtk").mkdir(parents=True)
     held = lock_exclusively(out / FOLDER_LOCK)
     try:
         assert refused(run("animate", out), "run: a drydem run is writing there; animate it once the run has ended")
+        assert refused(run("animate", out / "vtk"), "vtk: a drydem run is writing there")
         assert refused(run("sweep", tmp_path / "study.toml", "--out", out), "run: a drydem run is writing there; give a sweep its own --out")
     finally:
         unlock(out / FOLDER_LOCK, held)
+    montecarlo = lock_exclusively(out / ".montecarlo.lock")  # a Monte Carlo run started from Python holds only its own lock
+    try:
+        assert refused(run("tilt", path, "--out", out, "--increment", "2", "--overwrite"), "run: another drydem run is writing there")
+    finally:
+        unlock(out / ".montecarlo.lock", montecarlo)
     assert run("tilt", path, "--out", out, "--increment", "2", "--overwrite").exit_code == 0
     assert refused(run("sweep", tmp_path / "study.toml", "--out", out), "run: holds a drydem run (summary.json), not a sweep's records")
     assert not (out / "runs").exists()
@@ -172,8 +179,9 @@ def test_a_lock_left_by_a_killed_run_is_no_file_of_the_folder(tmp_path):
 
 
 def test_default_results_folders_are_never_shared(tmp_path, monkeypatch):
-    """Two runs started in the same second take results/NAME-TIME and NAME-TIME-2: each folder is
-    made exclusively, not looked for and then made (two processes could both find it free)."""
+    """Two runs started in the same second both take results/NAME-TIME: the folder was looked
+    for, then made (exist_ok), so a run that found it free could end up writing into the
+    folder another run made in between. Each run now makes its own exclusively (-2, -3, ...)."""
     import drydem.cli.common as common
 
     class Frozen(common.datetime):
@@ -181,15 +189,25 @@ def test_default_results_folders_are_never_shared(tmp_path, monkeypatch):
         def now(cls, tz=None):
             return cls(2026, 1, 2, 3, 4, 5)
 
+    original, raced = Path.mkdir, []
+
+    def another_run_makes_it_first(self, *args, **kwargs):
+        if self.name == "brick-20260102-030405" and not raced:
+            raced.append(self)
+            original(self, parents=True)
+        return original(self, *args, **kwargs)
+
     monkeypatch.setattr(common, "datetime", Frozen)
-    path = model_file(tmp_path)
-    for _ in range(2):
-        assert run("tilt", path, "--increment", "2").exit_code == 0
-    made = sorted(p.name for p in (tmp_path / "results").iterdir())
-    assert made == ["brick-20260102-030405", "brick-20260102-030405-2"], made
-    (tmp_path / "results").rename(tmp_path / "moved")
-    (tmp_path / "results").symlink_to(tmp_path / "nowhere")  # a link to nothing: said, not looped on
-    assert refused(run("tilt", path, "--increment", "2"), "results is a link to the missing")
+    monkeypatch.setattr(Path, "mkdir", another_run_makes_it_first)
+    assert run("tilt", model_file(tmp_path), "--increment", "2").exit_code == 0
+    results = tmp_path / "results"
+    assert sorted(p.name for p in results.iterdir()) == ["brick-20260102-030405", "brick-20260102-030405-2"]
+    assert not any((results / "brick-20260102-030405").iterdir())  # the other run's folder is left to it
+    assert (results / "brick-20260102-030405-2" / "summary.json").is_file()
+    monkeypatch.setattr(Path, "mkdir", original)
+    results.rename(tmp_path / "moved")
+    results.symlink_to(tmp_path / "nowhere")  # a link to nothing: said, not looped on
+    assert refused(run("tilt", model_file(tmp_path), "--increment", "2"), "results is a link to the missing")
 
 
 def test_a_results_folder_that_cannot_be_one_is_refused(tmp_path):

@@ -9,6 +9,7 @@ from click.testing import CliRunner
 import drydem as dd
 from drydem.analysis.tilt import TiltSettings, tilt_analysis
 from drydem.cli import main
+from drydem.files import WRITING, lock_exclusively, partial_name, unlock
 from drydem.io.model_file import save_model
 from drydem.io.vtk import VtkSeries
 from conftest import layout_blocks
@@ -271,6 +272,20 @@ def test_animate_refuses_a_frames_csv_not_as_drydem_writes_it_naming_the_line_an
     result = CliRunner().invoke(main, ["animate", str(short), "-o", str(tmp_path / "collapse.gif")])
     assert result.exit_code == 1 and f"Error: {short / 'frames.csv'}: {message}" in result.output, result.output
     assert "9" * 40 not in result.output and not (tmp_path / "collapse.gif").exists()
+
+
+def test_a_video_another_process_is_writing_is_neither_written_nor_replaced_by_a_gif(run, tmp_path):
+    """Found by a review: that refusal was taken for ffmpeg failing, and a GIF written instead."""
+    short = first_frames(run, tmp_path / "three")
+    video = tmp_path / "collapse.mp4"
+    lock = partial_name(video, WRITING)
+    held = lock_exclusively(lock)
+    try:
+        result = CliRunner().invoke(main, ["animate", str(short), "-o", str(video)])
+    finally:
+        unlock(lock, held)
+    assert result.exit_code == 1 and "collapse.mp4: another drydem process is writing it" in result.output, result.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["three"]
 
 
 def spoiled(run, tmp_path, spoil):

@@ -16,3 +16,7 @@ class ModelError(DrydemError):
 class DivergenceError(DrydemError):
     """The explicit integration blew up (timestep too large or the model is unstable numerically)."""
 
+
+class OutputTakenError(DrydemError):
+    """An output file is being written by another process, or was written by one while drydem
+    wrote its own (which then keeps the other's)."""

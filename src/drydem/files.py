@@ -3,6 +3,7 @@ before any work, and write each file whole or not at all; the numbers text files
 
 from __future__ import annotations
 
+import errno
 import fcntl
 import os
 import re
@@ -17,7 +18,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-from drydem.errors import DrydemError, ModelError
+from drydem.errors import DrydemError, ModelError, OutputTakenError
 
 #: a number as the text files drydem reads write one (motion records, OBJ, STL, VRML): ASCII
 #: digits with an optional sign, point and exponent (Python's float() also takes 1_0 for 10, and
@@ -116,6 +117,10 @@ def write_text(path: str | Path, text: str) -> Path:
     return path
 
 
+#: the tag of the lock beside a file being written (:func:`replaced_atomically`, :func:`partial_name`)
+WRITING = "writing"
+
+
 @contextmanager
 def replaced_atomically(path: str | Path, *, replace: bool = True):
     """Yield a temporary file name beside ``path`` (:func:`partial_name`; same suffix: writers
@@ -126,13 +131,14 @@ def replaced_atomically(path: str | Path, *, replace: bool = True):
     name is removed first, a link included: a writer would write through it to its target.
 
     Two processes writing ``path`` at once would write the one temporary file: the second is
-    refused (DrydemError), ``path`` held by a lock beside it (:func:`held`, the name
-    ``.STEM.writing.SUFFIX``). With ``replace`` False (a command that replaces no file unless
-    asked, which looked before its work) the file is put in place only if nothing is there by
-    then (:func:`_put_in_place`)."""
+    refused (OutputTakenError), ``path`` held by a lock beside it (:func:`held`, the name
+    ``.STEM.writing.SUFFIX``: :data:`WRITING`). With ``replace`` False (a command that replaces
+    no file unless asked, which looked before its work) the file is put in place only if
+    nothing is there by then (:func:`_put_in_place`)."""
     path = Path(path)
     temporary = partial_name(path)
-    with held(partial_name(path, "writing"), f"{path}: another drydem process is writing it; wait for it to end, or give another name"):
+    busy = f"{path}: another drydem process is writing it; wait for it to end, or give another name"
+    with held(partial_name(path, WRITING), busy, OutputTakenError):
         try:
             if temporary.is_symlink() or temporary.is_file():
                 temporary.unlink()
@@ -147,14 +153,14 @@ def replaced_atomically(path: str | Path, *, replace: bool = True):
 
 def _put_in_place(temporary: Path, path: Path, replace: bool) -> None:
     """``temporary`` renamed to ``path``; with ``replace`` False only if nothing is at ``path``
-    (a hard link made, which fails if the name is taken, in one step), else a DrydemError: the
+    (a hard link made, which fails if the name is taken, in one step), else an OutputTakenError: the
     file another process wrote there meanwhile is kept. A file system without hard links (FAT)
     is looked at, then renamed to."""
     if replace:
         os.replace(temporary, path)
         return
-    kept = DrydemError(f"{path}: was written by another process while drydem wrote it, and is kept; pass --overwrite to replace it, "
-                       "or give another name")
+    kept = OutputTakenError(f"{path}: was written by another process while drydem wrote it, and is kept; pass --overwrite to "
+                            "replace it, or give another name")
     try:
         os.link(temporary, path)
     except FileExistsError:
@@ -167,22 +173,21 @@ def _put_in_place(temporary: Path, path: Path, replace: bool) -> None:
 
 def lock_exclusively(path: Path) -> int | None:
     """The descriptor of ``path`` locked exclusively (flock) for this process, created if
-    missing, held until :func:`unlock`; None if another process holds it. DrydemError naming
-    ``path`` if the file system refuses the lock.
+    missing, held until :func:`unlock`; None if another open file of it holds the lock.
+    DrydemError naming ``path`` if it is not a regular file (:func:`_lock_file`) or the file
+    system refuses the lock.
 
     A lock rather than a file created exclusively (O_EXCL): the kernel drops it when its process
     ends, however it ends (kill -9, a crash), so there is no stale lock to detect and take over
     by guessing from process ids and hosts, and no window in which two processes both take a
-    stale one over. (On NFS, Linux maps flock to the lock manager's locks, across hosts.) The
-    file only tells a person who holds it: host, pid, time. Its holder deletes it before
-    unlocking it (:func:`unlock`), so a process that opened it before that and locks it after
-    finds it is no longer the file at that path, and tries again on the new one. A lock belongs
-    to an open file, so a second lock of ``path`` in the same process is refused too."""
+    stale one over. The file only tells a person who holds it: host, pid, time. Its holder
+    deletes it before unlocking it (:func:`unlock`), so a process that opened it before that and
+    locks it after finds it is no longer the file at that path, and tries again on the new one.
+    On a local file system a lock belongs to an open file, so a second lock of ``path`` in the
+    same process is refused too; on NFS, where Linux emulates flock with the lock manager's
+    per-process locks (across hosts), it is not."""
     while True:
-        try:
-            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
-        except OSError as exc:
-            raise DrydemError(f"{path}: cannot make the lock file ({exc.strerror})") from None
+        fd = _lock_file(path)
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
@@ -192,14 +197,31 @@ def lock_exclusively(path: Path) -> int | None:
             os.close(fd)
             raise DrydemError(f"{path}: cannot lock it ({exc.strerror}): does this file system support locks?") from None
         try:
-            current = os.stat(path).st_ino == os.fstat(fd).st_ino
+            if os.lstat(path).st_ino == os.fstat(fd).st_ino:
+                os.ftruncate(fd, 0)
+                os.write(fd, f"held by {socket.gethostname()} pid {os.getpid()} since {time.strftime('%Y-%m-%d %H:%M:%S')}\n".encode())
+                return fd
         except FileNotFoundError:
-            current = False
-        if current:
-            os.ftruncate(fd, 0)
-            os.write(fd, f"held by {socket.gethostname()} pid {os.getpid()} since {time.strftime('%Y-%m-%d %H:%M:%S')}\n".encode())
-            return fd
+            pass
+        except OSError as exc:
+            os.close(fd)
+            raise DrydemError(f"{path}: cannot write the lock file ({exc.strerror})") from None
         os.close(fd)
+
+
+def _lock_file(path: Path) -> int:
+    """A descriptor of the regular file ``path``, made if missing, never opened through a link
+    (a planted link would have drydem empty and write its target) nor waited on (a pipe);
+    DrydemError naming ``path`` otherwise."""
+    try:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_NONBLOCK, 0o644)
+    except OSError as exc:
+        reason = "a link; a lock file is a regular file: remove it" if exc.errno == errno.ELOOP else exc.strerror
+        raise DrydemError(f"{path}: cannot make the lock file ({reason})") from None
+    if not stat.S_ISREG(os.fstat(fd).st_mode):
+        os.close(fd)
+        raise DrydemError(f"{path}: is not a regular file (a pipe or a device); a lock file is: remove it")
+    return fd
 
 
 def unlock(path: Path, fd: int) -> None:
@@ -214,13 +236,16 @@ def unlock(path: Path, fd: int) -> None:
 
 
 def locked_by_another(path: Path) -> bool:
-    """Whether another process holds the lock ``path`` (:func:`lock_exclusively`), looked at
-    without making or changing anything: False if there is no such file or it cannot be read."""
+    """Whether the lock ``path`` (:func:`lock_exclusively`) is held through another open file
+    (another process, or this one through another descriptor), looked at without making or
+    changing anything: False if there is no such regular file or it cannot be read."""
     try:
-        fd = os.open(path, os.O_RDONLY)
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
     except OSError:
         return False
     try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            return False
         fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
         return False
     except BlockingIOError:
@@ -250,7 +275,7 @@ MAX_NAME_BYTES = 255
 
 def partial_name(path: Path, tag: str = "partial") -> Path:
     """``.STEM.TAG.SUFFIX`` beside ``path``: the names drydem reserves for a file being written
-    (:func:`replaced_atomically`: TAG partial, and writing for its lock), its stem cut so that
+    (:func:`replaced_atomically`: TAG partial, and :data:`WRITING` for its lock), its stem cut so that
     the name stays within MAX_NAME_BYTES (a legal 250-character name would otherwise give one
     the system refuses)."""
     stem = path.stem

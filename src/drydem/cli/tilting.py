@@ -273,7 +273,7 @@ def animate(result_dir: Path, out: Path | None, fps: float, overwrite: bool) -> 
     from drydem.files import locked_by_another
     from drydem.io.results import FOLDER_LOCK
 
-    if locked_by_another(result_dir / FOLDER_LOCK):
+    if any(locked_by_another(folder / FOLDER_LOCK) for folder in (result_dir, result_dir.parent)):  # RESULT_DIR or RESULT_DIR/vtk
         raise click.ClickException(f"{result_dir}: a drydem run is writing there; animate it once the run has ended "
                                    "(a run with --video renders its own video)")
     folder = result_dir / "vtk" if (result_dir / "vtk").is_dir() else result_dir

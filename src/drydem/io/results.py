@@ -26,7 +26,7 @@ import numpy as np
 
 from drydem import __version__
 from drydem.errors import DrydemError
-from drydem.files import held, locked_by_another, replaceable, replaced_atomically, writable_folder
+from drydem.files import WRITING, held, locked_by_another, replaceable, replaced_atomically, writable_folder
 
 if TYPE_CHECKING:  # annotations only: importing the limit analysis takes scipy.optimize, a third of a second
     from drydem.analysis.limit import LimitResult, LimitSettings
@@ -215,8 +215,13 @@ def model_summary(model: Model) -> dict:
 FOLDER_LOCK = ".drydem.lock"
 #: the file a Monte Carlo run (drydem.parametric.montecarlo, from Python too) holds its folder by
 MONTECARLO_LOCK = ".montecarlo.lock"
-#: what a run killed by the system (kill -9) may leave in its folder besides its outputs: no result
-LOCK_FILES = (FOLDER_LOCK, MONTECARLO_LOCK)
+
+
+def is_lock(name: str) -> bool:
+    """Whether the file ``name`` is one of drydem's locks, which a run killed by the system (kill
+    -9) may leave in its folder: no result (:data:`FOLDER_LOCK`, :data:`MONTECARLO_LOCK`, and
+    the lock beside a file being written, drydem.files.partial_name with drydem.files.WRITING)."""
+    return name in (FOLDER_LOCK, MONTECARLO_LOCK) or (name.startswith(".") and f".{WRITING}" in name)
 
 
 @contextmanager
@@ -232,8 +237,11 @@ def prepared_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | No
     written in, is refused with the reason (:func:`drydem.files.writable_folder`).
     """
     folder = writable_folder(folder)
-    with held(folder / FOLDER_LOCK, f"{folder}: another drydem run is writing there; wait for it to end, or give another --out"):
-        present = sorted(p.name for p in folder.iterdir() if p.name not in LOCK_FILES)
+    busy = f"{folder}: another drydem run is writing there; wait for it to end, or give another --out"
+    if locked_by_another(folder / MONTECARLO_LOCK):  # a Monte Carlo run from Python holds only its own lock
+        raise DrydemError(busy)
+    with held(folder / FOLDER_LOCK, busy):
+        present = sorted(p.name for p in folder.iterdir() if not is_lock(p.name))
         ours = [name for name in present if name in outputs]
         if present and not (resume or overwrite):
             go_on = "" if resume is None else ", --resume to go on from its checkpoint"
@@ -254,7 +262,7 @@ def records_folder(folder: Path) -> Path:
     written (its :data:`FOLDER_LOCK` held by another process) or one written (its summary.json).
     DrydemError naming it otherwise."""
     folder = writable_folder(folder)
-    if locked_by_another(folder / FOLDER_LOCK):
+    if locked_by_another(folder / FOLDER_LOCK) or locked_by_another(folder / MONTECARLO_LOCK):
         raise DrydemError(f"{folder}: a drydem run is writing there; give a sweep its own --out")
     if (folder / "summary.json").is_file():
         raise DrydemError(f"{folder}: holds a drydem run (summary.json), not a sweep's records; give a sweep its own --out")

@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drydem.errors import DrydemError
+from drydem.errors import DrydemError, OutputTakenError
 from drydem.files import regular_file, replaceable, replaced_atomically
 from drydem.io.vtk import FRAME_KINDS, LOAD_AXES, frame_number, frames_csv_rows
 from drydem.model.parameters import shown
@@ -275,6 +275,8 @@ def render_video(folder: Path, path: Path, *, fps: float = 8.0, overwrite: bool 
                 for image in images:
                     writer.append_data(image)
             return path
+        except OutputTakenError:  # another process's video: no fall-back
+            raise
         except (ImportError, RuntimeError, DrydemError):  # no ffmpeg, or it failed (an OSError): fall back to a GIF
             path = video_path(path.with_suffix(".gif"), overwrite=overwrite)
     with replaced_atomically(path, replace=overwrite) as partial:

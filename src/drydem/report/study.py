@@ -403,8 +403,8 @@ def _yours(records: list[dict], figures: Path, paper: dict) -> list[str]:
 
 def _file_part(name: str) -> str:
     """``name`` as a part of a figure's file name: ASCII letters, digits, - and _ (anything else
-    a -), at most ID_PART_CHARACTERS of them, as in the runs' ids (a target of 245 characters
-    gave a figure name past the system's 255 bytes, and no report)."""
+    a -), at most ID_PART_CHARACTERS of them, the length of a name in the runs' ids (a target of
+    245 characters gave a figure name past the system's 255 bytes, and no report)."""
     return "".join(c if (c.isascii() and c.isalnum()) or c in "-_" else "-" for c in name)[:ID_PART_CHARACTERS]
 
 
