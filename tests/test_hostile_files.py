@@ -15,7 +15,7 @@ from click.testing import CliRunner
 import drydem as dd
 from drydem.cli import main
 from drydem.errors import DrydemError
-from drydem.files import held, lock_exclusively, locked_by_another, partial_name, replaced_atomically, unlock
+from drydem.files import WRITING, held, lock_exclusively, locked_by_another, partial_name, replaced_atomically, unlock
 from drydem.io.model_file import save_model
 from drydem.io.vtk import write_vtu
 from conftest import layout_blocks
@@ -309,7 +309,7 @@ def test_two_processes_writing_one_output_do_not_share_its_partial_file(tmp_path
     """Two `export`s to one file at once both wrote .STEM.partial.SUFFIX, each deleting the
     other's, and one failed naming that temporary file (found by a hunt)."""
     path = tmp_path / "x.vtu"
-    lock = partial_name(path, "writing")
+    lock = partial_name(path, WRITING)
     held = lock_exclusively(lock)  # the other process, writing x.vtu
     try:
         with pytest.raises(DrydemError, match="x.vtu: another drydem process is writing it"):

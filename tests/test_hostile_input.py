@@ -17,7 +17,7 @@ from drydem.analysis.tilt import TiltSettings, tilt_analysis
 from drydem.cli import main
 from drydem.engine.checkpoint import DIGEST, digest
 from drydem.errors import DrydemError
-from drydem.files import lock_exclusively, unlock
+from drydem.files import WRITING, lock_exclusively, partial_name, unlock
 from drydem.io.results import FOLDER_LOCK
 
 #: a brick on a base: the cheapest model that tilts (slides at atan 0.5 = 26.6 deg)
@@ -164,14 +164,17 @@ def test_a_folder_a_run_is_writing_in_is_neither_animated_nor_swept_into(tmp_pat
 
 
 def test_a_lock_left_by_a_killed_run_is_no_file_of_the_folder(tmp_path):
-    """kill -9 leaves a Monte Carlo run's lock file (the system drops the lock, not the file):
-    the folder then counted as holding "other files (.montecarlo.lock)"."""
+    """kill -9 leaves a Monte Carlo run's lock file, or the lock beside a file being written
+    (the system drops the lock, not the file): the folder then counted as holding "other files
+    (.montecarlo.lock)"."""
     path, out = model_file(tmp_path), tmp_path / "run"
     out.mkdir()
-    (out / ".montecarlo.lock").write_text("held by a run killed outright")
+    stale = [".montecarlo.lock", partial_name(out / "checkpoint.npz", WRITING).name]
+    for name in stale:
+        (out / name).write_text("held by a run killed outright")
     assert run("tilt", path, "--out", out, "--increment", "2").exit_code == 0
-    for finished in out.iterdir():  # the run's outputs gone, the user's notes and the old lock left
-        if finished.name != ".montecarlo.lock":
+    for finished in out.iterdir():  # the run's outputs gone, the user's notes and the old locks left
+        if finished.name not in stale:
             finished.unlink()
     (out / "notes.txt").write_text("mine")
     assert refused(run("tilt", path, "--out", out, "--increment", "2"),
