@@ -270,10 +270,9 @@ def _fps(ctx, param, value):
 def animate(result_dir: Path, out: Path | None, fps: float, overwrite: bool) -> None:
     """Render the VTK series of a `drydem tilt --vtk` run (RESULT_DIR or RESULT_DIR/vtk) to a video.
     An existing video is replaced only with --overwrite (checked before any frame is drawn)."""
-    from drydem.files import locked_by_another
-    from drydem.io.results import FOLDER_LOCK
+    from drydem.io.results import being_written
 
-    if any(locked_by_another(folder / FOLDER_LOCK) for folder in (result_dir, result_dir.parent)):  # RESULT_DIR or RESULT_DIR/vtk
+    if being_written(result_dir) or being_written(result_dir.parent):  # RESULT_DIR or RESULT_DIR/vtk
         raise click.ClickException(f"{result_dir}: a drydem run is writing there; animate it once the run has ended "
                                    "(a run with --video renders its own video)")
     folder = result_dir / "vtk" if (result_dir / "vtk").is_dir() else result_dir

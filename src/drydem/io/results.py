@@ -224,6 +224,13 @@ def is_lock(name: str) -> bool:
     return name in (FOLDER_LOCK, MONTECARLO_LOCK) or (name.startswith(".") and f".{WRITING}" in name)
 
 
+def being_written(folder: Path) -> bool:
+    """Whether a drydem run holds ``folder`` (its :data:`FOLDER_LOCK`, or the
+    :data:`MONTECARLO_LOCK` a Monte Carlo run started from Python holds alone), through another
+    open file than this process's own (drydem.files.locked_by_another)."""
+    return any(locked_by_another(Path(folder) / lock) for lock in (FOLDER_LOCK, MONTECARLO_LOCK))
+
+
 @contextmanager
 def prepared_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | None = False, overwrite: bool = False) -> Iterator[Path]:
     """``folder``, ready for a run's ``outputs`` (file and folder names) and held by this process
@@ -238,9 +245,9 @@ def prepared_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | No
     """
     folder = writable_folder(folder)
     busy = f"{folder}: another drydem run is writing there; wait for it to end, or give another --out"
-    if locked_by_another(folder / MONTECARLO_LOCK):  # a Monte Carlo run from Python holds only its own lock
+    if being_written(folder):
         raise DrydemError(busy)
-    with held(folder / FOLDER_LOCK, busy):
+    with held(folder / FOLDER_LOCK, busy):  # taken for this run: being_written only looked
         present = sorted(p.name for p in folder.iterdir() if not is_lock(p.name))
         ours = [name for name in present if name in outputs]
         if present and not (resume or overwrite):
@@ -259,10 +266,10 @@ def prepared_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | No
 def records_folder(folder: Path) -> Path:
     """``folder`` made ready for a sweep's records (:func:`drydem.files.writable_folder`; sweeps
     may share one), unless it is a single run's, in which the records would be mixed: one being
-    written (its :data:`FOLDER_LOCK` held by another process) or one written (its summary.json).
+    written (:func:`being_written`) or one written (its summary.json).
     DrydemError naming it otherwise."""
     folder = writable_folder(folder)
-    if locked_by_another(folder / FOLDER_LOCK) or locked_by_another(folder / MONTECARLO_LOCK):
+    if being_written(folder):
         raise DrydemError(f"{folder}: a drydem run is writing there; give a sweep its own --out")
     if (folder / "summary.json").is_file():
         raise DrydemError(f"{folder}: holds a drydem run (summary.json), not a sweep's records; give a sweep its own --out")

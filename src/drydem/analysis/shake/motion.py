@@ -274,7 +274,7 @@ class GroundMotion:
         (exact at the sample times) and is zero after its end, where the table moves freely.
         """
         check_arguments("per_cycle", {"dt_s": TIMESTEP, "cycles": COUNT, "start_s": START},
-               dt_s=dt_s, cycles=cycles, start_s=start_s)
+                        dt_s=dt_s, cycles=cycles, start_s=start_s)
         times = start_s + np.arange(cycles) * dt_s
         return np.stack([np.interp(times, self.time_s, component, right=0.0)
                          for component in self.acceleration_m_s2.T], axis=1)
@@ -520,7 +520,7 @@ def pulse(kind: str, *, amplitude_m_s2: float, frequency_hz: float, cycles: int 
     ``cycles`` must be 1.
     """
     check_arguments("pulse", PULSE_RULES, kind=kind, amplitude_m_s2=amplitude_m_s2, frequency_hz=frequency_hz,
-           cycles=cycles, direction=direction, samples_per_period=samples_per_period)
+                    cycles=cycles, direction=direction, samples_per_period=samples_per_period)
     if kind != "sine" and cycles != 1:
         raise ModelError(f"pulse cycles = {cycles}: a {kind} pulse has no cycles to repeat (cycles = 1); "
                          "use kind 'sine' for several periods")
