@@ -35,7 +35,7 @@ import time
 from pathlib import Path
 
 #: the command line of ``drydem`` in this interpreter
-DRYDEM = [sys.executable, "-c", "from drydem.cli import main; main()"]
+DRYDEM = [sys.executable, "-c", "from drydem.cli import console; console()"]
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the model lives with the tests
 from test_model_file import GOOD as ONE_BLOCK  # noqa: E402  a brick on a fixed base: it slides at atan 0.5 = 26.6 deg
 #: the goals, s (None: printed for scale)

@@ -9,7 +9,7 @@ import time
 from pathlib import Path
 
 #: the command line of ``drydem`` in this interpreter
-DRYDEM = [sys.executable, "-c", "from drydem.cli import main; main()"]
+DRYDEM = [sys.executable, "-c", "from drydem.cli import console; console()"]
 
 
 def interrupted_drydem(arguments: list[str], path: Path, lines: int, signal_name: str = "SIGINT") -> tuple[int, str]:

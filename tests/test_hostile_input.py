@@ -128,6 +128,26 @@ def test_a_results_folder_another_run_is_writing_in_is_refused_and_left_alone(tm
     assert (out / "summary.json").is_file() and not lock.exists()
 
 
+def test_no_run_writes_inside_a_folder_another_run_is_writing_in(tmp_path):
+    """Found in the fifth session: a run held only its own folder, so `tilt --out mc/samples/x`
+    during a Monte Carlo run in mc wrote among its samples; now a folder inside a held one (or a
+    link to it) is refused as the held one is, and nothing is made there."""
+    path, mc = model_file(tmp_path), tmp_path / "mc"
+    (mc / "samples").mkdir(parents=True)
+    (tmp_path / "link").symlink_to(mc / "samples")
+    (tmp_path / "study.toml").write_text('[study]\nname = "s"\n[[grid]]\ntargets = ["brick.toml"]\n')
+    held = lock_exclusively(mc / ".montecarlo.lock")
+    try:
+        for out in (mc / "samples" / "x", tmp_path / "link" / "y", mc / "samples"):
+            assert refused(run("tilt", path, "--out", out, "--increment", "2"), f"another drydem run is writing there (in {mc.resolve()})")
+        assert refused(run("limit", path, "--out", mc / "samples" / "x"), f"(in {mc.resolve()}); wait for it to end, or give another --out")
+        assert refused(run("sweep", tmp_path / "study.toml", "--out", mc / "samples" / "s"), "give a sweep its own --out")
+        assert sorted(p.name for p in (mc / "samples").iterdir()) == []
+    finally:
+        unlock(mc / ".montecarlo.lock", held)
+    assert run("tilt", path, "--out", mc / "samples" / "x", "--increment", "2").exit_code == 0
+
+
 def test_a_lock_is_refused_by_name_where_its_file_cannot_be_made_and_taken_again_once_released(tmp_path):
     with pytest.raises(DrydemError, match="missing/x.lock: cannot make the lock file \\(No such file or directory\\)"):
         lock_exclusively(tmp_path / "missing" / "x.lock")
@@ -148,9 +168,9 @@ def test_a_folder_a_run_is_writing_in_is_neither_animated_nor_swept_into(tmp_pat
     (out / "vtk").mkdir(parents=True)
     held = lock_exclusively(out / FOLDER_LOCK)
     try:
-        assert refused(run("animate", out), "run: a drydem run is writing there; animate it once the run has ended")
-        assert refused(run("animate", out / "vtk"), "vtk: a drydem run is writing there")
-        assert refused(run("sweep", tmp_path / "study.toml", "--out", out), "run: a drydem run is writing there; give a sweep its own --out")
+        assert refused(run("animate", out), "run: another drydem run is writing there; animate it once the run has ended")
+        assert refused(run("animate", out / "vtk"), f"vtk: another drydem run is writing there (in {out.resolve()}); animate it")
+        assert refused(run("sweep", tmp_path / "study.toml", "--out", out), "run: another drydem run is writing there; give a sweep its own --out")
     finally:
         unlock(out / FOLDER_LOCK, held)
     montecarlo = lock_exclusively(out / ".montecarlo.lock")  # a Monte Carlo run started from Python holds only its own lock

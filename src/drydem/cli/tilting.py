@@ -270,11 +270,12 @@ def _fps(ctx, param, value):
 def animate(result_dir: Path, out: Path | None, fps: float, overwrite: bool) -> None:
     """Render the VTK series of a `drydem tilt --vtk` run (RESULT_DIR or RESULT_DIR/vtk) to a video.
     An existing video is replaced only with --overwrite (checked before any frame is drawn)."""
-    from drydem.io.results import being_written
+    from drydem.io.results import refuse_if_written
 
-    if being_written(result_dir) or being_written(result_dir.parent):  # RESULT_DIR or RESULT_DIR/vtk
-        raise click.ClickException(f"{result_dir}: a drydem run is writing there; animate it once the run has ended "
-                                   "(a run with --video renders its own video)")
+    try:  # RESULT_DIR, or RESULT_DIR/vtk, of a run still going
+        refuse_if_written(result_dir, "animate it once the run has ended (a run with --video renders its own video)")
+    except DrydemError as exc:
+        raise click.ClickException(str(exc)) from None
     folder = result_dir / "vtk" if (result_dir / "vtk").is_dir() else result_dir
     _render(folder, out or result_dir / "collapse.mp4", fps=fps, overwrite=overwrite)
 

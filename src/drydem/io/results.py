@@ -231,6 +231,27 @@ def being_written(folder: Path) -> bool:
     return any(locked_by_another(Path(folder) / lock) for lock in (FOLDER_LOCK, MONTECARLO_LOCK))
 
 
+def writer_of(folder: Path) -> Path | None:
+    """The folder, ``folder`` itself or one it lies in (symbolic links followed), that another
+    drydem run is writing in (:func:`being_written`), or None: a run's folder holds folders of
+    its own (a Monte Carlo run's samples/, a tilt's vtk/) that another run must not write in."""
+    real = Path(folder).resolve()
+    return next((above for above in (real, *real.parents) if being_written(above)), None)
+
+
+def refuse_if_written(folder: Path, advice: str) -> None:
+    """A DrydemError if another drydem run is writing in ``folder`` or a folder it lies in
+    (:func:`writer_of`): "FOLDER: another drydem run is writing there[ (in WRITER)]; ADVICE"."""
+    writer = writer_of(folder)
+    if writer is not None:
+        inside = "" if writer == Path(folder).resolve() else f" (in {writer})"
+        raise DrydemError(f"{folder}: another drydem run is writing there{inside}; {advice}")
+
+
+#: what a run is told to do when another holds its results folder
+RUN_BUSY_ADVICE = "wait for it to end, or give another --out"
+
+
 @contextmanager
 def prepared_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | None = False, overwrite: bool = False) -> Iterator[Path]:
     """``folder``, ready for a run's ``outputs`` (file and folder names) and held by this process
@@ -243,10 +264,9 @@ def prepared_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | No
     the new results; other files are kept. A path that is not a folder, or cannot be made or
     written in, is refused with the reason (:func:`drydem.files.writable_folder`).
     """
+    refuse_if_written(folder, RUN_BUSY_ADVICE)  # before writable_folder makes it inside another run's
     folder = writable_folder(folder)
-    busy = f"{folder}: another drydem run is writing there; wait for it to end, or give another --out"
-    if being_written(folder):
-        raise DrydemError(busy)
+    busy = f"{folder}: another drydem run is writing there; {RUN_BUSY_ADVICE}"
     with held(folder / FOLDER_LOCK, busy):  # taken for this run: being_written only looked
         present = sorted(p.name for p in folder.iterdir() if not is_lock(p.name))
         ours = [name for name in present if name in outputs]
@@ -268,9 +288,8 @@ def records_folder(folder: Path) -> Path:
     may share one), unless it is a single run's, in which the records would be mixed: one being
     written (:func:`being_written`) or one written (its summary.json).
     DrydemError naming it otherwise."""
+    refuse_if_written(folder, "give a sweep its own --out")
     folder = writable_folder(folder)
-    if being_written(folder):
-        raise DrydemError(f"{folder}: a drydem run is writing there; give a sweep its own --out")
     if (folder / "summary.json").is_file():
         raise DrydemError(f"{folder}: holds a drydem run (summary.json), not a sweep's records; give a sweep its own --out")
     return folder
