@@ -3,8 +3,9 @@
 A block is the convex hull of its vertices (computed with Qhull through
 ``scipy.spatial.ConvexHull``); coplanar hull triangles are merged into polygonal
 faces whose vertices run counter-clockwise seen from outside, so every face has
-an outward unit normal. An axis-aligned box (:func:`box`, every brick of a wall
-file) is built in closed form, with the hull's faces and no Qhull.
+an outward unit normal. An axis-aligned box (:func:`box`: every brick of a wall
+file, and vertices that are a box's 8 corners, :func:`box_corners`) is built in
+closed form, with the hull's faces and no Qhull.
 
 Mass properties are exact for the polyhedron: it is split into tetrahedra
 (centroid of the vertices, and a fan of each face), and each tetrahedron with
@@ -240,6 +241,9 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
         raise GeometryError(f"{name}: {len(pts)} vertices: a block has at most {MAX_BLOCK_VERTICES} (a scanned surface? simplify "
                             "it into a convex block of fewer vertices)")
     scale = _block_scale(pts, name)
+    corners = box_corners(pts)
+    if corners is not None:  # most bricks: in closed form, without Qhull nor scipy.spatial's import
+        return box(*corners, name=name)
     from scipy.spatial import ConvexHull, QhullError  # here: scipy.spatial takes a fifth of a second to import
 
     try:
@@ -264,6 +268,18 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
     faces = tuple(remap[f] for f in faces)
     volume, centroid, second = _mass_properties(vertices, faces)
     return ConvexPolyhedron(vertices, faces, normals, volume, centroid, second)
+
+
+def box_corners(pts: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """The min and max corners of the axis-aligned box whose 8 corners ``pts`` ((n, 3), m) are,
+    each coordinate equal to the min or max one exactly and every corner present (some perhaps
+    given twice), else None: the vertices of a brick as a model file, OBJ, STL or compas file
+    gives them, whose hull :func:`box` builds in closed form."""
+    lower, upper = pts.min(axis=0), pts.max(axis=0)
+    if not ((pts == lower) | (pts == upper)).all():
+        return None
+    corner = (pts == upper) @ np.array([4, 2, 1])  # 4 ix + 2 iy + iz: a flat box has fewer than 8
+    return (lower, upper) if len(np.unique(corner)) == 8 else None
 
 
 def frozen_array(array: np.ndarray) -> np.ndarray:
@@ -308,6 +324,8 @@ def face_interior_points(points: np.ndarray, shape: ConvexPolyhedron) -> np.ndar
     refuses for a point inside it) farther than :data:`HULL_TOLERANCE` from every edge of
     ``shape``: points inside a face, which the hull drops, as opposed to its corners and to
     points on its edges (an edge split in two, as a mesh generator may leave)."""
+    if box_corners(points) is not None:  # a box's corners: every one a corner (nor is scipy.spatial imported)
+        return np.zeros(0, dtype=np.intp)
     from scipy.spatial import cKDTree
 
     tol = HULL_TOLERANCE * shape.size
