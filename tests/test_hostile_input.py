@@ -146,6 +146,8 @@ def test_no_run_writes_inside_a_folder_another_run_is_writing_in(tmp_path):
     finally:
         unlock(mc / ".montecarlo.lock", held)
     assert run("tilt", path, "--out", mc / "samples" / "x", "--increment", "2").exit_code == 0
+    (tmp_path / "loop").symlink_to(tmp_path / "loop")  # the folders above a link that leads nowhere: no RuntimeError
+    assert refused(run("tilt", path, "--out", tmp_path / "loop" / "x"), "loop/x: cannot write results there")
 
 
 def test_a_lock_is_refused_by_name_where_its_file_cannot_be_made_and_taken_again_once_released(tmp_path):

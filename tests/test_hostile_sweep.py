@@ -229,6 +229,31 @@ def test_a_corrupt_record_is_named_and_to_be_run_again(tmp_path, corruption):
     assert records.valid == [] and [str(e) for e in records.corrupt] == [str(caught.value)]
 
 
+def test_a_records_folder_or_record_path_taken_by_something_else_is_refused_before_any_run(folder):
+    """Found by a hunt: OUT/runs as a file was a NotADirectoryError traceback, and a folder where
+    a run's record goes was read as a corrupt record, the run computed, then an IsADirectoryError
+    traceback when its record could not replace the folder (the run lost)."""
+    out = folder / "results"
+    out.mkdir()
+    (out / "runs").write_text("mine")
+    for command in (["sweep", folder / "small.toml", "--out", out], ["calibrate", out, "--designs", "WD3"]):
+        refused(invoke(*command), "runs: exists and is not a folder, where a sweep writes its records")
+    assert (out / "runs").read_text() == "mine"
+    (out / "runs").unlink()
+    assert invoke("sweep", folder / "small.toml", "--out", out, "--workers", "2").exit_code == 0
+    first = sorted((out / "runs").glob("*.json"))[0]
+    first.unlink()
+    first.mkdir()
+    result = invoke("sweep", folder / "small.toml", "--out", out, "--workers", "2")
+    refused(result, f"{first}: is not a file but where the record of run {first.stem} goes; move it away")
+    assert "runs done" not in result.output and first.is_dir() and not list((out / "runs").glob("*.tmp"))
+
+
+def test_a_study_file_that_is_a_pipe_is_called_so_not_missing(folder):
+    os.mkfifo(folder / "pipe.toml")  # found by a hunt: "no such study file", where `check` says what it is
+    refused(invoke("sweep", folder / "pipe.toml", "--out", folder / "out"), "pipe.toml: not a regular file (a pipe or a device?)")
+
+
 def test_a_restarted_sweep_runs_the_corrupt_records_again_and_says_which(folder):
     out = folder / "results"
     assert invoke("sweep", folder / "small.toml", "--out", out, "--workers", "2").exit_code == 0

@@ -21,8 +21,8 @@ def console() -> None:
     """The ``drydem`` program (pyproject.toml's script): :func:`main`, with every object the
     garbage collector tracks frozen as the interpreter shuts down (:func:`gc.freeze` as an
     atexit hook), so that its last collections skip the ~10^5 objects numba's import and
-    kernels leave: they would free nothing the end of the process does not, and took 0.1-0.25 s
-    of a one-block tilt's 2-3 s (measured 2026-11-26, benchmarks/bench_start.py). Files are
+    kernels leave: they would free nothing the end of the process does not, and took 0.1-0.4 s
+    of a one-block tilt's 2.5-3.5 s (measured 2026-11-26, benchmarks/bench_start.py). Files are
     closed by the code that writes them, never by a collection. :func:`main` itself, which
     tests and scripts call in a process that goes on, leaves the collector alone."""
     atexit.register(gc.freeze)

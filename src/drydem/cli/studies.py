@@ -32,6 +32,8 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
 
     if Path(study_file).is_dir():
         raise click.ClickException(f"{study_file}: is a folder, not a study file (a TOML file: README, \"Parametric studies\")")
+    if Path(study_file).exists() and not Path(study_file).is_file():
+        raise click.ClickException(f"{study_file}: not a regular file (a pipe or a device?), not a study file (a TOML file)")
     path = Path(study_file) if Path(study_file).is_file() else studies.find(study_file)
     if path is None:
         raise click.ClickException(f"{study_file}: no such study file, and not a shipped study (savalle2022)")
@@ -41,11 +43,11 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
         raise click.ClickException(str(exc)) from None
     try:
         out = records_folder(out or Path("results") / study.name)
+        plan = pending(study.runs, out, retry_failed=retry_failed)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     for note in study.notes:
         click.echo(f"note: {note}", err=True)
-    plan = pending(study.runs, out, retry_failed=retry_failed)
     click.echo(f"{study.name}: {len(study.runs)} runs, {plan.recorded} already recorded in {out}")
     for corrupt in plan.corrupt:
         click.echo(f"corrupt record, run again: {corrupt}", err=True)

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import shutil
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
@@ -235,7 +236,7 @@ def writer_of(folder: Path) -> Path | None:
     """The folder, ``folder`` itself or one it lies in (symbolic links followed), that another
     drydem run is writing in (:func:`being_written`), or None: a run's folder holds folders of
     its own (a Monte Carlo run's samples/, a tilt's vtk/) that another run must not write in."""
-    real = Path(folder).resolve()
+    real = Path(os.path.realpath(folder))  # not Path.resolve, which raises RuntimeError on a loop of links
     return next((above for above in (real, *real.parents) if being_written(above)), None)
 
 
@@ -244,7 +245,7 @@ def refuse_if_written(folder: Path, advice: str) -> None:
     (:func:`writer_of`): "FOLDER: another drydem run is writing there[ (in WRITER)]; ADVICE"."""
     writer = writer_of(folder)
     if writer is not None:
-        inside = "" if writer == Path(folder).resolve() else f" (in {writer})"
+        inside = "" if writer == Path(os.path.realpath(folder)) else f" (in {writer})"
         raise DrydemError(f"{folder}: another drydem run is writing there{inside}; {advice}")
 
 
@@ -255,7 +256,8 @@ RUN_BUSY_ADVICE = "wait for it to end, or give another --out"
 @contextmanager
 def prepared_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | None = False, overwrite: bool = False) -> Iterator[Path]:
     """``folder``, ready for a run's ``outputs`` (file and folder names) and held by this process
-    for the block (:data:`FOLDER_LOCK`): a DrydemError if another drydem process holds it.
+    for the block (:data:`FOLDER_LOCK`): a DrydemError if another drydem process holds it or a
+    folder it lies in (:func:`refuse_if_written`).
 
     Nothing is lost: a folder that already holds files is refused (DrydemError naming them)
     unless the run goes on from it (``resume``; None for a run that cannot, so the message does
@@ -286,7 +288,7 @@ def prepared_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | No
 def records_folder(folder: Path) -> Path:
     """``folder`` made ready for a sweep's records (:func:`drydem.files.writable_folder`; sweeps
     may share one), unless it is a single run's, in which the records would be mixed: one being
-    written (:func:`being_written`) or one written (its summary.json).
+    written (:func:`refuse_if_written`: it or a folder it lies in) or one written (its summary.json).
     DrydemError naming it otherwise."""
     refuse_if_written(folder, "give a sweep its own --out")
     folder = writable_folder(folder)

@@ -97,12 +97,19 @@ class Pending:
 
 
 def pending(runs: Iterable[RunSpec], results: Path, *, retry_failed: bool = False) -> Pending:
-    """The runs to do (see :class:`Pending`)."""
+    """The runs to do (see :class:`Pending`). SweepError naming the path, before any run, if
+    RESULTS/runs is there but no folder, or a run's record path is taken by something else than
+    a file (a folder: a record could not be put in its place once the run is done)."""
     runs = list(runs)
+    folder = Path(results) / "runs"
+    if folder.exists() and not folder.is_dir():
+        raise SweepError(f"{folder}: exists and is not a folder, where a sweep writes its records; move it away or give another --out")
     todo, corrupt, seen = [], [], {}
     for spec in runs:
         path = record_path(results, spec.id)
         identity = _identity(path)
+        if identity is not None and not path.is_file():
+            raise SweepError(f"{path}: is not a file but where the record of run {spec.id} goes; move it away")
         try:
             needed = identity is None or (read_record(path)["status"] == "failed" and retry_failed)
         except RecordError as exc:
