@@ -274,6 +274,21 @@ def test_a_report_file_drydem_did_not_write_is_kept_unless_overwrite(tmp_path, n
     assert mine.read_text() != "my notes\n"
 
 
+def test_a_figures_folder_of_no_drydem_report_is_kept_unless_overwrite(tmp_path):
+    """Found by a hunt: report.md and report.html were kept, but a file of a figure's name in
+    OUT/figures was silently replaced."""
+    run_folder(tmp_path, "good", limit_summary())
+    figures = tmp_path / "report" / "figures"
+    figures.mkdir(parents=True)
+    (figures / "mine.png").write_bytes(b"my picture")
+    refused = CliRunner().invoke(main, ["report", str(tmp_path)])
+    assert refused.exit_code == 1 and f"{figures}: holds files of no drydem report (mine.png); pass --overwrite" in refused.output
+    assert sorted(p.name for p in figures.iterdir()) == ["mine.png"] and not (tmp_path / "report" / "report.md").exists()
+    assert CliRunner().invoke(main, ["report", str(tmp_path), "--overwrite"]).exit_code == 0
+    assert (figures / "mine.png").read_bytes() == b"my picture"  # another name: kept beside the report's figures
+    assert CliRunner().invoke(main, ["report", str(tmp_path)]).exit_code == 0  # its own report now: made again
+
+
 @pytest.mark.parametrize("text, kind", [("[1, 2]", "list"), ("null", "null"), ('"a string"', "str")])
 def test_a_summary_that_is_not_a_json_object_is_named_corrupt(tmp_path, text, kind):
     # it was taken for another analysis' summary and skipped: with no other run, "nothing to report"

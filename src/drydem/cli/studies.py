@@ -82,8 +82,9 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
 @main.command()
 @click.argument("results_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
 @click.option("--out", type=click.Path(file_okay=False), callback=out_path, help="Report folder (default: RESULTS_DIR/report).")
-@click.option("--overwrite", is_flag=True, help="Replace a report.md or report.html there that drydem did not write (its own "
-              "earlier report is always replaced: it is made from the records again).")
+@click.option("--overwrite", is_flag=True, help="Replace a report.md or report.html there that drydem did not write, and write "
+              "the figures into a figures/ folder of no drydem report (its own earlier report is always replaced: it is made from "
+              "the records again).")
 def report(results_dir: Path, out: Path | None, overwrite: bool) -> None:
     """Write the report of the runs in RESULTS_DIR (Markdown, HTML, PNG figures): a sweep's
     records (RESULTS_DIR/runs) and the folders of `drydem tilt` and `drydem limit` runs (RESULTS_DIR

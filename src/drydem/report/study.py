@@ -204,8 +204,7 @@ def build_report(results: Path, out: Path | None = None, *, overwrite: bool = Fa
     runs, (monte_carlo, unreadable) = Runs(records.valid), montecarlo_runs(summaries)
     out = writable_folder(out or results / "report")
     markdown_path, html_path = _report_files(out, overwrite)
-    figures = out / "figures"
-    figures.mkdir(parents=True, exist_ok=True)
+    figures = _figures_folder(out, overwrite)
     paper = savalle2022()
     of_paper = any(paper_wall(r) is not None for r in records.valid if r["spec"]["analysis"] in ("tilt", "limit"))
     counted = f"{len(runs.ok)} runs recorded ({len(runs.failed)} failed)" + (
@@ -240,19 +239,33 @@ def _report_files(out: Path, overwrite: bool) -> tuple[Path, Path]:
     drydem wrote (it begins as REPORT_STARTS says), or, with ``overwrite``, another regular file
     (:func:`~drydem.files.replaceable`; a link or a pipe is never written through); checked
     before any figure is drawn."""
-    found = []
-    for name, start in REPORT_STARTS.items():
-        path = out / name
-        ours = path.is_file() and not path.is_symlink() and _begins_with(path, start)
-        found.append(path if ours else replaceable(path, overwrite, other="another --out"))
+    found = [path if _ours(path) else replaceable(path, overwrite, other="another --out") for path in (out / name for name in REPORT_STARTS)]
     return found[0], found[1]
 
 
-def _begins_with(path: Path, start: str) -> bool:
-    """Whether the regular file ``path`` begins with ``start`` (its first bytes only are read)."""
-    head = start.encode()
+def _ours(path: Path) -> bool:
+    """Whether ``path`` is a report file drydem wrote: a regular file (no link) that begins as
+    REPORT_STARTS says for its name (its first bytes only are read)."""
+    head = REPORT_STARTS[path.name].encode()
+    if not path.is_file() or path.is_symlink():
+        return False
     with path.open("rb") as f:
         return f.read(len(head)) == head
+
+
+def _figures_folder(out: Path, overwrite: bool) -> Path:
+    """``out``/figures, made if missing: a drydem report's figures, replaced by this one's. A
+    figures folder holding files where no report of drydem's is (report.md) is someone else's:
+    ReportError naming it, unless ``overwrite`` (then only the report's own figure names are
+    written; the other files are kept)."""
+    figures = out / "figures"
+    present = sorted(p.name for p in figures.iterdir()) if figures.is_dir() else []
+    if present and not overwrite and not _ours(out / "report.md"):
+        listed = ", ".join(present[:3]) + (", ..." if len(present) > 3 else "")
+        raise ReportError(f"{figures}: holds files of no drydem report ({listed}); pass --overwrite to write the report's figures "
+                          "there (files of other names are kept), or give another --out")
+    figures.mkdir(parents=True, exist_ok=True)
+    return figures
 
 
 def _paper_tables(runs: Runs, paper: dict) -> list[str]:
