@@ -201,6 +201,20 @@ def test_a_recorded_sample_with_an_angle_out_of_range_is_corrupt_not_averaged_in
     assert len(again.corrupt) == 1 and all(0.0 <= s["collapse_angle_deg"] <= 90.0 for s in again.summary["samples"])
 
 
+def test_a_samples_folder_that_is_a_link_is_refused_and_the_run_it_leads_to_left_alone(tall_brick, tmp_path):
+    """Found by a hunt: a resumed run whose samples/ linked to another run's wrote its new
+    samples there, mixing the two runs (the other one's summary still counting its own)."""
+    wall = load_wall(tall_brick)
+    other, mine = tmp_path / "other", tmp_path / "mine"
+    with ThreadPoolExecutor(1) as pool:
+        monte_carlo(wall, settings(1), other, pool, target={"name": "tall"})
+    mine.mkdir()
+    (mine / "samples").symlink_to(other / "samples")
+    with ThreadPoolExecutor(1) as pool, pytest.raises(MonteCarloError, match=re.escape(f"{mine / 'samples'}: is a link; a run writes")):
+        monte_carlo(wall, settings(2), mine, pool, target={"name": "tall"})
+    assert sorted(p.name for p in (other / "samples").iterdir()) == ["0000"]
+
+
 @pytest.mark.parametrize("content", [json.dumps({"settings": "x"}), "[" * 100_000])
 def test_a_summary_whose_settings_are_not_a_table_is_no_run_to_resume(tall_brick, tmp_path, content):
     # "settings": "x" was an AttributeError traceback on --resume, JSON nested 100,000 deep a RecursionError

@@ -361,8 +361,11 @@ def monte_carlo(wall: Wall, settings: MonteCarloSettings, folder: Path, executor
     ``on_sample(entry)`` for each sample finished here. MonteCarloError if another run holds
     the folder, the folder holds samples beyond ``settings.samples``
     (:func:`check_samples_kept`), or the executor loses a sample (the samples finished are
-    recorded)."""
+    recorded), or its samples folder is a link (it would mix this run's samples with those of
+    the run it leads to)."""
     folder = Path(folder)
+    if (folder / SAMPLES_FOLDER).is_symlink():
+        raise MonteCarloError(f"{folder / SAMPLES_FOLDER}: is a link; a run writes its samples in a folder of its own")
     (folder / SAMPLES_FOLDER).mkdir(parents=True, exist_ok=True)
     with hold_folder(folder):
         check_samples_kept(folder, settings)
