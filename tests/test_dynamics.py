@@ -153,6 +153,25 @@ def test_a_block_slides_once_the_table_exceeds_mu_g():
     assert slips[1.05] > 100 * elastic
 
 
+@pytest.mark.parametrize("alpha_per_s", [2e4, 1e6])
+def test_a_block_falling_against_rayleigh_s_mass_drag_reaches_g_over_alpha(alpha_per_s):
+    """Rayleigh's mass term alone, on a block in the air: dv/dt = -g - alpha v, terminal velocity
+    -g / alpha (the explicit step's exact fixed point), reached at the rate alpha within 5 %
+    (the timestep keeps alpha dt <= 0.1, drydem.engine.damping.drag_timestep). Found by a
+    hunt: alpha = 2e4 1/s, within the range shake takes, made alpha dt 1.3 and diverged."""
+    blocks = [dd.Block(name="base", shape=dd.box([-1.0, -0.1, -0.1], [1.0, 0.1, 0.0]), fixed=True),
+              dd.Block(name="block", shape=dd.box([-0.1, -0.05, 1.0], [0.1, 0.05, 1.2]))]
+    model = dd.build_model(blocks, density=2000.0, joint=dd.JointMaterial(kn=1e9, ks=1e9, friction=0.5), supports=dd.Supports(fix_y=True))
+    sim = dd.Simulation(model, damping=Damping(0.0, mass_proportional=alpha_per_s))
+    assert alpha_per_s * sim.timestep <= 0.1
+    cycles = 200  # 20 decay times
+    sim.cycle(cycles)
+    terminal = -dd.G / alpha_per_s
+    assert sim.state.velocity[1, 2] == pytest.approx(terminal, rel=1e-6)
+    rate = -math.log(1.0 - alpha_per_s * sim.timestep) / sim.timestep
+    assert rate == pytest.approx(alpha_per_s, rel=0.06)
+
+
 def test_slip_under_a_constant_acceleration_pulse_is_newmarks():
     """Newmark 1965 (rigid block on a plane with friction): a table accelerating at a > mu g for
     T seconds, then at rest, leaves the block behind by

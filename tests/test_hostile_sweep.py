@@ -249,6 +249,16 @@ def test_a_records_folder_or_record_path_taken_by_something_else_is_refused_befo
     assert "runs done" not in result.output and first.is_dir() and not list((out / "runs").glob("*.tmp"))
 
 
+def test_more_workers_than_four_a_core_are_refused_naming_the_bound(folder):
+    from drydem.parametric.workers import cores
+
+    # found by a hunt: --workers 1000000 started a local process per run
+    too_many = 4 * cores() + 1
+    refused(invoke("sweep", folder / "small.toml", "--out", folder / "out", "--workers", too_many),
+            f"{too_many}: at most {too_many - 1} local processes (4 per core; this process may run on {cores()} cores)")
+    assert not (folder / "out").exists()
+
+
 def test_a_study_file_that_is_a_pipe_is_called_so_not_missing(folder):
     os.mkfifo(folder / "pipe.toml")  # found by a hunt: "no such study file", where `check` says what it is
     refused(invoke("sweep", folder / "pipe.toml", "--out", folder / "out"), "pipe.toml: not a regular file (a pipe or a device?)")

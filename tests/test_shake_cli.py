@@ -245,6 +245,17 @@ def test_a_record_with_a_component_along_a_held_axis_is_run_along_the_others_wit
             "([supports] fix_y = true); the motion along x is analysed") in result.output
 
 
+def test_an_output_interval_shorter_than_the_timestep_is_refused_at_the_run_start(files, tmp_path):
+    """Found by a hunt: --output-interval 1e-12 was taken, the history written every cycle and
+    summary.json recording 1e-12 s."""
+    out = tmp_path / "fine"
+    result = shake(files["block"], "--pulse", "one-sine", "--amplitude", "2", "--frequency", "4", "--damping-ratio", "0.05",
+                   "--output-interval", "1e-12", "--out", out)
+    assert result.exit_code == 1
+    assert "output_interval_s = 1e-12 s (--output-interval) is shorter than the timestep" in result.output
+    assert "the history has a row at most every cycle; give at least" in result.output and not (out / "summary.json").exists()
+
+
 def test_a_pulse_the_timestep_cannot_follow_is_refused_at_the_run_start(files, tmp_path):
     """The finding: --frequency 1e12 ran and reported. The timestep is the model's (known once
     it has settled and its damping is set): the period must span 20 of them."""

@@ -41,7 +41,20 @@ unit_option = click.option("--unit", type=click.Choice(list(UNITS)), default="m"
                            help="Length unit of imported geometry (.wrl, .obj, .stl, compas .json).")
 
 
-workers_option = click.option("--workers", type=click.IntRange(min=1), help="Local processes (default: all cores).")
+def _workers(ctx, param, value):
+    """--workers: None (one per core) or at most drydem.parametric.workers.most_workers(), else a
+    usage error naming the bound."""
+    if value is not None:
+        from drydem.parametric.workers import WORKERS_PER_CORE, cores, most_workers
+
+        if value > most_workers():
+            raise click.BadParameter(f"{value}: at most {most_workers()} local processes ({WORKERS_PER_CORE} per core; this process "
+                                     f"may run on {cores()} cores): more would only queue for them")
+    return value
+
+
+workers_option = click.option("--workers", type=click.IntRange(min=1), callback=_workers,
+                              help="Local processes, at most 4 per core (default: one per core this process may run on).")
 scheduler_option = click.option("--scheduler", help="Address of a Dask distributed scheduler to run on instead (tcp://host:8786).")
 
 

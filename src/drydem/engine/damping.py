@@ -60,9 +60,24 @@ def timestep_factor(damping: Damping, critical_timestep: float) -> float:
     proportional to its spring damps each mode in proportion to its frequency, and the rocking
     mode of a rectangular block (2b x 2h) on its bed joint is at most sqrt(3) times as fast as
     its bounce (omega_rock^2 / omega_bounce^2 = (b^2 + 3 h^2) / (b^2 + h^2) <= 3), so a contact's
-    ratio zeta, set for the bounce, is less than doubled there."""
-    z = 2.0 * damping.contact_ratio + damping.stiffness_proportional / critical_timestep
+    ratio zeta, set for the bounce, is less than doubled there; Rayleigh's mass term alpha adds
+    alpha / (2 omega_max) = alpha dt_crit / 4 (and :func:`drag_timestep` bounds it apart)."""
+    z = 2.0 * damping.contact_ratio + damping.stiffness_proportional / critical_timestep + damping.mass_proportional * critical_timestep / 4
     return float(np.sqrt(1.0 + z * z) - z)
+
+
+#: the most of its velocity Rayleigh's mass term takes from a block in one step, alpha dt
+#: (:func:`drag_timestep`)
+MASS_DRAG_PER_STEP = 0.1
+
+
+def drag_timestep(damping: Damping) -> float:
+    """The longest timestep, s, that resolves Rayleigh's mass term alpha, applied explicitly (each
+    velocity times 1 - alpha dt, springs or none): alpha dt <= :data:`MASS_DRAG_PER_STEP`, so the
+    velocity decays at the rate -ln(1 - alpha dt) / dt, within 5 % of alpha (at alpha dt > 1
+    the drag reversed the velocity every step, beyond 2 it grew: a one-sine pulse on a block
+    diverged at alpha = 2e4 1/s, alpha dt = 1.3, before this bound); infinite without it."""
+    return MASS_DRAG_PER_STEP / damping.mass_proportional if damping.mass_proportional > 0.0 else np.inf
 
 
 @numba.njit(cache=True, inline="always")

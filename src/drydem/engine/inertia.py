@@ -30,7 +30,7 @@ import numpy as np
 
 from drydem import compiled_cache
 from drydem.engine.contacts import SubContacts
-from drydem.engine.damping import Damping, timestep_factor
+from drydem.engine.damping import Damping, drag_timestep, timestep_factor
 from drydem.engine.joints import (
     CLOSING_CYCLES, JointConstants, StressJoint, kernel_joint, normal_closures, normal_stiffness, normal_stress, shear_stiffness,
 )
@@ -247,7 +247,8 @@ def timestep_and_blocks(
 
     The timestep is ``fixed_timestep`` (ModelError if above the critical one), else
     ``solver.timestep_safety`` times the critical one (:func:`critical_timestep`, reduced for
-    the dashpots of a viscous ``damping``: :func:`drydem.engine.damping.timestep_factor`), at
+    the dashpots of a viscous ``damping``: :func:`drydem.engine.damping.timestep_factor`, and at
+    most :func:`drydem.engine.damping.drag_timestep`), at
     most the free flight one (:func:`free_flight_timestep`, the only bound where nothing is
     sprung: on soft joints the critical timestep is long enough for a block released in
     contact to fall through its joint in a cycle or two, before the spring acts, and be called
@@ -269,6 +270,7 @@ def timestep_and_blocks(
     k_t, k_r = contact_stiffness(contacts, stiffness, model.n_blocks)
     critical = critical_timestep(model.block_mass, model.block_inertia_whitening, movable, k_t, k_r)
     critical *= timestep_factor(damping, critical) if np.isfinite(critical) else 1.0
+    critical = min(critical, drag_timestep(damping))
     if fixed_timestep is not None:
         if fixed_timestep > critical:
             raise ModelError(

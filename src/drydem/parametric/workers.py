@@ -19,6 +19,25 @@ from drydem.parametric.sweep import SweepError
 SCHEDULER_TIMEOUT_S = 5.0
 
 
+#: local worker processes at most per core this process may run on: more only queue for the
+#: cores, each a Python process with its own kernels (--workers 1000000 started one per run)
+WORKERS_PER_CORE = 4
+
+
+def cores() -> int:
+    """The cores this process may run on: its CPU affinity (taskset, a container's cpuset), where
+    the system tells it, else all of the machine's."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def most_workers() -> int:
+    """The most local worker processes a run may ask for (:data:`WORKERS_PER_CORE` per core)."""
+    return WORKERS_PER_CORE * cores()
+
+
 @dataclass(frozen=True)
 class Workers:
     """Where runs go: an ``executor``, a description of it (``where``), and the runs it computes
@@ -31,14 +50,14 @@ class Workers:
 
 @contextmanager
 def open_workers(workers: int | None = None, scheduler: str | None = None) -> Iterator[Workers]:
-    """``workers`` local processes (:func:`local_executor`; default: all cores), or the cluster
+    """``workers`` local processes (:func:`local_executor`; default: one per core, :func:`cores`), or the cluster
     of the Dask scheduler at ``scheduler`` (:func:`connect`). On an exception (an interrupt)
     the queued runs are cancelled rather than waited for."""
     if scheduler is not None:
         client = connect(scheduler)
         pool = Workers(client.get_executor(), f"Dask scheduler {scheduler}", None)
     else:
-        workers = workers or os.cpu_count() or 1
+        workers = workers or cores()
         client, pool = None, Workers(local_executor(workers), f"{workers} local processes", workers)
     try:
         yield pool

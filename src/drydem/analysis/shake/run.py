@@ -79,6 +79,10 @@ def shake_analysis(
     unresolved = settings.motion.resolution_problem(sim.timestep)
     if unresolved is not None:
         raise ModelError(f"{model.source}: {unresolved}")
+    if settings.output_interval_s < sim.timestep:  # a row per cycle at most: the history would not be at the interval recorded
+        raise ModelError(f"{model.source}: output_interval_s = {settings.output_interval_s:g} s (--output-interval) is shorter than "
+                         f"the timestep, {sim.timestep:.3g} s (the model's at the start of the shaking): the history has a row at "
+                         f"most every cycle; give at least {sim.timestep:.3g} s")
     shaking = Shaking(sim, monitor, settings)
     shaking.run(on_progress, on_frame)
     return shaking.result(ratio, restitution, time.perf_counter() - start)
