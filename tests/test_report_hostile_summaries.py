@@ -144,6 +144,21 @@ def test_a_pushover_csv_with_a_field_past_the_csv_limit_is_named_corrupt():
         _pushover_csv(path)
 
 
+@pytest.mark.parametrize("content, message", [
+    ("", "not a pushover curve"),
+    (f"{','.join(PUSHOVER_COLUMNS)}\n0,0,nan,0,0,1\n", "pushover row 0 [0.0, nan, 0.0, 0.0, 1.0]: the numbers must be finite"),
+    (f"{','.join(PUSHOVER_COLUMNS)}\n1e300,0,0,0,0,1\n", "pushover row 0 [1e+300, 0.0, 0.0, 0.0, 1.0]: the numbers must be finite, the tilt an angle in [0, 90] deg"),
+])
+def test_a_pushover_csv_empty_or_with_a_nan_or_an_absurd_tilt_is_named_corrupt(tmp_path, content, message):
+    """Found by a hunt: such a curve was counted and drawn as a run's, with no note."""
+    run_folder(tmp_path, "good", tilt_summary())
+    bad = run_folder(tmp_path, "bad", tilt_summary())
+    (bad.parent / "pushover.csv").write_text(content)
+    stderr, text = report(tmp_path)
+    assert f"corrupt record left out: {bad.parent}" in stderr and message in stderr
+    assert "1 runs recorded (0 failed)" in text and GOOD_TILT_ROW in text
+
+
 def test_a_run_made_with_a_step_below_today_s_least_is_still_a_result():
     # the least tilt step became 0.001 deg; a run recorded before with 1e-4 deg is no corrupt record
     from drydem.parametric.records import collapse_problem

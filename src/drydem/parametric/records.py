@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import os
 import sys
 from collections.abc import Collection, Mapping
@@ -177,8 +178,19 @@ def _result_problem(spec: RunSpec, summary, curve) -> str | None:
     problem = _shake_problem(spec, summary) if spec.analysis == "shake" else collapse_problem(spec.analysis, summary)
     if problem is not None:
         return problem
+    return _curve_problem(curve)
+
+
+def _curve_problem(curve) -> str | None:
+    """What is wrong with a finished run's pushover ``curve``, or None: rows of
+    :data:`CURVE_COLUMNS` finite numbers, the tilt an :data:`ANGLE` and the cycles none or more (a
+    NaN was drawn and tabled as a run's)."""
     if not isinstance(curve, list) or not all(isinstance(row, list) and len(row) == CURVE_COLUMNS and all(map(_numeric, row)) for row in curve):
         return f"pushover must be a list of rows of {CURVE_COLUMNS} numbers (tilt, ux, uz, drift, cycles)"
+    for k, (tilt, ux, uz, drift, cycles) in enumerate(curve):
+        if not all(map(math.isfinite, (tilt, ux, uz, drift, cycles))) or tilt not in ANGLE or cycles < 0:
+            return (f"pushover row {k} {[tilt, ux, uz, drift, cycles]}: the numbers must be finite, the tilt an angle in [0, 90] deg "
+                    "and the cycles none or more")
     return None
 
 
@@ -314,8 +326,10 @@ def _pushover_csv(path: Path) -> list[list[float]]:
     """A tilt's pushover.csv as a record's curve (:data:`CURVE_FROM_CSV`); RecordError naming the file."""
     try:
         with path.open(newline="", encoding="utf-8") as file:
-            rows = list(csv.reader(file))[1:]
-        return [[float(row[k]) for k in CURVE_FROM_CSV] for row in rows]
+            rows = list(csv.reader(file))
+        if not rows:  # a run writes the header as it starts
+            raise ValueError("no header")
+        return [[float(row[k]) for k in CURVE_FROM_CSV] for row in rows[1:]]
     except OSError as exc:
         raise RecordError(f"{path}: cannot read the run's pushover curve ({exc.strerror})") from None
     except (ValueError, IndexError, csv.Error):  # csv.Error: a field past the csv module's limit (131,072 characters)
