@@ -111,6 +111,13 @@ def test_a_box_too_far_too_small_or_too_flat_is_refused_as_a_hull_would_be():
         dd.box([0, 0, 0], [1e-7, 1e-7, 1e-7], name="grain")
     with pytest.raises(dd.GeometryError, match=r"sheet: degenerate block \(volume 1e-12 m3"):
         dd.box([0, 0, 0], [1, 1, 1e-12], name="sheet")
+    # found by a hunt: a brick 0.1 um thick (volume / size^2 = 3.9e-8 m) passed, its tilt endless
+    film = r"film: 3.9e-08 m thick on average \(volume 3e-11 m3 over its size 0.0277 m squared\): a block must be at least 1e-07 m thick"
+    with pytest.raises(dd.GeometryError, match=film):
+        dd.box([0, 0, 0], [0.025, 0.012, 1e-7], name="film")
+    with pytest.raises(dd.GeometryError, match=film):  # the same rule through Qhull
+        dd.convex_hull(np.vstack([box_vertices([0, 0, 0], [0.025, 0.012, 1e-7]), [[0.0125, 0.0, 0.0]]]), name="film")
+    assert dd.box([0, 0, 0], [0.025, 0.012, 3e-6]).volume > 0  # 3 um: kept
 
 
 def test_tetrahedron_mass_properties_match_closed_form():

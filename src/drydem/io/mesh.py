@@ -330,8 +330,8 @@ def _is_binary_stl(path: Path, data: bytes) -> bool:
 def _read_ascii_stl(path: Path, text: str) -> tuple[list[list[float]], list[_Solid]]:
     """``solid NAME``, then facets (``facet normal``, ``outer loop``, three ``vertex x y z``,
     ``endloop``, ``endfacet``), ``endsolid`` (``endsolid NAME``: the name of the solid it
-    closes); one or more solids. The normals are not used (drydem orients faces itself); each
-    statement is checked in its place."""
+    closes); one or more solids. The normals are not used (drydem orients faces itself), but
+    must be three finite numbers, as the vertices; each statement is checked in its place."""
     points: list[list[float]] = []
     solids: list[_Solid] = []
     solid = facet = None
@@ -354,7 +354,10 @@ def _read_ascii_stl(path: Path, text: str) -> tuple[list[list[float]], list[_Sol
             fixed = name is not None and name.endswith(FIXED_SOLID)
             solid = _Solid(name[: -len(FIXED_SOLID)] if fixed else name, "solid", [number])
             solids.append(solid)
-        elif key == "facet":
+        elif key == "facet":  # its normal is not used, but read: a NaN there is a damaged file
+            if len(words) < 2 or words[1].lower() != "normal":
+                raise ModelError(f"{where}: {shown(line.strip())}: a facet begins 'facet normal nx ny nz'")
+            _coordinates(words[2:], where, "a facet normal")
             facet, start = [], number
         elif key == "vertex":
             if len(facet) == 3:
@@ -383,9 +386,9 @@ def _check_endsolid(closing: str, opened: str | None, line: int, where: str) -> 
                          f"{line}: the name after endsolid, when given, must be the solid's (is the file cut short?)")
 
 
-def _coordinates(words: list[str], where: str) -> list[float]:
+def _coordinates(words: list[str], where: str, what: str = "a vertex") -> list[float]:
     """x, y, z: three finite numbers (an OBJ vertex may add w or a colour, which are not used),
-    each a :data:`~drydem.files.PLAIN_NUMBER` (float() also takes 1_0 for 10)."""
+    each a :data:`~drydem.files.PLAIN_NUMBER` (float() also takes 1_0 for 10); ``what`` they are, in the message."""
     try:
         if not all(PLAIN_NUMBER.fullmatch(w) for w in words[:3]):
             raise ValueError
@@ -393,7 +396,7 @@ def _coordinates(words: list[str], where: str) -> list[float]:
     except ValueError:
         raise ModelError(f"{where}: {shown(' '.join(words))}: the coordinates must be numbers") from None
     if len(xyz) < 3 or not all(map(math.isfinite, xyz)):
-        raise ModelError(f"{where}: {shown(' '.join(words))}: a vertex needs three finite numbers x y z")
+        raise ModelError(f"{where}: {shown(' '.join(words))}: {what} needs three finite numbers x y z")
     return xyz
 
 

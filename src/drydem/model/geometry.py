@@ -41,6 +41,10 @@ MAX_COORDINATE_M = 1e6
 #: the smallest block, m across (its bounding box's diagonal): a micrometre, a thousandth of the
 #: paper's smallest brick dimension; below it a model is in another unit
 MIN_BLOCK_SIZE_M = 1e-6
+#: the least mean thickness of a block, m, its volume over its size squared: a tenth of
+#: MIN_BLOCK_SIZE_M (a cube a third of a micrometre across has it); a brick 0.1 um thick was
+#: taken, and its tilt ran on for minutes at a timestep of 0.3 us
+MIN_THICKNESS_M = 1e-7
 #: the most vertices a block is given by: a 1000-sided prism, 0.1 s to build; masonry units
 #: have tens. The hull's check of every vertex against every face is n x 2n numbers (20,000
 #: vertices asked 24 GB), and past ~1000 sides the faces of a round block lie closer than
@@ -314,9 +318,14 @@ def _block_scale(pts: np.ndarray, name: str) -> float:
 
 def _refuse_flat(volume: float, scale: float, name: str) -> None:
     """GeometryError naming ``name`` for a block of ``volume`` (m3) at most 1e-9 of its size
-    ``scale`` (m) cubed: a sheet or a needle, whose inertia the cycles would divide by."""
+    ``scale`` (m) cubed: a sheet or a needle, whose inertia the cycles would divide by; or
+    thinner on average than :data:`MIN_THICKNESS_M` (volume / size^2): a film, whose joints'
+    timestep (it goes as the square root of the mass) would keep a run from ending."""
     if volume <= 1e-9 * scale**3:
         raise GeometryError(f"{name}: degenerate block (volume {volume:.3g} m3 for size {scale:.3g} m)")
+    if volume < MIN_THICKNESS_M * scale**2:
+        raise GeometryError(f"{name}: {volume / scale**2:.3g} m thick on average (volume {volume:.3g} m3 over its size {scale:.3g} m "
+                            f"squared): a block must be at least {MIN_THICKNESS_M:g} m thick (a model in another unit than metres?)")
 
 
 def face_interior_points(points: np.ndarray, shape: ConvexPolyhedron) -> np.ndarray:
