@@ -283,3 +283,11 @@ def test_drydem_check_of_a_hostile_file_exits_non_zero_naming_it_without_a_trace
     result = CliRunner().invoke(main, ["check", str(path)])
     assert result.exit_code != 0 and isinstance(result.exception, SystemExit), result.output
     assert "Traceback" not in result.output and f"{path}" in result.output
+
+
+def test_a_blank_compas_mesh_name_is_refused_naming_the_file(tmp_path):
+    # found by a hunt: the block's own rule refused it, without the file
+    path = tmp_path / "blank.json"
+    path.write_text(json.dumps([unit_mesh() | {"name": "   "}]))
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}: mesh 0: the name '   ' is blank; give the mesh a name, or none"):
+        read_compas(path)

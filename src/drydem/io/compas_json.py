@@ -184,6 +184,8 @@ def _name(data, where: str) -> str | None:
     name = data.get("name") if isinstance(data, dict) else None
     if name is not None and not isinstance(name, str):
         raise ModelError(f"{where}: the name must be a string, not {name!r}")
+    if name is not None and not name.strip():  # a block's name must be a text (the model said so, without the file)
+        raise ModelError(f"{where}: the name {name!r} is blank; give the mesh a name, or none (it is then called \"Mesh\")")
     return name
 
 
