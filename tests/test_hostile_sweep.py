@@ -261,6 +261,17 @@ def test_more_workers_than_four_a_core_are_refused_naming_the_bound(folder):
     assert not (folder / "out").exists()
 
 
+def test_a_value_listed_twice_and_grids_of_one_name_are_noted(folder):
+    """Found by a hunt: kn = [3e7, 3e7] made one run, and two grids named alike ran, without a word."""
+    (folder / "twice.toml").write_text('[study]\nname = "t"\n[[grid]]\nname = "g"\ntargets = ["pier.toml"]\nkn = [3e7, 3e7]\n'
+                                        '[[grid]]\nname = "g"\ntargets = ["pier.toml"]\nkn = [1e8]\n')
+    study = load_study(folder / "twice.toml")
+    assert len(study.runs) == 2
+    assert study.notes[:2] == (f"{folder / 'twice.toml'}: [[grid]] #0 ('g'): 1 of its 2 runs are the same as another of its runs "
+                               "(a value listed twice?): each is run once",
+                               f"{folder / 'twice.toml'}: [[grid]] #1 ('g'): another grid before it has the name 'g'")
+
+
 def test_a_study_file_that_is_a_pipe_is_called_so_not_missing(folder):
     os.mkfifo(folder / "pipe.toml")  # found by a hunt: "no such study file", where `check` says what it is
     refused(invoke("sweep", folder / "pipe.toml", "--out", folder / "out"), "pipe.toml: not a regular file (a pipe or a device?)")

@@ -232,9 +232,9 @@ def motion_label(motion: str, *, compact: bool = False) -> str:
 
 @dataclass(frozen=True)
 class Study:
-    """A checked study file: its runs, and the notes on its motions that drydem shake prints
-    for one run (a record shifted to start at 0, a component along an axis the supports hold:
-    :func:`_motion_notes`)."""
+    """A checked study file: its runs, and notes: on runs a grid makes twice (a value listed
+    twice) and grids of one name, and those on its motions that drydem shake prints for one run
+    (a record shifted to start at 0, a component along an axis the supports hold: :func:`_motion_notes`)."""
 
     name: str
     description: str
@@ -275,13 +275,15 @@ def _texts_problems(name, description, source: str) -> list[str]:
 
 
 def _runs(grids: list, defaults: dict, path: Path, problems: list[str]) -> tuple[list[RunSpec], tuple[str, ...]]:
-    """The runs of every grid, each once, each checked on its target, and the notes on their
-    motions (:func:`_motion_notes`); a problem found is appended to ``problems``. Once the runs
+    """The runs of every grid, each once, each checked on its target, and the notes on runs a
+    grid lists twice, grids of one name and their motions (:func:`_motion_notes`); a problem
+    found is appended to ``problems``. Once the runs
     exceed :data:`MAX_RUNS` the grids after are not expanded: the study is refused, naming each
     grid's count."""
     source = str(path)
     runs: dict[RunSpec, None] = {}
     counts: list[str] = []
+    twice: list[str] = []  # notes: runs a grid makes more than once, grids of one name
     models: dict[str, object] = {}  # target -> its model, or the message saying why it cannot be loaded
     motions: dict[str, object] = {}  # motion -> its unscaled GroundMotion, or the message saying why it cannot be read
     for k, grid in enumerate(grids):
@@ -295,13 +297,18 @@ def _runs(grids: list, defaults: dict, path: Path, problems: list[str]) -> tuple
         except ModelError as exc:
             problems.append(str(exc))
             continue
+        if len(set(found)) < len(found):
+            twice.append(f"{where}: {len(found) - len(set(found))} of its {len(found)} runs are the same as another of its runs (a value "
+                         "listed twice?): each is run once")
+        if name != "?" and any(isinstance(g, dict) and g.get("name") == name for g in grids[:k]):
+            twice.append(f"{where}: another grid before it has the name {name!r}")
         runs |= dict.fromkeys(found)
         counts.append(f"#{k} {name!r} {len(found)}")
         if len(runs) > MAX_RUNS:
             problems.append(f"{source}: {'at least ' if k + 1 < len(grids) else ''}{len(runs)} runs (grids {', '.join(counts)}; a run "
                             f"several grids share counted once): {_too_many()}")
             break
-    return list(runs), () if problems else _motion_notes(runs, models, motions)
+    return list(runs), () if problems else tuple(twice) + _motion_notes(runs, models, motions)
 
 
 def _motion_notes(runs, models: dict, motions: dict) -> tuple[str, ...]:
