@@ -182,6 +182,7 @@ def test_a_folder_a_run_is_writing_in_is_neither_animated_nor_swept_into(tmp_pat
         unlock(out / ".montecarlo.lock", montecarlo)
     assert run("tilt", path, "--out", out, "--increment", "2", "--overwrite").exit_code == 0
     assert refused(run("sweep", tmp_path / "study.toml", "--out", out), "run: holds a drydem run (summary.json), not a sweep's records")
+    assert refused(run("calibrate", out, "--designs", "WD3"), "not a sweep's records; give calibrate a sweep's folder, or a new one")
     assert not (out / "runs").exists()
 
 

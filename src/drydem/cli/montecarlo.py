@@ -62,8 +62,8 @@ def montecarlo(target, samples, seed, height_sd, height_distribution, flatness_s
                                    "--misalignment-sd (mm, > 0)")
     found = resolve_target(target)
     if found.wall is None:
-        raise click.ClickException(f"{target}: a model file has no brick layout, and imperfections are drawn on a wall's bricks: "
-                                   "give a built-in wall (drydem designs) or a wall file")
+        raise click.ClickException(f"{target}: not a wall (a model file, a building or imported geometry has no brick layout), "
+                                   "and imperfections are drawn on a wall's bricks: give a built-in wall (drydem designs) or a wall file")
     try:
         imperfections.check_for(found.wall.brick, found.wall.source, name=IMPERFECTION_OPTIONS.__getitem__)
         settings = MonteCarloSettings(samples=samples, seed=seed, imperfections=imperfections, tilt=tilt.settings(),

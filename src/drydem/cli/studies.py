@@ -139,7 +139,7 @@ def calibrate(results_dir, designs, kn_min, kn_max, ks_ratio, increment, joint_l
         raise click.ClickException("\n".join(problems))
     out = out or results_dir / CALIBRATION_FILE
     try:
-        records_folder(results_dir)
+        records_folder(results_dir, "calibrate")
         check_calibration_file(writable(out), search, overwrite=overwrite)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None

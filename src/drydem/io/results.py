@@ -285,15 +285,17 @@ def prepared_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | No
         yield folder
 
 
-def records_folder(folder: Path) -> Path:
-    """``folder`` made ready for a sweep's records (:func:`drydem.files.writable_folder`; sweeps
+def records_folder(folder: Path, command: str = "sweep") -> Path:
+    """``folder`` made ready for the records of a sweep (or of ``command``, named in the advice;
+    :func:`drydem.files.writable_folder`; sweeps
     may share one), unless it is a single run's, in which the records would be mixed: one being
     written (:func:`refuse_if_written`: it or a folder it lies in) or one written (its summary.json).
     DrydemError naming it otherwise."""
-    refuse_if_written(folder, "give a sweep its own --out")
+    advice = "give a sweep its own --out" if command == "sweep" else f"give {command} a sweep's folder, or a new one"
+    refuse_if_written(folder, advice)
     folder = writable_folder(folder)
     if (folder / "summary.json").is_file():
-        raise DrydemError(f"{folder}: holds a drydem run (summary.json), not a sweep's records; give a sweep its own --out")
+        raise DrydemError(f"{folder}: holds a drydem run (summary.json), not a sweep's records; {advice}")
     return folder
 
 

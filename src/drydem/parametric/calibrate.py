@@ -388,7 +388,7 @@ def calibrate_stiffness(search: StiffnessSearch, results: Path, executor: Execut
     computed by another process, DrydemError for an ``out`` that cannot or may not be written."""
     refuse(search.problems())
     experiment = experimental_angles()
-    records_folder(results)
+    records_folder(results, "calibrate")
     if out is not None:
         check_calibration_file(writable(out), search, overwrite=overwrite)
     found: dict[float, Evaluation] = {}
