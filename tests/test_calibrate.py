@@ -207,3 +207,11 @@ def test_a_calibration_converts_to_a_dataframe_of_its_evaluations_and_probes(tmp
     assert len(frame) == len(result.evaluations) + 2 and frame["probe"].sum() == 2
     assert frame.loc[~frame["probe"], "error"].min() == frame.attrs["best_error"] == result.best_error
     assert frame.attrs["noise"] == result.noise and not (tmp_path / "calibration.json").exists()  # no out, no file
+
+
+def test_a_joint_law_missing_its_keys_is_named_once_not_at_each_end_of_the_kn_range(tmp_path):
+    # found by a hunt: the same three missing keys were listed for kn = 1e7 and again for 1e9
+    result = calibrate_command(tmp_path, "--joint-model", "power")
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    assert result.output.count("needs kn_exponent") == 1 and "at kn =" not in result.output
+    assert "joint law {'model': 'power'}: [joint] model = 'power' needs kn_exponent" in result.output

@@ -227,14 +227,15 @@ def _design_problems(designs: tuple[str, ...], name: Callable[[str], str]) -> li
 
 
 def _law_problems(law: dict, kn_range: tuple[float, float], ks_ratio: float) -> list[str]:
-    """Why the joint ``law`` cannot take the kn at either end of ``kn_range`` (ks = ks_ratio x kn)."""
-    found = []
+    """Why the joint ``law`` cannot take the kn at either end of ``kn_range`` (ks = ks_ratio x kn),
+    each reason once: with the kn it holds at, unless it holds at both (a key the law lacks)."""
+    found: dict[str, list[float]] = {}
     for kn in kn_range:
         try:
             JointMaterial(kn=kn, ks=ks_ratio * kn, **law)
         except (ModelError, TypeError) as exc:
-            found.append(f"joint law {law} at kn = {kn:.4g} Pa/m: {exc}")
-    return sorted(set(found), key=found.index)
+            found.setdefault(str(exc), []).append(kn)
+    return [f"joint law {law}{'' if len(kns) == len(kn_range) else f' at kn = {kns[0]:.4g} Pa/m'}: {reason}" for reason, kns in found.items()]
 
 
 @dataclass(frozen=True)
