@@ -50,7 +50,7 @@ def extent(block):
 
 
 def test_vrml_boxes_under_transforms_import_to_the_right_blocks(tmp_path):
-    blocks = read_vrml(write(tmp_path, TWO_BOXES), unit_m=1e-3)
+    blocks, _ = read_vrml(write(tmp_path, TWO_BOXES), unit_m=1e-3)
     assert [b.name for b in blocks] == ["left", "right"]
     for block, x0 in zip(blocks, (0.0, 0.02)):
         assert block.shape.volume == pytest.approx(0.02 * 0.012 * 0.01)
@@ -67,12 +67,23 @@ def test_vrml_transform_applies_scale_about_its_centre_and_use_repeats_a_node(tm
     Transform { scale 2 1 1 center 1 0 0 children DEF cube Shape { geometry Box { size 1 1 1 } } }
     Transform { translation 0 0 5 children USE cube }
     """
-    scaled, moved = read_vrml(write(tmp_path, text))
+    path = write(tmp_path, text)
+    (scaled, moved), notes = read_vrml(path)
     lo, hi = extent(scaled)
     np.testing.assert_allclose(lo, [2 * (-0.5 - 1) + 1, -0.5, -0.5])
     np.testing.assert_allclose(hi, [2 * (0.5 - 1) + 1, 0.5, 0.5])
     assert (scaled.name, moved.name) == ("cube", "cube-2")
+    assert notes == [f"{path}: 2 shapes share the name 'cube' (a USE copy, or a DEF given twice): they are the blocks 'cube', "
+                     "'cube-2' in file order"]  # found by a hunt: the OBJ and compas readers said so, VRML did not
     np.testing.assert_allclose(moved.shape.centroid, [0, 0, 5])
+
+
+def test_a_vrml_name_the_file_gives_is_not_taken_by_a_repeated_one(tmp_path):
+    text = ("#VRML V2.0 utf8\nDEF a Shape { geometry Box { size 1 1 1 } }\n"
+            "Transform { translation 0 0 5 children DEF a Shape { geometry Box { size 1 1 1 } } }\n"
+            "Transform { translation 0 0 10 children DEF a-2 Shape { geometry Box { size 1 1 1 } } }\n")
+    blocks, notes = read_vrml(write(tmp_path, text))
+    assert [b.name for b in blocks] == ["a", "a-3", "a-2"] and len(notes) == 1 and "'a', 'a-3' in file order" in notes[0]
 
 
 @pytest.mark.parametrize("text, message", [

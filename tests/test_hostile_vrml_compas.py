@@ -76,7 +76,7 @@ def test_use_copies_of_a_shape_of_many_points_past_the_vertex_limit_are_refused(
 
 def test_vrml_nesting_is_read_to_the_depth_limit_and_refused_past_it(tmp_path):
     # a Shape and its Box are two levels of nodes
-    assert len(read_vrml(wrl(tmp_path, nested(MAX_DEPTH - 2), "deepest.wrl"))) == 1
+    assert len(read_vrml(wrl(tmp_path, nested(MAX_DEPTH - 2), "deepest.wrl"))[0]) == 1
     path = wrl(tmp_path, nested(330))
     with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}, line 2: Group nests nodes {MAX_DEPTH + 1} levels deep: "
                                          rf"drydem reads at most {MAX_DEPTH}"):
@@ -126,7 +126,7 @@ def test_a_rotation_about_a_zero_axis_is_refused_naming_its_field(tmp_path, fiel
 
 def test_a_rotation_of_angle_zero_or_about_a_long_axis_is_read(tmp_path):
     def corners(rotation):
-        return read_vrml(wrl(tmp_path, f"Transform {{ rotation {rotation} children [ {cube()} ] }}"))[0].shape.vertices
+        return read_vrml(wrl(tmp_path, f"Transform {{ rotation {rotation} children [ {cube()} ] }}"))[0][0].shape.vertices
     assert corners("0 0 0 0").tolist() == corners("0 0 1 0").tolist()
     # an axis of 1e200 has a norm past the float range: it was taken as no rotation
     assert corners("1e200 0 0 1.5707963267948966") == pytest.approx(corners("1 0 0 1.5707963267948966"), abs=1e-15)

@@ -98,7 +98,7 @@ def imported_model(path: Path, *, unit_m: float = 1.0) -> tuple[Model, list[str]
 
     kind = MESH_SUFFIXES[path.suffix.lower()]
     if kind == "VRML":
-        blocks, notes = read_vrml(path, unit_m=unit_m), []
+        blocks, notes = read_vrml(path, unit_m=unit_m)
     elif kind == "compas JSON":
         blocks, notes = read_compas(path, unit_m=unit_m)
     else:

@@ -13,7 +13,7 @@ lights, viewpoints and other nodes that carry no geometry are skipped. ``PROTO``
 ``Inline`` and other geometry nodes are errors naming their line.
 
 A block is named after the DEF name of its Shape, else of its nearest named ancestor, else
-``shape{k}``; repeated names get ``-2``, ``-3``...
+``shape{k}``; repeated names get ``-2``, ``-3``... (a note says so).
 
 Limits, checked while parsing, before any block is built: nodes nest at most :data:`MAX_DEPTH`
 deep, and the scene expands to at most :data:`MAX_BLOCKS` shapes and :data:`MAX_POINTS`
@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 import re
+import itertools
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -72,9 +73,10 @@ class Node:
     height: int = 1
 
 
-def read_vrml(path: str | Path, *, unit_m: float = 1.0) -> list[Block]:
-    """The blocks of a VRML file, coordinates times ``unit_m`` (m: drydem.io.mesh.UNIT); ModelError
-    naming the file and line."""
+def read_vrml(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], list[str]]:
+    """The blocks of a VRML file, coordinates times ``unit_m`` (m: drydem.io.mesh.UNIT), and notes
+    on the names given to shapes that share one (:func:`_labels`), as drydem.io.mesh.read_mesh
+    gives its own; ModelError naming the file and line."""
     check_reader_arguments("read_vrml", path, unit_m)
     path = Path(path)
     text = read_text(path, EXPECTED)
@@ -87,13 +89,24 @@ def read_vrml(path: str | Path, *, unit_m: float = 1.0) -> list[Block]:
             _collect(node, np.eye(4), None, shapes, str(path))
     if not shapes:
         raise ModelError(f"{path}: no Shape with an IndexedFaceSet or Box")
-    blocks, taken = [], {}
-    for k, (name, points, faces, line) in enumerate(shapes):
-        base = name or f"shape{k}"
-        taken[base] = taken.get(base, 0) + 1
-        label = base if taken[base] == 1 else f"{base}-{taken[base]}"
-        blocks.append(closed_convex_block(points * unit_m, faces, name=label, where=f"{path}, line {line}: Shape {label!r}"))
-    return blocks
+    labels, notes = _labels([name or f"shape{k}" for k, (name, *_) in enumerate(shapes)], path)
+    blocks = [closed_convex_block(points * unit_m, faces, name=label, where=f"{path}, line {line}: Shape {label!r}")
+              for label, (_, points, faces, line) in zip(labels, shapes)]
+    return blocks, notes
+
+
+def _labels(names: list[str], path: Path) -> tuple[list[str], list[str]]:
+    """Block names for shapes named ``names`` (in file order): each name once, a repeated one
+    NAME-2, NAME-3, ... (skipping any name the file gives), and a note for each repeated name
+    saying what its blocks are called (a USE copy, or a DEF name given twice)."""
+    given, labels, shared = set(names), [], {}
+    for name in names:
+        label = name if name not in shared else next(f"{name}-{n}" for n in itertools.count(2) if f"{name}-{n}" not in given | set(labels))
+        labels.append(label)
+        shared.setdefault(name, []).append(label)
+    notes = [f"{path}: {len(named)} shapes share the name {name!r} (a USE copy, or a DEF given twice): they are the blocks "
+             f"{', '.join(map(repr, named))} in file order" for name, named in shared.items() if len(named) > 1]
+    return labels, notes
 
 
 def _collect(node: Node, to_world: np.ndarray, name: str | None, out: list, source: str) -> None:
