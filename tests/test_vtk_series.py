@@ -232,6 +232,11 @@ def test_animate_names_the_line_of_a_frame_whose_tilt_is_not_finite(run, tmp_pat
     result = CliRunner().invoke(main, ["animate", str(short), "-o", str(tmp_path / "collapse.gif")])
     assert result.exit_code == 1
     assert "frames.csv: line 3: not a frame of drydem tilt or shake --vtk (ValueError(\"tilt_deg 'nan': must be a finite number" in result.output
+    lines[2] = lines[2].replace("nan", "1e300", 1)  # found by a hunt: drawn as a caption
+    (short / "frames.csv").write_text("\n".join(lines) + "\n")
+    result = CliRunner().invoke(main, ["animate", str(short), "-o", str(tmp_path / "collapse.gif")])
+    assert result.exit_code == 1 and "line 3: not a frame of drydem tilt or shake --vtk (ValueError(\"tilt_deg '1e300': must be a " \
+        "finite number in [0, 90]" in result.output, result.output
 
 
 def _frame(line, number):
@@ -366,3 +371,15 @@ def test_a_caption_shows_a_round_off_below_a_hundredth_of_a_millimetre_as_zero()
     row = {"kind": "equilibrium", "tilt_deg": "0.0", "ux_m": "-3e-20"}
     assert _caption(row, 0) == "equilibrium: tilt 0.00 deg, monitored ux 0.00 mm"
     assert _caption({"time_s": "1.0", "ux_m": "-0.0042"}, 0) == "t = 1.000 s, monitored ux -4.20 mm"
+
+
+def test_a_shake_frame_before_the_table_started_or_before_the_frame_before_is_refused(tmp_path):
+    """Found by a hunt: time_s = -5 in the middle of a shake series was drawn."""
+    from drydem.errors import DrydemError
+    from drydem.report.animation import _caption, _check_increasing
+
+    with pytest.raises(ValueError, match=r"time_s '-5': must be a finite number >= 0"):
+        _caption({"time_s": "-5", "ux_m": "0"}, 0)
+    rows = [{"frame": "0", "time_s": "0.0"}, {"frame": "1", "time_s": "0.2"}, {"frame": "2", "time_s": "0.1"}]
+    with pytest.raises(DrydemError, match=r"frames.csv: line 4: time_s 0.1 is before the frame before's, 0.2 \(line 3\)"):
+        _check_increasing(tmp_path / "frames.csv", rows)

@@ -126,6 +126,9 @@ def _check_increasing(index: Path, rows: list[dict]) -> None:
         if int(row["frame"]) <= int(before["frame"]):
             raise DrydemError(f"{index}: line {line}: frame {row['frame']} is not after frame {before['frame']} (line {line - 1}): "
                               "frame numbers must increase strictly, as drydem numbers a series' frames (0, 1, 2, ...)")
+        if row.get("time_s") is not None and float(row["time_s"]) < float(before["time_s"]):
+            raise DrydemError(f"{index}: line {line}: time_s {row['time_s']} is before the frame before's, {before['time_s']} "
+                              f"(line {line - 1}): a shaking table's frames follow its model time")
 
 
 def _listed_frame(index: Path, line: int, row: dict) -> tuple[Path, str, int]:
@@ -208,11 +211,11 @@ def _caption(row: dict, load_direction: int) -> str:
     monitored displacement along the load (``ux_m``: along y when tilting about x); a
     ValueError for a kind not of :data:`drydem.io.vtk.FRAME_KINDS`."""
     if row.get("time_s") is not None:
-        return f"t = {_finite(row, 'time_s'):.3f} s, monitored ux {_millimetres(_finite(row, 'ux_m'))} mm"
+        return f"t = {_finite(row, 'time_s', 0.0):.3f} s, monitored ux {_millimetres(_finite(row, 'ux_m'))} mm"
     if row["kind"] not in FRAME_KINDS:
         raise ValueError(f"kind {row['kind']!r}: must be one of {', '.join(map(repr, FRAME_KINDS))}")
     along = f"monitored u{LOAD_AXES[load_direction]} {_millimetres(_finite(row, 'ux_m'))} mm"
-    return f"{row['kind']}: tilt {_finite(row, 'tilt_deg'):.2f} deg, {along}"
+    return f"{row['kind']}: tilt {_finite(row, 'tilt_deg', 0.0, 90.0):.2f} deg, {along}"
 
 
 def _millimetres(metres: float) -> str:
@@ -220,12 +223,14 @@ def _millimetres(metres: float) -> str:
     return f"{round(metres * 1e3, 2) + 0.0:.2f}"
 
 
-def _finite(row: dict, column: str) -> float:
+def _finite(row: dict, column: str, low: float = -math.inf, high: float = math.inf) -> float:
     """The number in ``column`` of a row of ``frames.csv``; a ValueError naming the column if it
-    is not a finite number (NaN, inf)."""
+    is not a finite number (NaN, inf) in [``low``, ``high``] (a tilt in [0, 90] deg, a model time
+    none or more: a tilt of 1e300 deg was drawn as a caption)."""
     value = float(row[column])
-    if not math.isfinite(value):
-        raise ValueError(f"{column} {row[column]!r}: must be a finite number")
+    if not (math.isfinite(value) and low <= value <= high):
+        bounds = "" if (low, high) == (-math.inf, math.inf) else f" in [{low:g}, {high:g}]" if high < math.inf else f" >= {low:g}"
+        raise ValueError(f"{column} {row[column]!r}: must be a finite number{bounds}")
     return value
 
 
