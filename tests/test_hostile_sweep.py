@@ -307,6 +307,9 @@ def test_a_report_leaves_out_corrupt_records_and_names_them(folder):
 
 def test_a_report_of_a_folder_without_runs_says_it_has_nothing_to_report(tmp_path):
     refused(invoke("report", tmp_path), f"{tmp_path}: nothing to report: no runs/ folder")
+    # found by a hunt: a shake run's folder was said to have no summary.json, which it has
+    (tmp_path / "summary.json").write_text(json.dumps({"overturned": False, "max_rotation_rad": 0.0}))
+    refused(invoke("report", tmp_path), f"{tmp_path / 'summary.json'} is of another analysis (a `drydem shake` run's folder is its own report")
 
 
 # --- claims: one run, one sweep -------------------------------------------------------------

@@ -198,8 +198,11 @@ def build_report(results: Path, out: Path | None = None, *, overwrite: bool = Fa
     results = Path(results)
     swept, folders, summaries = load_records(results), load_run_folders(results), montecarlo_summaries(results)
     if not ((results / "runs").is_dir() or folders.valid or folders.corrupt or summaries):
+        other = next((folder / SUMMARY_FILE for folder in run_folders(results) if (folder / SUMMARY_FILE).is_file()), None)
         raise ReportError(f"{results}: nothing to report: no runs/ folder (`drydem sweep STUDY --out {results}` writes one) and no "
-                          f"folder of a `drydem tilt`, `drydem limit` or `drydem montecarlo` run (its {SUMMARY_FILE})")
+                          f"folder of a `drydem tilt`, `drydem limit` or `drydem montecarlo` run (its {SUMMARY_FILE})"
+                          + ("" if other is None else f"; {other} is of another analysis (a `drydem shake` run's folder is its "
+                                                      "own report: summary.json, history.csv, history.png; a sweep's shake runs are reported)"))
     records = Records(swept.valid + folders.valid, swept.corrupt + folders.corrupt)
     runs, (monte_carlo, unreadable) = Runs(records.valid), montecarlo_runs(summaries)
     out = writable_folder(out or results / "report")
