@@ -99,7 +99,8 @@ def test_a_results_folder_holding_a_run_is_never_replaced_silently(tmp_path):
     first = (out / "summary.json").read_text()
     (out / "vtk").mkdir()
     (out / "collapse.mp4").write_bytes(b"old video")
-    assert refused(run("tilt", path, "--out", out, "--increment", "2"), "already holds another run", "--overwrite")
+    assert refused(run("tilt", path, "--out", out, "--increment", "2"), "already holds another run", "--overwrite",
+                   "--resume to go on with it (a run of this command)")  # not "from its checkpoint": montecarlo resumes its samples
     assert (out / "summary.json").read_text() == first
     # --overwrite replaces it and leaves nothing stale of the old run beside the new results
     assert run("tilt", path, "--out", out, "--increment", "2", "--overwrite").exit_code == 0

@@ -273,7 +273,7 @@ def prepared_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | No
         present = sorted(p.name for p in folder.iterdir() if not is_lock(p.name))
         ours = [name for name in present if name in outputs]
         if present and not (resume or overwrite):
-            go_on = "" if resume is None else ", --resume to go on from its checkpoint"
+            go_on = "" if resume is None else ", --resume to go on with it (a run of this command)"
             others = f"{', '.join(present[:5])}{', ...' if len(present) > 5 else ''}"
             raise DrydemError(f"{folder}: already holds another run ({', '.join(ours)}); pass --overwrite to replace it{go_on}, "
                               "or another --out" if ours else
