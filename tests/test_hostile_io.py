@@ -55,6 +55,8 @@ def fails(args: list[str], *messages: str):
     ("stray.stl", "solid a\nvertex 0 0 0\n", "line 2: 'vertex' is out of place (inside a solid)"),
     ("word.stl", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 zero\n", "line 4: vertex: '0 0 zero': the coordinates must be numbers"),
     ("outside.stl", "solid a\nendsolid a\nfacet normal 0 0 1\n", "line 3: 'facet' is out of place (outside any solid)"),
+    ("turned.obj", CUBE.replace("f 1 4 3 2", "f 1 2 3 4"),  # found by a hunt: OBJ and STL skipped the check VRML and compas make
+     "the faces do not wind consistently: the edge [0.0, 0.0, 0.0] - [1.0, 0.0, 0.0] runs the same way in both its faces"),
     ("normal.stl", "solid a\nfacet normal nan 0.0 -1.0\n", "line 2: 'nan 0.0 -1.0': a facet normal needs three finite numbers x y z"),
     ("bare.stl", "solid a\nfacet\n", "line 2: 'facet': a facet begins 'facet normal nx ny nz'"),
     ("verb.stl", "solid a\nfacets\n", "line 2: 'facets' is not an ASCII STL statement"),

@@ -122,6 +122,8 @@ def test_invalid_toml_and_missing_file_name_the_file(tmp_path):
         load_model(write(tmp_path, "[joint\nkn = 1", name="bad.toml"))
     with pytest.raises(dd.ModelError, match=r"absent\.toml: cannot read"):
         load_model(tmp_path / "absent.toml")
+    with pytest.raises(dd.ModelError, match=r"long\.toml: an integer of more than 4,300 digits, which Python does not read"):
+        load_model(write(tmp_path, "[joint]\nkn = 1" + "0" * 5000 + "\n", name="long.toml"))  # found by a hunt: a raw ValueError
 
 
 def test_replacing_parameters_keeps_masses_and_inertias_bit_for_bit(tmp_path):

@@ -10,6 +10,7 @@ import re
 import signal
 import socket
 import stat
+import sys
 import tempfile
 import threading
 import time
@@ -343,3 +344,6 @@ def read_toml(path: Path) -> tuple[dict, str]:
         return tomllib.loads(text), text
     except tomllib.TOMLDecodeError as exc:
         raise ModelError(f"{path}: not valid TOML: {exc}") from None
+    except ValueError:  # an integer of more digits than Python converts (4,300), raised by int() inside tomllib
+        raise ModelError(f"{path}: an integer of more than {sys.get_int_max_str_digits():,} digits, which Python does not read; "
+                         "no number of a model needs that many") from None

@@ -21,8 +21,8 @@ import numpy as np
 
 from drydem.engine.contacts import NeighbourList, SubContacts
 from drydem.engine.simulation import Snapshot
-from drydem.errors import DrydemError
-from drydem.files import replaced_atomically, uninterrupted
+from drydem.errors import DrydemError, ModelError
+from drydem.files import regular_file, replaced_atomically, uninterrupted
 from drydem.model.state import State
 
 _PARTS = {"state": State, "contacts": SubContacts, "neighbours": NeighbourList, "broad_state": State}
@@ -72,9 +72,10 @@ def _check_digest(data) -> None:
 
 def load_checkpoint(path: Path) -> tuple[Snapshot, dict]:
     """The snapshot and progress saved by :func:`save_checkpoint`; DrydemError naming the file
-    if it is missing, empty, truncated or not a drydem checkpoint."""
+    if it is missing, empty, truncated, not a drydem checkpoint, or no regular file (a pipe would
+    be waited on forever)."""
     try:
-        with np.load(path) as data:
+        with np.load(regular_file(path, "a checkpoint is the checkpoint.npz a run writes")) as data:
             _check_digest(data)
             parts = {part: cls(**{name: data[f"{part}.{name}"] for name in cls._fields}) for part, cls in _PARTS.items()}
             scaled, time_s, farthest = (float(data[key]) for key in ("scaled_timestep", "time_s", "farthest_travel_kg_m"))
@@ -83,7 +84,7 @@ def load_checkpoint(path: Path) -> tuple[Snapshot, dict]:
             snapshot = Snapshot(**parts, active=data["active"], cycles=int(data["cycles"]), time_s=time_s,
                                 scaled_timestep=None if np.isnan(scaled) else scaled, farthest_travel_kg_m=farthest)
             progress = {key.removeprefix("progress."): data[key] for key in data.files if key.startswith("progress.")}
-    except (OSError, ValueError, KeyError, EOFError, MemoryError, zipfile.BadZipFile) as exc:
+    except (OSError, ValueError, KeyError, EOFError, MemoryError, zipfile.BadZipFile, ModelError) as exc:
         # np.load raises each of these for a missing, empty, truncated or foreign file (MemoryError:
         # an array's header claiming terabytes)
         raise unreadable(path, exc) from None

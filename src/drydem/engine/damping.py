@@ -27,6 +27,7 @@ import numba
 import numpy as np
 
 from drydem import compiled_cache
+from drydem.model.parameters import Range
 
 
 class Damping(NamedTuple):
@@ -42,6 +43,15 @@ class Damping(NamedTuple):
     contact_ratio: float = 0.0
     stiffness_proportional: float = 0.0
     mass_proportional: float = 0.0
+
+
+#: the range of each viscous coefficient of :class:`Damping` (drydem shake's options are held to
+#: the same): a contact damping ratio up to 10, Rayleigh's stiffness term up to 1 s and its mass
+#: term up to 1e6 1/s; beyond them the timestep they need (:func:`timestep_factor`,
+#: :func:`drag_timestep`) shrinks towards nothing (a ratio of 1e8 gave a timestep of 0, and the
+#: cycles moved nothing)
+VISCOUS_RULES = {"contact_ratio": Range(0.0, 10.0, unit="(ratio of critical)"), "stiffness_proportional": Range(0.0, 1.0, unit="s"),
+                 "mass_proportional": Range(0.0, 1e6, unit="1/s")}
 
 
 @numba.njit(cache=True, inline="always")

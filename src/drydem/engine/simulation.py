@@ -24,7 +24,7 @@ import numpy as np
 
 from drydem.engine import diagnostics, loop
 from drydem.engine.contacts import NeighbourList, SubContacts, closing_motion, snapshot_problem
-from drydem.engine.damping import Damping
+from drydem.engine.damping import VISCOUS_RULES, Damping
 from drydem.engine.inertia import BlockConstants, keep_kinetic_energy, timestep_and_blocks
 from drydem.engine.joints import kernel_joint
 from drydem.engine.threads import threads_for, using_threads
@@ -41,8 +41,6 @@ from drydem.model.state import QUATERNION_TOLERANCE, State, block_array, checked
 #: "numba": compiled, the planar cycle for in-plane models (drydem.engine.cycle_planar), else the
 #: 3D one; "numba-3d": the compiled 3D cycle for every model
 ENGINES = ("numba", "numba-3d")
-#: a damping coefficient or ratio: any finite value >= 0
-NON_NEGATIVE = Range(0.0, None)
 #: a timestep given to a Simulation, s: above 0, and not below a picosecond, which is 50 times
 #: below the critical timestep of any model drydem accepts (the stiffest joint, 1e15 Pa/m, under
 #: the lightest micrometre block, 1 kg/m3: ~5e-11 s); one above the critical timestep is refused
@@ -149,6 +147,8 @@ class Simulation:
         #: kg m: the largest sum m |x - x_origin| over the moving blocks at the end of a call of the
         #: kernel loop, part of the divergence test's allowance (:meth:`_energy_slack_j`)
         self._farthest_travel_kg_m = 0.0
+        #: m/s2: the largest g_max of the calls so far, with which the allowance bounds the work done (:meth:`_energy_slack_j`)
+        self._largest_g_m_s2 = 0.0
         self.blocks: BlockConstants | None = None
         self.cycles = 0
         self.time_s = 0.0
@@ -454,12 +454,16 @@ class Simulation:
         V = integral of |a_g| dt, and K <= 2 (U0 + G*) + M V^2. The table's part is M V^2 / 2,
         V summed to the call's end (:attr:`table_impulse_m_s` before it; a call is at most
         TABLE_CHUNK cycles), so the allowance of its work, 10 M V^2 / 2, is 5 times the bound. A
-        blow-up grows exponentially and soon passes it (and a NaN is caught at every cycle)."""
+        blow-up grows exponentially and soon passes it (and a NaN is caught at every cycle). The
+        work done so far is bounded with the largest g_max of any call (this one and those before:
+        the joints keep what an earlier gravity compressed them with; turned off after settling,
+        it was released as kinetic energy that this call's g_max, 0, called a divergence)."""
         magnitude = np.linalg.norm(table, axis=1)
         g_max = float(np.linalg.norm(gravity)) + float(magnitude.max(initial=0.0))  # the loop's g_max for this call
+        self._largest_g_m_s2 = max(self._largest_g_m_s2, g_max)
         speed = self.table_impulse_m_s + float(magnitude.sum()) * self.timestep
         settling = self.model.total_mass * self.model.contact_tolerance
-        return self._start_energy_j + g_max * (settling + self._farthest_travel_kg_m) + 0.5 * moving_mass * speed**2
+        return self._start_energy_j + self._largest_g_m_s2 * (settling + self._farthest_travel_kg_m) + 0.5 * moving_mass * speed**2
 
     # -- diagnostics ----------------------------------------------------------------------
     def energy(self, *, gravity=(0.0, 0.0, -G)) -> dict[str, float]:
@@ -478,8 +482,7 @@ def _checked(damping: Damping, model: Model) -> Damping:
     refusing dashpots on a stress-dependent joint."""
     if not isinstance(damping, Damping):
         raise ModelError(f"{model.source}: damping must be a drydem.engine.damping.Damping, got {damping!r}")
-    rules = {"local": DAMPING, "contact_ratio": NON_NEGATIVE, "stiffness_proportional": NON_NEGATIVE, "mass_proportional": NON_NEGATIVE}
-    check_fields(damping, rules, f"{model.source}: damping")
+    check_fields(damping, {"local": DAMPING, **VISCOUS_RULES}, f"{model.source}: damping")
     if model.joint.stress_dependent and (damping.contact_ratio > 0 or damping.stiffness_proportional > 0):
         raise ModelError(f"{model.source}: contact dashpots (a damping ratio or Rayleigh's stiffness term) with a stress-dependent "
                          f"joint ({model.joint.model} law): the dashpots are sized for a constant kn, and neither their damping ratio "

@@ -133,7 +133,8 @@ def read_mesh(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], li
             if any(fixed) and not all(fixed):
                 raise ModelError(f"{where}: {sum(fixed)} of its {b - a} faces are marked fixed (from {solid.origins[a + fixed.index(True)]}), "
                                  f"the others not; a fixed block has all its faces in the material {FIXED_MATERIAL!r}")
-            blocks.append(Block(name=name, shape=_convex_shape(points, faces[a:b], where=where), fixed=all(fixed)))
+            block = closed_convex_block(points, faces[a:b], name=name, where=where)  # its faces wound one way, as VRML's and compas'
+            blocks.append(Block(name=name, shape=block.shape, fixed=all(fixed)))
         unnamed += len(runs) if solid.name is None else 0
         renamed += _renamed(path, solid, [names[first + k] for k in range(len(runs))])
     notes = []

@@ -287,7 +287,8 @@ ARGUMENT_RULES = {"joint": InstanceOf(JointMaterial), "contacts": InstanceOf(Con
 def _checked_arguments(blocks, **arguments) -> list[Block]:
     """``blocks`` as a list, after ModelError naming every argument of :func:`build_model` of the
     wrong kind (:data:`ARGUMENT_RULES`) and every entry of ``blocks`` that is no Block (a
-    polyhedron needs its name: Block(name=..., shape=...)), or saying there are no blocks."""
+    polyhedron needs its name: Block(name=..., shape=...)), or saying there are no blocks; each
+    Block and settings object is checked again, as it was made (its ``__post_init__``)."""
     source = arguments["source"] if isinstance(arguments["source"], str) else "<python>"
     check_arguments(f"{source}: build_model", ARGUMENT_RULES, **arguments)
     if isinstance(blocks, (str, Mapping)) or not isinstance(blocks, Iterable):
@@ -302,6 +303,9 @@ def _checked_arguments(blocks, **arguments) -> list[Block]:
         raise ModelError(f"{source}: the model has no blocks")
     if len(blocks) > MAX_BLOCKS:
         raise ModelError(f"{source}: {len(blocks):,} blocks: a model has at most {MAX_BLOCKS:,}")
+    for checked in (*blocks, *(arguments[name] for name in ("joint", "contacts", "supports", "solver"))):
+        checked.__post_init__()  # again: a frozen dataclass still changes through object.__setattr__, and the kernels trust
+        # its values (points_per_length set to 0 after the check corrupted the heap)
     return blocks
 
 

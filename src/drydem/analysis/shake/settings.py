@@ -10,6 +10,7 @@ import numpy as np
 
 from drydem.analysis.shake.motion import MAX_DURATION_S, GroundMotion
 from drydem.engine.contacts import SubContacts
+from drydem.engine.damping import VISCOUS_RULES
 from drydem.errors import ModelError
 from drydem.model.parameters import Range, check_fields
 from drydem.model.state import State
@@ -26,9 +27,9 @@ DEFAULT_CONTACT_DAMPING_RATIO = 0.5
 SETTING_RULES = {
     "duration_s": Range(0.0, MAX_DURATION_S, low_open=True, unit="s"),
     "output_interval_s": Range(0.0, 1e3, low_open=True, unit="s"),
-    "contact_damping_ratio": Range(0.0, 10.0, unit="(ratio of critical)"),
-    "rayleigh_mass_per_s": Range(0.0, 1e6, unit="1/s"),
-    "rayleigh_stiffness_s": Range(0.0, 1.0, unit="s"),
+    "contact_damping_ratio": VISCOUS_RULES["contact_ratio"],
+    "rayleigh_mass_per_s": VISCOUS_RULES["mass_proportional"],
+    "rayleigh_stiffness_s": VISCOUS_RULES["stiffness_proportional"],
     "fall_rotation_deg": Range(0.0, 180.0, low_open=True, high_open=True, unit="deg"),
     "lost_drop_heights": Range(0.0, None, low_open=True),
 }
