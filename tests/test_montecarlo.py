@@ -383,3 +383,38 @@ def test_the_histogram_of_a_run_without_a_collapse_angle_leaks_no_matplotlib_war
         warnings.simplefilter("error")
         histogram_figure([], tmp_path / "histogram.png", title="tiny: 0 imperfect walls", **marks)
     assert (tmp_path / "histogram.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize("change, words", [
+    ({"in_flight": -1}, "monte_carlo in_flight = -1: must be an integer in [1, inf)"),
+    ({"wall": None}, "monte_carlo wall = None: must be a Wall"),
+    ({"executor": None}, "monte_carlo executor = None: must be an Executor"),
+    ({"folder": 5}, "monte_carlo folder = 5: must be a file path"),
+    ({"target": object()}, "monte_carlo target = <object"),
+    ({"settings": "overrides"}, "Model.overridden: unknown key(s) ['foo']"),
+], ids=["in-flight", "wall", "executor", "folder", "target", "override"])
+def test_monte_carlo_refuses_each_argument_of_the_wrong_kind_before_any_sample(tall_brick, tmp_path, change, words):
+    """Found by a hunt: in_flight = -1 ran no sample and said one was finished; None for the
+    wall or executor was an AttributeError; an unknown override failed every sample, one by one."""
+    arguments = {"wall": load_wall(tall_brick), "settings": settings(1), "folder": tmp_path / "mc", "target": {}}
+    if change.get("settings") == "overrides":
+        change = {"settings": MonteCarloSettings(samples=1, seed=3, imperfections=Imperfections(height_sd_mm=HEIGHT_SD_MM),
+                                                 tilt=TiltSettings(), model_overrides={"foo": 1})}
+    with ThreadPoolExecutor(1) as pool, pytest.raises(DrydemError, match=re.escape(words)):
+        monte_carlo(**({**arguments, "executor": pool} | change))
+    assert not (tmp_path / "mc").exists()
+
+
+@pytest.mark.parametrize("field, value", [("tilt", None), ("imperfections", None), ("model_overrides", [1, 2])])
+def test_monte_carlo_settings_of_the_wrong_kind_are_refused_naming_the_field(field, value):
+    values = {"samples": 1, "seed": 1, "imperfections": Imperfections(height_sd_mm=HEIGHT_SD_MM), "tilt": TiltSettings()}
+    with pytest.raises(DrydemError, match=re.escape(f"{field} = {value!r}: must be a")):
+        MonteCarloSettings(**(values | {field: value}))
+
+
+def test_samples_dataframe_of_what_is_no_monte_carlo_summary_is_refused():
+    from drydem.parametric.montecarlo import samples_dataframe
+
+    for given in ({}, None, {"samples": [1, 2]}):  # found by a hunt: KeyError, TypeError, AttributeError
+        with pytest.raises(MonteCarloError, match="not a drydem Monte Carlo summary"):
+            samples_dataframe(given)

@@ -43,7 +43,7 @@ from drydem.errors import ModelError
 from drydem.files import read_toml, writable, write_text
 from drydem.model.geometry import ConvexPolyhedron, box, convex_hull, face_interior_points
 from drydem.model.assembly import BLOCK_RULES, Block, Model, build_model
-from drydem.model.parameters import FILE_PATH, InstanceOf, check_arguments, field_problems, is_number, refuse, shown
+from drydem.model.parameters import FILE_PATH, TEXT, InstanceOf, check_arguments, field_problems, is_number, refuse, shown
 from drydem.model.tables import SECTIONS, errors_naming, no_unknown, parameters_from_dict
 
 BLOCK_KEYS = {"name", "fixed", "density", "box", "vertices"}
@@ -59,7 +59,9 @@ def load_model(path: str | Path) -> Model:
 
 
 def model_from_dict(data: dict, *, source: str = "<dict>") -> Model:
-    """Build a model from the parsed TOML structure (see module docstring)."""
+    """Build a model from the parsed TOML structure (see module docstring); ModelError for a
+    ``source`` that is no text (messages begin with it)."""
+    check_arguments("model_from_dict", {"source": TEXT}, source=source)
     no_unknown(data, {"material", "block", *SECTIONS}, source, "top level")
     with errors_naming(source):
         params = parameters_from_dict(data, source)

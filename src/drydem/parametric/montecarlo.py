@@ -51,7 +51,7 @@ from drydem.files import held
 from drydem.io.results import MONTECARLO_LOCK, PushoverWriter, tilt_summary, write_summary
 from drydem.masonry.imperfections import Imperfections, imperfect_model
 from drydem.masonry.walls import Wall
-from drydem.model.parameters import Range, field_problems, refuse
+from drydem.model.parameters import CALLBACK, FILE_PATH, InstanceOf, Range, check_arguments, field_problems, refuse, shown
 from drydem.parametric.calibrate import wall_angle
 from drydem.parametric.limits import SAMPLES
 from drydem.parametric.records import RecordError, collapse_problem, read_json
@@ -61,7 +61,12 @@ PERCENTILE = 5.0
 SAMPLES_FOLDER = "samples"
 #: the rules of a run's number of samples (at most MAX_SAMPLES, :mod:`drydem.parametric.limits`
 #: says why) and of its seed (any whole number >= 0: numpy's SeedSequence takes any)
-SETTINGS_RULES = {"samples": SAMPLES, "seed": Range(0, None, integer=True)}
+SETTINGS_RULES = {"samples": SAMPLES, "seed": Range(0, None, integer=True), "imperfections": InstanceOf(Imperfections),
+                  "tilt": InstanceOf(TiltSettings), "model_overrides": InstanceOf(Mapping)}
+
+
+#: at most this many samples analysed at once (monte_carlo's in_flight; None: all): 1 or more
+IN_FLIGHT = Range(1, None, integer=True)
 
 
 class MonteCarloError(DrydemError):
@@ -340,9 +345,14 @@ def samples_dataframe(summary: dict):
     ``index``, ``seed``, ``status``, ``collapse_angle_deg`` (0 for a wall that cannot stand,
     NaN without a verdict), ``dls_angle_deg``, ``ended_by``, ``runtime_s``, ``error`` (missing
     unless it failed); ``attrs``: the statistics (``collapse_angle_deg``, ``dls_angle_deg``),
-    ``excluded``, ``settings`` and ``target``."""
+    ``excluded``, ``settings`` and ``target``. MonteCarloError for anything else than such a summary."""
     from drydem.analysis.dataframes import data_frame
 
+    keys = ("samples", "collapse_angle_deg", "dls_angle_deg", "excluded", "settings", "target")
+    if not (isinstance(summary, dict) and set(keys) <= set(summary) and isinstance(summary["samples"], list)
+            and all(isinstance(sample, dict) for sample in summary["samples"])):
+        raise MonteCarloError(f"samples_dataframe summary = {shown(summary)}: not a drydem Monte Carlo summary (a dict with "
+                              f"{', '.join(keys)}, samples a list of dicts: OUT/summary.json of drydem montecarlo)")
     samples = summary["samples"]
     columns = {name: [sample.get(name) for sample in samples] for name in SAMPLE_COLUMNS}
     for name in ("collapse_angle_deg", "dls_angle_deg"):
@@ -362,7 +372,13 @@ def monte_carlo(wall: Wall, settings: MonteCarloSettings, folder: Path, executor
     the folder, the folder holds samples beyond ``settings.samples``
     (:func:`check_samples_kept`), or the executor loses a sample (the samples finished are
     recorded), or its samples folder is a link (it would mix this run's samples with those of
-    the run it leads to)."""
+    the run it leads to). Every argument is checked first (ModelError naming it), and the
+    overrides on the wall's model (which would otherwise fail every sample)."""
+    check_arguments("monte_carlo", {"wall": InstanceOf(Wall), "settings": InstanceOf(MonteCarloSettings), "folder": FILE_PATH,
+                                    "executor": InstanceOf(Executor), "target": InstanceOf(dict), "in_flight": IN_FLIGHT,
+                                    "on_sample": CALLBACK, "on_plan": CALLBACK}, optional=("in_flight",), wall=wall, settings=settings,
+                    folder=folder, executor=executor, target=target, in_flight=in_flight, on_sample=on_sample, on_plan=on_plan)
+    wall.model().overridden(**settings.model_overrides)
     folder = Path(folder)
     if (folder / SAMPLES_FOLDER).is_symlink():
         raise MonteCarloError(f"{folder / SAMPLES_FOLDER}: is a link; a run writes its samples in a folder of its own")
