@@ -614,3 +614,13 @@ def test_a_checkpoint_that_is_a_pipe_is_refused_not_waited_on(model, tmp_path):
     os.mkfifo(tmp_path / "checkpoint.npz")  # found by a hunt: np.load waited for a writer forever
     with pytest.raises(dd.DrydemError, match=r"checkpoint.npz: not a readable drydem checkpoint .*not a regular file"):
         tilt_analysis(model, TiltSettings(increment_deg=1.0), checkpoint=tmp_path / "checkpoint.npz", resume=True)
+
+
+@pytest.mark.parametrize("displacement, rotation, words", [
+    ([[0, 0, 0], [2e6, 0, 0]], [[0, 0, 0]] * 2, "move displacement of block 'brick': 2e+06 m, beyond 1e+06 m"),
+    ([[0, 0, 0]] * 2, [[0, 0, 0], [0, 4.0, 0]], "move rotation of block 'brick': 4 rad, beyond 3.142 rad (half a turn)"),
+])
+def test_a_move_beyond_the_model_s_reach_or_half_a_turn_is_refused_naming_the_block(in_plane, displacement, rotation, words):
+    sim = dd.Simulation(in_plane)  # found by a hunt: 100 km was taken without a word, 1e300 m called a divergence
+    with pytest.raises(ModelError, match=re.escape(words)):
+        sim.move(displacement, rotation)

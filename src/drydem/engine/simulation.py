@@ -31,7 +31,7 @@ from drydem.engine.threads import threads_for, using_threads
 from drydem.engine.tracker import ContactTracker
 from drydem.errors import DivergenceError, ModelError
 from drydem.model.assembly import Model
-from drydem.model.geometry import given, real_array
+from drydem.model.geometry import MAX_COORDINATE_M, given, real_array
 from drydem.model.parameters import (
     CALLBACK, DAMPING, MAX_ACCELERATION_M_S2, MAX_CYCLES, G, InstanceOf, Range, check_arguments, check_fields, shown,
 )
@@ -285,12 +285,20 @@ class Simulation:
         with the velocities displacement / dt and rotation / dt in which the blocks are too
         heavy (IMMOVABLE_INVERSE_MASS) for the joint forces to change them. A predictor for the
         next load step (:mod:`drydem.analysis.tilt`): dynamic relaxation then starts near the new
-        equilibrium. Fixed degrees of freedom do not move, whatever is asked of them.
+        equilibrium. Fixed degrees of freedom do not move, whatever is asked of them. ModelError
+        for a displacement component beyond MAX_COORDINATE_M or a rotation beyond half a turn.
         """
         shape = (self.model.n_blocks, 3)
         where = f"{self.model.source}: move"
         displacement = block_array(displacement, shape, f"{where} displacement")
         rotation = block_array(rotation, shape, f"{where} rotation")
+        reach = {"displacement": (np.abs(displacement).max(axis=1), MAX_COORDINATE_M, "m"),
+                 "rotation": (np.linalg.norm(rotation, axis=1), np.pi, "rad (half a turn)")}
+        for name, (size, bound, unit) in reach.items():  # a brick moved 100 km without a word; 1e300 m was called a divergence
+            far = np.flatnonzero(size > bound)
+            if far.size:
+                raise ModelError(f"{where} {name} of block {self.model.block_name[far[0]]!r}: {size[far[0]]:.3g} {unit.split()[0]}, "
+                                 f"beyond {bound:.4g} {unit}, the most a move may be")
         gravity = self._gravity(gravity, "move")
         blocks = self.blocks
         self.state.velocity[:] = displacement * blocks.free[:, :3] / self.timestep
