@@ -415,7 +415,8 @@ def test_a_study_folder_that_cannot_be_one_is_refused(tmp_path, command):
     (lambda: dd.JointMaterial(kn=True), "[joint] kn = True: must be a number in [1e+04, 1e+15] Pa/m"),
     (lambda: dd.JointMaterial(friction=1), None),  # an int is a number
     (lambda: dd.ContactSettings(points_per_length=True), "[contacts] points_per_length = True: must be an integer in [1, 32]"),
-    (lambda: dd.ContactSettings(tolerance=False), "[contacts] tolerance = False: must be a number in (0, inf) m"),
+    (lambda: dd.ContactSettings(tolerance=False), "[contacts] tolerance = False: must be a number in [1e-09, inf) m"),
+    (lambda: dd.ContactSettings(tolerance=1e-300), "[contacts] tolerance = 1e-300: must be a number in [1e-09, inf) m"),
     (lambda: dd.SolverSettings(max_cycles=True), "[solver] max_cycles = True: must be an integer in [1, 1e+10]"),
     (lambda: dd.SolverSettings(mass_scaling=1), "[solver] mass_scaling = 1: must be true or false"),
     (lambda: dd.SolverSettings(criterion="speed"), "[solver] criterion = 'speed': must be one of ('ratio', 'velocity')"),

@@ -470,8 +470,10 @@ def _clamp_problems(joint: JointMaterial) -> list[str]:
             for key in ("kn", "ks") if not low <= getattr(joint, key) <= high]
 
 
-#: contact tolerance, m: positive; its bound relative to the blocks is checked with the model
-TOLERANCE = Range(0.0, None, low_open=True, unit="m")
+#: contact tolerance, m: a nanometre or more (below it the free flight timestep, a tenth of the
+#: time to fall through the tolerance, drops under a microsecond: 1e-300 m made it 4.5e-152 s);
+#: its bound relative to the blocks is checked with the model
+TOLERANCE = Range(1e-9, None, unit="m")
 
 
 #: the rule of each field of :class:`ContactSettings` (points_across and tolerance may also be None)
