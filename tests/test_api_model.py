@@ -72,3 +72,14 @@ def test_a_joint_law_that_is_not_a_table_is_refused_naming_it():
 def test_a_polyhedron_s_name_must_be_a_text(make):
     with pytest.raises(dd.DrydemError, match=r"name = \['x'\]: must be a text \(the block's name in messages\)"):
         make(["x"])
+
+
+def test_save_model_writes_only_a_toml_path(tmp_path):
+    from drydem.io.model_file import save_model
+
+    model = dd.build_model([dd.Block(name="base", shape=dd.box([0, 0, -1], [1, 1, 0]), fixed=True),
+                            dd.Block(name="b", shape=dd.box([0, 0, 0], [1, 1, 1]))], density=1800.0)
+    with pytest.raises(dd.ModelError, match=r"save_model path = '.*x\.obj': a model file is TOML, its name ends in \.toml"):
+        save_model(model, tmp_path / "x.obj")  # found by a hunt: TOML was written into x.obj without a word
+    assert not (tmp_path / "x.obj").exists()
+    save_model(model, tmp_path / "X.TOML")

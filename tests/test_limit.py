@@ -1,6 +1,7 @@
 """Limit analysis: closed forms, a small wall by hand, LA-NA <= LA-A, and the DEM with stiff joints."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -221,7 +222,7 @@ def test_along_y_a_squat_block_slides_at_mu_and_a_slender_one_topples_at_b_y_ove
 
 
 def test_a_load_along_y_on_an_in_plane_model_is_a_clear_error():
-    with pytest.raises(LimitAnalysisError, match="no block may move along y, the live load's direction .tilt axis x.: the model is in-plane"):
+    with pytest.raises(LimitAnalysisError, match="no block may move along y, the live load's direction .tilt axis x.: \\[supports\\] fix_y holds every block in y"):
         limit_analysis(in_plane_wall("bBb\nBB\n", 0.5), LimitSettings(tilt_axis="x"))
 
 
@@ -249,7 +250,12 @@ def test_the_limit_command_takes_a_tilt_axis(tmp_path):
     # the stages, with the LP's size, on stderr
     assert "assembling the equilibrium matrix" in result.stderr and " rows x " in result.stderr
     refused = CliRunner().invoke(main, ["limit", "WD2", "--tilt-axis", "x", "--out", str(tmp_path / "wd2")])
-    assert refused.exit_code != 0 and "the model is in-plane, held in y" in refused.output
+    assert refused.exit_code != 0 and "no block may move along y, the live load's direction (tilt axis x): [supports] fix_y " \
+        "holds every block in y" in refused.output
+    held_x = slender([0.04], supports=dd.Supports(fix_x=True, fix_y=True))  # found by a hunt: it said "held in y"
+    with pytest.raises(dd.DrydemError, match=re.escape("no block may move along x, the live load's direction (tilt axis y): "
+                                                       "[supports] fix_x holds every block in x")):
+        limit_analysis(held_x)
     assert CliRunner().invoke(main, ["limit", "WD2", "--tilt-axis", "z"]).exit_code == 2
 
 

@@ -406,3 +406,10 @@ def test_a_checkpoint_of_another_tilt_axis_is_refused(tmp_path):
     tilt_analysis(model, TiltSettings(increment_deg=STEP, max_angle_deg=1.0), checkpoint=checkpoint)
     with pytest.raises(dd.ModelError, match="tilt setting tilt_axis: 'y' in the checkpoint, 'x' now"):
         tilt_analysis(model, TiltSettings(increment_deg=STEP, max_angle_deg=1.0, tilt_axis="x"), checkpoint=checkpoint, resume=True)
+
+
+def test_a_blank_monitor_name_is_refused_when_the_settings_are_made():
+    from drydem.analysis.tilt import TiltSettings
+
+    with pytest.raises(dd.ModelError, match=r"tilt setting monitor = '': must be a block name"):
+        TiltSettings(monitor="")  # found by a hunt: refused only later, as "no block named ''"

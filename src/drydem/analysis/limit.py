@@ -262,8 +262,9 @@ def _assemble(model: Model, tilt_axis: str, progress: Callable[[str], None]) -> 
     load = LOAD_DIRECTION[tilt_axis]
     free = ~model.block_fixed & movable[:, None]
     if not free[:, load].any():
-        raise LimitAnalysisError(f"{model.source}: no block may move along {'xy'[load]}, the live load's direction "
-                                 f"(tilt axis {tilt_axis}){': the model is in-plane, held in y' if model.in_plane else ''}")
+        axis = "xy"[load]
+        held = f": [supports] fix_{axis} holds every block in {axis}" if model.supports.mask[load] else ""  # not "held in y" for x
+        raise LimitAnalysisError(f"{model.source}: no block may move along {axis}, the live load's direction (tilt axis {tilt_axis}){held}")
     progress(f"finding the contacts of {model.n_blocks} blocks")
     corners = model.replace(contacts=ContactSettings(points_per_length=2, points_across=model.contacts.points_across,
                                                      tolerance=model.contacts.tolerance))

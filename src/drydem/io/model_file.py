@@ -151,11 +151,14 @@ def save_model(model: Model, path: str | Path, *, header: str = "") -> None:
 
     Written by hand rather than with a TOML library: the schema has only scalars and numeric
     arrays, and this keeps one line per block (tomli-w splits every array over many lines).
-    ModelError naming an argument that is not what it must be; DrydemError naming ``path`` if it
-    cannot be written (a folder, in a folder that does not exist, no permission).
+    ModelError naming an argument that is not what it must be (a path not ending in .toml); DrydemError
+    naming ``path`` if it cannot be written (a folder, in a folder that does not exist, no permission).
     """
     check_arguments("save_model", {"model": InstanceOf(Model), "path": FILE_PATH, "header": InstanceOf(str)},
                     model=model, path=path, header=header)
+    if Path(path).suffix.lower() != ".toml":  # TOML written into x.obj was taken silently
+        raise ModelError(f"save_model path = {str(path)!r}: a model file is TOML, its name ends in .toml "
+                         "(drydem.io.mesh.write_mesh writes .obj and .stl, drydem export every format)")
     path = writable(path)
     data = model_to_dict(model)
     lines = [f"# {line}" for line in header.splitlines()]

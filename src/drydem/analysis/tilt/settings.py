@@ -98,7 +98,7 @@ class TiltSettings:
 
     def __post_init__(self):
         check_fields(self, SETTING_RULES, "tilt setting")
-        if self.monitor is not None and not isinstance(self.monitor, str):
+        if self.monitor is not None and not (isinstance(self.monitor, str) and self.monitor.strip()):  # "" named no block
             raise ModelError(f"tilt setting monitor = {self.monitor!r}: must be a block name")
         if self.increment_deg > self.max_angle_deg:
             raise ModelError(
