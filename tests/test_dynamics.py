@@ -313,3 +313,21 @@ def test_the_least_overturning_one_sine_pulse_is_the_rigid_blocks(rocking, frequ
     ratio = calibrated_damping_ratio(rocking.model, 1, housner_restitution(ALPHA))
     found = dem_minimum_overturning_amplitude(rocking.model, frequency_hz, ratio, 0.9 * expected, 0.02)
     assert found == pytest.approx(expected, rel=0.05)
+
+
+def test_the_history_is_the_same_whatever_the_cycles_made_at_once(monkeypatch):
+    """The table's accelerations are made GROUND_CHUNK_CYCLES cycles at a time (a long output
+    interval at a short timestep would ask for gigabytes at once): the history of a chunk of 7
+    cycles is the one of the default chunk to round-off (the model time, a sum of n dt per call,
+    rounds with the calls)."""
+    from drydem.analysis.shake import run as shake_run
+
+    model = block_on_base(half_width=0.2, half_height=0.05, friction=0.3)
+    settings = ShakeSettings(motion=table([0.0, 0.05, 0.1], [0.0, 4.0, 0.0]), contact_damping_ratio=0.3, output_interval_s=0.01)
+    whole = shake_analysis(model, settings).history
+    monkeypatch.setattr(shake_run, "GROUND_CHUNK_CYCLES", 7)
+    chunked = shake_analysis(model, settings).history
+    np.testing.assert_allclose(chunked.time_s, whole.time_s, rtol=0, atol=1e-15)
+    slip_m = np.abs(whole.ux_m).max()
+    assert slip_m > 1e-4  # it slides: 4 m/s2 > mu g
+    np.testing.assert_allclose(chunked.ux_m, whole.ux_m, rtol=0, atol=1e-9 * slip_m)

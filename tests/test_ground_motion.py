@@ -521,7 +521,8 @@ def test_consecutive_excerpts_per_cycle_match_one_long_call():
 @pytest.mark.parametrize("arguments, message", [
     ((0.0, 10), "per_cycle dt_s = 0.0: must be a number in (0, inf) s"),
     ((math.nan, 10), "per_cycle dt_s = nan"),
-    ((1e-3, -1), "per_cycle cycles = -1: must be an integer in [0, inf)"),
+    ((1e-3, -1), "per_cycle cycles = -1: must be an integer in [0, 1e+07]"),
+    ((1e-3, 10**12), "per_cycle cycles = 1000000000000: must be an integer in [0, 1e+07]"),  # found by a hunt: a MemoryError
     ((1e-3, 10.0), "per_cycle cycles = 10.0: must be an integer"),
     ((1e-3, 10, True), "per_cycle start_s = True: must be a number"),
     ((1e-3, 10, -1.0), "per_cycle start_s = -1.0: must be a number in [0, inf) s"),

@@ -58,8 +58,9 @@ STEPS_PER_PERIOD = 20
 BASELINE_POSEDNESS = 1e-6
 #: s: the explicit timestep, or a pulse's period
 TIMESTEP = Range(0.0, None, low_open=True, unit="s")
-#: a number of cycles
-COUNT = Range(0, None, integer=True)
+#: a number of cycles whose accelerations are made at once: at most 1e7 (an array of 240 MB;
+#: 10**12 was a MemoryError)
+COUNT = Range(0, 10**7, integer=True)
 #: s, a time in the analysis
 START = Range(0.0, None, unit="s")
 

@@ -55,6 +55,10 @@ from drydem.model.assembly import Model
 from drydem.model.parameters import CALLBACK, InstanceOf, check_arguments
 from drydem.model.rotation import rotation_vectors, turn_angles
 
+#: cycles at most whose table accelerations are made at once (2.4 MB): an output interval of
+#: 1,000 s (the most allowed) at a microsecond timestep would have asked for an array of 24 GB
+GROUND_CHUNK_CYCLES = 100_000
+
 
 def shake_analysis(
     model: Model, settings: ShakeSettings, *, on_progress: Callable[[float, int, float], None] | None = None,
@@ -186,7 +190,7 @@ class Shaking:
         next_output = settings.output_interval_s
         while self.time_s < end - 0.5 * sim.timestep:
             dt = sim.timestep
-            cycles = max(1, int(round((min(next_output, end) - self.time_s) / dt)))
+            cycles = min(max(1, int(round((min(next_output, end) - self.time_s) / dt))), GROUND_CHUNK_CYCLES)
             ground = settings.motion.per_cycle(dt, cycles, self.time_s)
             sim.cycle(cycles, ground_acceleration=ground, stop=lambda: sim.timestep != dt)
             if self.time_s < min(next_output, end) - 0.5 * dt:
