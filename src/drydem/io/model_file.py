@@ -156,10 +156,10 @@ def save_model(model: Model, path: str | Path, *, header: str = "") -> None:
     """
     check_arguments("save_model", {"model": InstanceOf(Model), "path": FILE_PATH, "header": InstanceOf(str)},
                     model=model, path=path, header=header)
-    if Path(path).suffix.lower() != ".toml":  # TOML written into x.obj was taken silently
+    path = writable(path)
+    if path.suffix.lower() != ".toml":  # TOML written into x.obj was taken silently
         raise ModelError(f"save_model path = {str(path)!r}: a model file is TOML, its name ends in .toml "
                          "(drydem.io.mesh.write_mesh writes .obj and .stl, drydem export every format)")
-    path = writable(path)
     data = model_to_dict(model)
     lines = [f"# {line}" for line in header.splitlines()]
     for table in ("material", *SECTIONS):
