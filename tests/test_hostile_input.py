@@ -5,6 +5,7 @@ test_walls.py / test_layout.py; sweeps: test_hostile_sweep.py; geometry files an
 outputs: test_hostile_io.py.)"""
 
 import os
+import re
 import zipfile
 from pathlib import Path
 
@@ -430,6 +431,30 @@ def test_python_settings_refuse_booleans_as_numbers_with_one_error_type(make, me
     with pytest.raises(dd.ModelError) as refused:
         make()
     assert str(refused.value) == message
+
+
+@pytest.mark.parametrize("field, value, rule", [
+    ("lost_drop_heights", 1e300, "must be a number in (0, 1000]"),
+    ("chunk_cycles", 10**300, "must be an integer in [1, 1e+10]"),
+    ("trial_growth", 1e300, "must be a number in (1, 1e+06]"),
+    ("trial_floor_m", 1e300, "must be a number in (0, 100] m"),
+    ("predictor_growth", 1e300, "must be a number in [1, 1e+06]"),
+    ("predictor_cap_closures", float("inf"), "must be a number in (0, 1e+06]"),
+])
+def test_a_tilt_setting_that_would_switch_its_rule_off_is_refused(field, value, rule):
+    """A huge factor or count is no setting of the rule it names but its silent removal (a trial
+    never abandoned, a falling block never taken out)."""
+    with pytest.raises(dd.ModelError, match=re.escape(rule)) as info:
+        TiltSettings(**{field: value})
+    assert str(info.value).startswith(f"tilt setting {field} = ")
+
+
+def test_a_shake_setting_keeping_falling_blocks_forever_is_refused():
+    from drydem.analysis.shake import ShakeSettings, pulse
+
+    motion = pulse("one-sine", amplitude_m_s2=1.0, frequency_hz=2.0)
+    with pytest.raises(dd.ModelError, match=re.escape("shake setting lost_drop_heights = 1e+300: must be a number in (0, 1000]")):
+        ShakeSettings(motion=motion, lost_drop_heights=1e300)
 
 
 def test_every_bad_field_of_a_parameter_table_is_named_at_once():

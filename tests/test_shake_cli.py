@@ -256,6 +256,24 @@ def test_an_output_interval_shorter_than_the_timestep_is_refused_at_the_run_star
     assert "the history has a row at most every cycle; give at least" in result.output and not (out / "summary.json").exists()
 
 
+def test_damping_that_shortens_the_timestep_tenfold_is_said_before_the_shaking(files, tmp_path):
+    """Found by a hunt: --rayleigh-stiffness 1 ran 10 million cycles without a word. Rayleigh's
+    beta adds beta / dt_crit to the damping ratio at the highest frequency, and the stable step
+    is (2 / omega) (sqrt(1 + z^2) - z) (Belytschko & Hughes 1983): beta = 0.03 s overdamps the
+    block's joints (z ~ 30) and takes ~60 times more cycles; 0.001 s (z ~ 1) says nothing."""
+    notes = {}
+    for beta in ("0.03", "0.001"):
+        result = shake(files["block"], "--pulse", "one-sine", "--amplitude", "2", "--frequency", "4", "--damping-ratio", "0.05",
+                       "--rayleigh-stiffness", beta, "--duration", "0.05", "--out", tmp_path / beta)
+        assert result.exit_code == 0, result.output
+        notes[beta] = [line for line in result.output.replace("\r", "\n").splitlines() if "shortens the timestep" in line]
+    assert notes["0.001"] == []
+    [note] = notes["0.03"]
+    fold = float(note.split("shortens the timestep ")[1].split("-fold")[0])
+    assert 10 < fold < 1000 and "rayleigh_stiffness_s 0.03 s" in note, note
+    assert json.loads((tmp_path / "0.03" / "summary.json").read_text())["cycles"] > 1000
+
+
 def test_a_pulse_the_timestep_cannot_follow_is_refused_at_the_run_start(files, tmp_path):
     """The finding: --frequency 1e12 ran and reported. The timestep is the model's (known once
     it has settled and its damping is set): the period must span 20 of them."""

@@ -273,6 +273,20 @@ def test_a_snapshot_whose_active_flags_do_not_fit_the_model_is_refused():
             dd.Simulation(sim.model).restore(dataclasses.replace(saved, active=active))
 
 
+def test_a_snapshot_of_other_blocks_of_the_same_count_is_refused():
+    """Taller bricks, or the same bricks of another density: the state of one model is no state
+    of the other, however many blocks both have; other joints over the same blocks restore."""
+    sim = dd.Simulation(stack_model([0.0055] * 3))
+    sim.cycle(100)
+    saved = sim.snapshot()
+    for other in (stack_model([0.0065] * 3), stack_model([0.0055] * 3, density=2000.0)):
+        with pytest.raises(dd.ModelError, match=r"Simulation.restore: snapshot of other blocks \(vertices, densities or fixities"):
+            dd.Simulation(other).restore(saved)
+    softer = dd.Simulation(stack_model([0.0055] * 3, joint=dd.JointMaterial(kn=3e7, ks=3e7, friction=0.5)))
+    softer.restore(saved)
+    np.testing.assert_array_equal(softer.state.position, saved.state.position)
+
+
 def test_removed_blocks_stop_moving_and_let_go_of_the_others():
     # take the middle block of a 3-stack out: it stays where it is, while the top one loses its
     # support, falls one block height through it and comes to rest on the bottom one

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -139,7 +140,8 @@ def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequenc
             bar.set_postfix_str(f"rotation {rotation_rad:.3g} rad")
 
         try:
-            result = shake_analysis(model, settings, on_progress=progress, on_frame=live)
+            result = shake_analysis(model, settings, on_progress=progress, on_frame=live,
+                                    on_note=lambda note: bar.write(f"note: {note}", file=sys.stderr))
         except DrydemError as exc:
             if not live.writer.rows:
                 discard_unstarted(live.writer.path, live.series)

@@ -34,7 +34,7 @@ def save_checkpoint(path: Path, snapshot: Snapshot, progress: dict) -> None:
     arrays = {f"{part}.{name}": value for part in _PARTS for name, value in getattr(snapshot, part)._asdict().items()}
     arrays |= {"active": snapshot.active, "cycles": snapshot.cycles, "time_s": snapshot.time_s,
                "scaled_timestep": np.nan if snapshot.scaled_timestep is None else snapshot.scaled_timestep,
-               "farthest_travel_kg_m": snapshot.farthest_travel_kg_m}
+               "farthest_travel_kg_m": snapshot.farthest_travel_kg_m, "blocks_digest": snapshot.blocks_digest}
     arrays = {name: np.asarray(value) for name, value in arrays.items()}
     arrays |= {f"progress.{name}": np.asarray(value) for name, value in progress.items()}
     arrays[DIGEST] = np.asarray(digest(arrays))
@@ -82,7 +82,8 @@ def load_checkpoint(path: Path) -> tuple[Snapshot, dict]:
             if not 0.0 <= farthest < np.inf:
                 raise ValueError(f"farthest_travel_kg_m = {farthest}: must be a finite number >= 0")
             snapshot = Snapshot(**parts, active=data["active"], cycles=int(data["cycles"]), time_s=time_s,
-                                scaled_timestep=None if np.isnan(scaled) else scaled, farthest_travel_kg_m=farthest)
+                                scaled_timestep=None if np.isnan(scaled) else scaled, blocks_digest=str(data["blocks_digest"]),
+                                farthest_travel_kg_m=farthest)
             progress = {key.removeprefix("progress."): data[key] for key in data.files if key.startswith("progress.")}
     except (OSError, ValueError, KeyError, EOFError, MemoryError, zipfile.BadZipFile, ModelError) as exc:
         # np.load raises each of these for a missing, empty, truncated or foreign file (MemoryError:

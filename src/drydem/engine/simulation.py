@@ -93,8 +93,9 @@ class EquilibriumResult:
 class Snapshot:
     """A saved point of a :class:`Simulation`: state, contacts with their shear history,
     neighbour list, the state at the last broad phase, the blocks still in the analysis, cycles
-    run, model time (s), the timestep kept by mass scaling (s), and the farthest travel so far
-    (kg m, the divergence test's: :meth:`Simulation._travel_kg_m`)."""
+    run, model time (s), the timestep kept by mass scaling (s), the digest of the blocks it was
+    cycled on (:attr:`drydem.model.assembly.Model.blocks_digest`: it restores into their model
+    only) and the farthest travel so far (kg m, the divergence test's: :meth:`Simulation._travel_kg_m`)."""
 
     state: State
     contacts: SubContacts
@@ -104,6 +105,7 @@ class Snapshot:
     cycles: int
     time_s: float
     scaled_timestep: float | None
+    blocks_digest: str
     farthest_travel_kg_m: float = 0.0
 
 
@@ -250,7 +252,7 @@ class Simulation:
         return Snapshot(
             state=self.state.copy(), contacts=t.contacts.copy(), neighbours=t.neighbours.copy(), broad_state=t.broad_state.copy(),
             active=t.active.copy(), cycles=self.cycles, time_s=self.time_s, scaled_timestep=self._scaled_timestep,
-            farthest_travel_kg_m=self._farthest_travel_kg_m,
+            blocks_digest=self.model.blocks_digest, farthest_travel_kg_m=self._farthest_travel_kg_m,
         )
 
     def restore(self, snapshot: Snapshot) -> None:
@@ -260,6 +262,9 @@ class Simulation:
         InstanceOf(Snapshot).check(snapshot, f"{self.model.source}: Simulation.restore snapshot")
         where = f"{self.model.source}: Simulation.restore: snapshot"
         check_fields(snapshot, SNAPSHOT_RULES, where, optional=("scaled_timestep",))
+        if snapshot.blocks_digest != self.model.blocks_digest:
+            raise ModelError(f"{where} of other blocks (vertices, densities or fixities: digest {str(snapshot.blocks_digest)[:12]!r}, "
+                             f"this model's {self.model.blocks_digest[:12]!r}): a snapshot restores into the model it was taken of")
         problem = snapshot_problem(snapshot.contacts, snapshot.neighbours, snapshot.active, self.model.n_blocks)
         if problem is not None:
             raise ModelError(f"{where} {problem}")

@@ -8,6 +8,7 @@ a run lives in :class:`drydem.model.state.State` and the engine's contacts (:mod
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import inspect
 import itertools
 from collections import Counter
@@ -134,6 +135,16 @@ class Model:
         displacements from it, and a Simulation starts there). The other cached arrays below are
         the engine's, handed to the compiled kernels, which are built for writable arrays."""
         return frozen_array(np.array([s.centroid for s in self.block_shape]))
+
+    @cached_property
+    def blocks_digest(self) -> str:
+        """SHA-1 (hex) of the blocks' vertices, densities and fixities, in order (computed once):
+        what a saved state must have been cycled on to be restored into this model."""
+        found = hashlib.sha1()
+        for shape in self.block_shape:
+            found.update(np.ascontiguousarray(shape.vertices).tobytes())
+        found.update(self.block_density.tobytes() + self.block_fixed.tobytes())
+        return found.hexdigest()
 
     @cached_property
     def block_movable(self) -> np.ndarray:

@@ -538,6 +538,10 @@ RATIO = Range(1e-12, 1e-2)
 MAX_VELOCITY = Range(0.0, 1e-3, low_open=True, unit="m/s")
 #: cycles per equilibrium: 1e10 cycles are days of computing for a single load step
 MAX_CYCLES = Range(1, 10**10, integer=True)
+#: the drop, in a block's own heights, past which a block has fallen out of a tilting or shaking
+#: analysis: a block that fell a thousand of its heights has left any wall it was part of, and a
+#: larger value only keeps falling blocks cycling (nothing below a model stops them)
+LOST_DROP_HEIGHTS = Range(0.0, 1e3, low_open=True)
 
 
 #: the rule of each field of :class:`SolverSettings`

@@ -62,15 +62,18 @@ GROUND_CHUNK_CYCLES = 100_000
 
 def shake_analysis(
     model: Model, settings: ShakeSettings, *, on_progress: Callable[[float, int, float], None] | None = None,
-    on_frame: Callable[[ShakeFrame], None] | None = None,
+    on_frame: Callable[[ShakeFrame], None] | None = None, on_note: Callable[[str], None] | None = None,
 ) -> ShakeResult:
     """The time history of ``model`` under ``settings.motion`` (module docstring).
 
     ``on_progress(time_s, cycles, rotation_rad)`` and ``on_frame(frame)`` are called at every
-    output interval. Every argument is checked first: ModelError naming each one that is not
-    what it must be (a model, settings, None or a function)."""
+    output interval; ``on_note(text)`` once before the shaking if the viscous damping shortens
+    the timestep more than SLOW_DAMPING_FACTOR-fold (:func:`slow_damping_note`). Every argument
+    is checked first: ModelError naming each one that is not what it must be (a model,
+    settings, None or a function)."""
     check_arguments("shake_analysis", {"model": InstanceOf(Model), "settings": InstanceOf(ShakeSettings), "on_progress": CALLBACK,
-                                       "on_frame": CALLBACK}, model=model, settings=settings, on_progress=on_progress, on_frame=on_frame)
+                                       "on_frame": CALLBACK, "on_note": CALLBACK},
+                    model=model, settings=settings, on_progress=on_progress, on_frame=on_frame, on_note=on_note)
     start = time.perf_counter()
     if model.solver.mass_scaling:
         model = model.replace(solver=replace(model.solver, mass_scaling=False))
@@ -79,7 +82,11 @@ def shake_analysis(
     sim = Simulation(model)
     settle(sim, settings.lost_drop_heights)
     ratio, restitution = damping_ratio(model, monitor, settings)
+    undamped_s = sim.timestep
     sim.use_damping(Damping(0.0, ratio, settings.rayleigh_stiffness_s, settings.rayleigh_mass_per_s))
+    note = slow_damping_note(undamped_s, sim.timestep, ratio, settings)
+    if note is not None and on_note is not None:
+        on_note(note)
     unresolved = settings.motion.resolution_problem(sim.timestep)
     if unresolved is not None:
         raise ModelError(f"{model.source}: {unresolved}")
@@ -90,6 +97,24 @@ def shake_analysis(
     shaking = Shaking(sim, monitor, settings)
     shaking.run(on_progress, on_frame)
     return shaking.result(ratio, restitution, time.perf_counter() - start)
+
+
+#: the shortening of the timestep by the viscous damping past which :func:`shake_analysis` says so
+SLOW_DAMPING_FACTOR = 10.0
+
+
+def slow_damping_note(undamped_s: float, damped_s: float, contact_ratio: float, settings: ShakeSettings) -> str | None:
+    """What the viscous damping costs, if it shortens the timestep (from ``undamped_s`` to
+    ``damped_s``, s) more than :data:`SLOW_DAMPING_FACTOR`-fold: the cycles the analysed time
+    then takes, and the coefficients that did it (the damping ratio at the highest frequency,
+    :func:`drydem.engine.damping.timestep_factor`, grows as beta / dt: a Rayleigh stiffness term
+    meant for the structure's modes overdamps the joints' stiff one); None otherwise."""
+    if damped_s * SLOW_DAMPING_FACTOR >= undamped_s:
+        return None
+    return (f"the viscous damping shortens the timestep {undamped_s / damped_s:.3g}-fold, to {damped_s:.3g} s: "
+            f"{settings.analysed_s / damped_s:.3g} cycles for {settings.analysed_s:g} s (contact_damping_ratio {contact_ratio:.3g}, "
+            f"rayleigh_stiffness_s {settings.rayleigh_stiffness_s:g} s, rayleigh_mass_per_s {settings.rayleigh_mass_per_s:g} 1/s; "
+            "a stiffness term beta damps the joints' highest frequency at a ratio of about beta / the undamped timestep)")
 
 
 def check_held_axes(model: Model, motion: GroundMotion, given_by: Callable[[str], str] | None = None) -> list[str]:

@@ -12,7 +12,7 @@ from drydem.analysis.shake.motion import MAX_DURATION_S, GroundMotion
 from drydem.engine.contacts import SubContacts
 from drydem.engine.damping import VISCOUS_RULES
 from drydem.errors import ModelError
-from drydem.model.parameters import Range, check_fields
+from drydem.model.parameters import LOST_DROP_HEIGHTS, Range, check_fields
 from drydem.model.state import State
 
 #: why an analysis ended (ShakeResult.ended_by)
@@ -31,7 +31,7 @@ SETTING_RULES = {
     "rayleigh_mass_per_s": VISCOUS_RULES["mass_proportional"],
     "rayleigh_stiffness_s": VISCOUS_RULES["stiffness_proportional"],
     "fall_rotation_deg": Range(0.0, 180.0, low_open=True, high_open=True, unit="deg"),
-    "lost_drop_heights": Range(0.0, None, low_open=True),
+    "lost_drop_heights": LOST_DROP_HEIGHTS,
 }
 #: a coefficient of restitution of rocking impacts (angular-velocity ratio): 0 < r <= 1
 RESTITUTION = Range(0.0, 1.0, low_open=True)

@@ -5,7 +5,6 @@ resume itself (:func:`resume`)."""
 from __future__ import annotations
 
 import ast
-import hashlib
 import json
 import os
 from dataclasses import asdict
@@ -25,11 +24,7 @@ def fingerprint(model: Model, settings: TiltSettings) -> dict[str, str]:
     """What a checkpoint must match to be resumed, by name: the model's source, blocks (a hash
     of their geometry, densities and fixities), every parameter of its tables and every tilt
     setting (values as repr strings)."""
-    blocks = hashlib.sha1()
-    for shape in model.block_shape:
-        blocks.update(np.ascontiguousarray(shape.vertices).tobytes())
-    blocks.update(model.block_density.tobytes() + model.block_fixed.tobytes())
-    items = {"model": model.source, "blocks": f"{model.n_blocks} blocks, geometry {blocks.hexdigest()[:12]}"}
+    items = {"model": model.source, "blocks": f"{model.n_blocks} blocks, geometry {model.blocks_digest[:12]}"}
     for table in ("joint", "contacts", "supports", "solver"):
         items |= {f"[{table}] {k}": v for k, v in asdict(getattr(model, table)).items()}
     items |= {f"tilt setting {k}": v for k, v in asdict(settings).items()}

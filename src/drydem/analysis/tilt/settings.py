@@ -15,7 +15,8 @@ from drydem.analysis.drift import drift_limit_angles
 from drydem.engine.contacts import SubContacts
 from drydem.errors import ModelError
 from drydem.model.assembly import Model
-from drydem.model.parameters import FLAG, MAX_ACCELERATION_M_S2, G, LOAD_DIRECTION, TILT_AXES, OneOf, Range, check_fields
+from drydem.model.parameters import (FLAG, LOST_DROP_HEIGHTS, MAX_ACCELERATION_M_S2, SOLVER_RULES, G, LOAD_DIRECTION, TILT_AXES, OneOf,
+                                     Range, check_fields)
 from drydem.model.state import State
 
 LOADINGS = ("tilt", "multiplier")
@@ -39,12 +40,14 @@ SETTING_RANGES = {
     "refinements": Range(0, 12, integer=True),
     "stop_displacement_m": Range(0.0, 100.0, low_open=True, unit="m"),
     "max_angle_deg": Range(0.0, 90.0, low_open=True, high_open=True, unit="deg"),
-    "lost_drop_heights": Range(0.0, None, low_open=True),
-    "chunk_cycles": Range(1, None, integer=True),
-    "trial_growth": Range(1.0, None, low_open=True),
-    "trial_floor_m": Range(0.0, None, low_open=True, unit="m"),
-    "predictor_growth": Range(1.0, None),
-    "predictor_cap_closures": Range(0.0, None, low_open=True),
+    "lost_drop_heights": LOST_DROP_HEIGHTS,
+    "chunk_cycles": SOLVER_RULES["max_cycles"],  # a check of the monitored point at most as far apart as one equilibrium's cycles may be
+    # the factors of the adaptive trials and the predictor: past 1e6 each rule is off in all but
+    # name, which a setting must not hide (a trial is abandoned, a predicted move capped, never)
+    "trial_growth": Range(1.0, 1e6, low_open=True),
+    "trial_floor_m": Range(0.0, 100.0, low_open=True, unit="m"),  # as stop_displacement_m
+    "predictor_growth": Range(1.0, 1e6),
+    "predictor_cap_closures": Range(0.0, 1e6, low_open=True),
 }
 
 
