@@ -106,6 +106,8 @@ def test_a_csv_record_starting_after_zero_is_shifted_to_start_at_zero_with_a_not
     ("one.csv", "time_s,acc_x_m_s2\n0,1\n", "1 rows of samples; a motion needs at least 2"),
     ("header.csv", "time_s,acc_x_m_s2\n", "0 rows of samples; a motion needs at least 2"),
     ("empty.csv", "", "empty: no header line; expected the columns time_s, acc_x_m_s2"),
+    # found by a hunt: the csv module's limit on a field (131,072 characters) ended in a traceback
+    ("field.csv", "time_s,acc_x_m_s2\n0,0\n0.01," + "1" * 200_000 + "\n", "line 3: not a CSV row (field larger than field limit"),
 ])
 def test_a_bad_csv_motion_is_refused_naming_the_file_and_the_problem(tmp_path, name, text, message):
     path = written(tmp_path, name, text)

@@ -292,6 +292,37 @@ def test_report_and_a_resumed_montecarlo_name_a_record_that_is_a_pipe_without_wa
                                                             tilt=TiltSettings()), wall)
 
 
+def test_a_runs_pushover_csv_or_a_mesh_that_is_a_pipe_is_named_without_waiting_on_it(tmp_path):
+    """Found by a hunt: drydem report waited forever on a tilt folder whose pushover.csv was a
+    pipe (its summary.json was checked, not the curve), and read_mesh on a pipe named .obj."""
+    from drydem.io.mesh import read_mesh
+
+    run = tmp_path / "results" / "run"
+    run.mkdir(parents=True)
+    with within():
+        assert CliRunner().invoke(main, ["tilt", "WD3", "--increment", "45", "--max-angle", "45", "--out", str(run),
+                                         "--overwrite"]).exit_code == 0
+    (run / "pushover.csv").unlink()
+    os.mkfifo(run / "pushover.csv")
+    with within():
+        result = CliRunner().invoke(main, ["report", str(tmp_path / "results")])
+    assert result.exit_code == 1 and "the report holds no run" in result.output, result.output
+    assert f"{run / 'pushover.csv'}: not a regular file (a pipe, a socket or a device)" in result.output
+    os.mkfifo(tmp_path / "pipe.obj")
+    with within(), pytest.raises(dd.ModelError, match="pipe.obj: not a regular file"):
+        read_mesh(tmp_path / "pipe.obj")
+
+
+def test_a_toml_file_nested_thousands_deep_is_refused_naming_it(tmp_path):
+    """Found by a hunt: tomllib parses nested arrays recursively; 3,000 levels ended in a
+    RecursionError's traceback."""
+    path = tmp_path / "deep.toml"
+    path.write_text("[material]\ndensity = " + "[" * 3000 + "]" * 3000 + "\n")
+    result = CliRunner().invoke(main, ["check", str(path)])
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    assert f"{path}: nested deeper than Python's recursion limit" in result.output
+
+
 def test_a_link_left_at_the_partial_name_is_not_written_through(tmp_path, monkeypatch):
     # drydem writes OUTPUT as .STEM.partial.SUFFIX, then renames it: a link planted there made
     # the export write the model into the link's target and left OUTPUT a link to it

@@ -358,7 +358,8 @@ def test_tilt_options_out_of_range_are_named(tmp_path):
     ("--increment", "0", "0.0: must be a number in [0.001, 90) deg (tilt setting increment_deg)"),
     ("--increment", "1e-12", "1e-12: must be a number in [0.001, 90) deg (tilt setting increment_deg)"),
     ("--max-angle", "90", "90.0: must be a number in (0, 90) deg (tilt setting max_angle_deg)"),
-    ("--stop-displacement", "-1", "-1.0: must be a number in (0, 100] m (tilt setting stop_displacement_m)"),
+    ("--stop-displacement", "-1", "-1.0: must be a number in [1e-09, 100] m (tilt setting stop_displacement_m)"),
+    ("--stop-displacement", "1e-300", "1e-300: must be a number in [1e-09, 100] m (tilt setting stop_displacement_m)"),
     ("--kn", "0", "0.0: must be a number in [1e+04, 1e+15] Pa/m ([joint] kn)"),
     ("--ks", "nan", "nan: must be a number in [1e+04, 1e+15] Pa/m ([joint] ks)"),
     ("--friction", "inf", "inf: must be a number in (0, 10] ([joint] friction)"),
@@ -372,6 +373,21 @@ def test_a_tilt_option_out_of_its_range_is_refused_as_itself_with_what_it_sets(t
     and the rule: a usage error (exit 2), before the target is read and the folder made."""
     result = run("tilt", model_file(tmp_path), option, value, "--out", tmp_path / "never")
     assert result.exit_code == 2 and refused(result, f"Invalid value for '{option}': {message}")
+    assert not (tmp_path / "never").exists()
+
+
+@pytest.mark.parametrize("command, option, value, kind", [
+    ("tilt", "--kn", "3_0e7", "float"),  # Python's float() reads 3_0e7 as 3e8
+    ("tilt", "--increment", "0x10", "float"),
+    ("tilt", "--threads", "1_0", "integer"),
+    ("tilt", "--points", "\u0664", "integer"),  # an Arabic-Indic four, which int() takes
+    ("shake", "--amplitude", "0_5", "float"),  # found by a hunt: ran a pulse of 5 m/s2
+    ("montecarlo", "--samples", "1_0", "integer"),
+    ("animate", "--fps", "1_0", "float"),
+])
+def test_a_number_option_takes_plain_digits_only(tmp_path, command, option, value, kind):
+    result = run(command, model_file(tmp_path), option, value, "--out", tmp_path / "never")
+    assert result.exit_code == 2 and refused(result, f"Invalid value for '{option}': {value!r} is not a valid {kind} (ASCII digits")
     assert not (tmp_path / "never").exists()
 
 

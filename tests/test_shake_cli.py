@@ -274,6 +274,16 @@ def test_damping_that_shortens_the_timestep_tenfold_is_said_before_the_shaking(f
     assert json.loads((tmp_path / "0.03" / "summary.json").read_text())["cycles"] > 1000
 
 
+def test_a_duration_of_fewer_than_twenty_timesteps_is_refused_at_the_run_start(files, tmp_path):
+    """Found by a hunt: --duration 1e-300 ran no cycle and reported "no block fell" under a PGA
+    the table never reached."""
+    out = tmp_path / "instant"
+    result = shake(files["block"], "--pulse", "one-sine", "--amplitude", "2", "--frequency", "4", "--damping-ratio", "0.05",
+                   "--duration", "1e-300", "--out", out)
+    assert result.exit_code == 1 and not (out / "summary.json").exists()
+    assert "duration_s = 1e-300 s (--duration) spans fewer than 20 timesteps" in result.output, result.output
+
+
 def test_a_pulse_the_timestep_cannot_follow_is_refused_at_the_run_start(files, tmp_path):
     """The finding: --frequency 1e12 ran and reported. The timestep is the model's (known once
     it has settled and its damping is set): the period must span 20 of them."""

@@ -2,6 +2,7 @@
 
 import csv
 
+import meshio
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -309,12 +310,27 @@ def _set(mesh, field, value):
         values[:] = value
 
 
+def _replace(mesh, field, value):
+    """``field`` of every block set to the float ``value`` (a flag's integers would not hold it)."""
+    mesh.cell_data[field] = [np.full(len(values), value) for values in mesh.cell_data[field]]
+
+
 @pytest.mark.parametrize("spoil, message", [
     (lambda mesh: _set(mesh, "active", 0), "no block in the analysis (active = 0 for every block): nothing to draw"),
     (lambda mesh: _set(mesh, "displacement_magnitude", np.nan), "displacement_magnitude: not all finite numbers >= 0: not a frame drydem writes"),
     (lambda mesh: _set(mesh, "displacement_magnitude", -1.0), "displacement_magnitude: not all finite numbers >= 0: not a frame drydem writes"),
-    (lambda mesh: mesh.points.__setitem__((0, 2), np.inf), "points: not all finite numbers (NaN or inf): not a frame drydem writes"),
-], ids=["no-active-block", "nan-magnitude", "negative-magnitude", "inf-point"])
+    (lambda mesh: mesh.points.__setitem__((0, 2), np.inf), "points: not all finite numbers within 1e+07 m of the origin"),
+    # found by a hunt, each a traceback in matplotlib or Qhull: a point 1e300 m away, a magnitude
+    # of three components, triangles for blocks, flags that are neither 0 nor 1
+    (lambda mesh: mesh.points.__imul__(1e300), "points: not all finite numbers within 1e+07 m of the origin"),
+    (lambda mesh: mesh.cell_data.__setitem__("displacement_magnitude", [np.ones((len(v), 3)) for v in mesh.cell_data["active"]]),
+     "displacement_magnitude: shape ("),
+    (lambda mesh: setattr(mesh, "cells", [meshio.CellBlock("triangle", np.array([[0, 1, 2]] * len(mesh.cell_data["active"][0])))]),
+     "cells triangle: not a frame drydem writes (one polyhedron a block)"),
+    (lambda mesh: _replace(mesh, "active", 0.5), "active: values other than 0 and 1"),
+    (lambda mesh: _replace(mesh, "fixed", np.nan), "fixed: values other than 0 and 1"),
+], ids=["no-active-block", "nan-magnitude", "negative-magnitude", "inf-point", "far-point", "vector-magnitude", "triangles",
+        "half-active", "nan-fixed"])
 def test_animate_names_a_frame_it_cannot_draw_and_the_rule(run, tmp_path, spoil, message):
     short = spoiled(run, tmp_path, spoil)
     result = CliRunner().invoke(main, ["animate", str(short), "-o", str(tmp_path / "collapse.gif")])

@@ -344,6 +344,9 @@ def read_toml(path: Path) -> tuple[dict, str]:
         return tomllib.loads(text), text
     except tomllib.TOMLDecodeError as exc:
         raise ModelError(f"{path}: not valid TOML: {exc}") from None
+    except RecursionError:  # arrays or inline tables nested thousands deep: tomllib parses them recursively
+        raise ModelError(f"{path}: nested deeper than Python's recursion limit ({sys.getrecursionlimit():,}); no table of a model, "
+                         "wall or study file is nested more than a few levels") from None
     except ValueError:  # an integer of more digits than Python converts (4,300), raised by int() inside tomllib
         raise ModelError(f"{path}: an integer of more than {sys.get_int_max_str_digits():,} digits, which Python does not read; "
                          "no number of a model needs that many") from None

@@ -10,6 +10,7 @@ import functools
 import itertools
 import math
 import os
+import re
 import shutil
 import signal
 from collections.abc import Callable
@@ -22,11 +23,41 @@ import click
 
 from drydem import __version__
 from drydem.errors import DrydemError
+from drydem.files import PLAIN_INTEGER, PLAIN_NUMBER
 from drydem.model.parameters import DENSITY, JOINT_MODELS, JOINT_RULES, POINTS, Rule
 
 if TYPE_CHECKING:
     from drydem.io.target import Target
     from drydem.masonry.imperfections import Imperfections
+
+
+class _Plain:
+    """A number option as the files drydem reads write a number (drydem.files.PLAIN_NUMBER):
+    click's float and int are Python's, which also take 1_0 for 10 (``--amplitude 0_5`` ran a
+    pulse of 5 m/s2) and other scripts' digits; then click's own conversion and range."""
+
+    pattern: re.Pattern
+    written: str
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str) and not self.pattern.fullmatch(value.strip()):
+            self.fail(f"{value!r} is not a valid {self.written}; not 1_0 nor 0x10)", param, ctx)
+        return super().convert(value, param, ctx)
+
+
+class PlainFloat(_Plain, click.types.FloatParamType):
+    pattern, written = PLAIN_NUMBER, "float (ASCII digits, an optional sign, point and exponent"
+
+
+class PlainInt(_Plain, click.types.IntParamType):
+    pattern, written = PLAIN_INTEGER, "integer (ASCII digits and an optional sign"
+
+
+class PlainIntRange(_Plain, click.IntRange):
+    pattern, written = PlainInt.pattern, PlainInt.written
+
+
+PLAIN_FLOAT, PLAIN_INT = PlainFloat(), PlainInt()
 
 
 #: the tilting analysis' checkpoint in its results folder, and the file it is written to first
@@ -53,7 +84,7 @@ def _workers(ctx, param, value):
     return value
 
 
-workers_option = click.option("--workers", type=click.IntRange(min=1), callback=_workers,
+workers_option = click.option("--workers", type=PlainIntRange(min=1), callback=_workers,
                               help="Local processes, at most 4 per core (default: one per core this process may run on).")
 scheduler_option = click.option("--scheduler", help="Address of a Dask distributed scheduler to run on instead (tcp://host:8786).")
 
@@ -72,7 +103,7 @@ def _threads(ctx, param, value):
 
 #: the compiled kernels' threads (drydem.engine.threads): set by the option itself, so a command
 #: takes no argument for it; the results are the same for every count, only the speed changes
-threads_option = click.option("--threads", type=int, callback=_threads, expose_value=False,
+threads_option = click.option("--threads", type=PLAIN_INT, callback=_threads, expose_value=False,
                               help="Most threads for the compiled kernels (default: all cores; a small model takes fewer).")
 
 
@@ -92,7 +123,7 @@ def ruled(rule: Rule | Callable[[], Rule], sets: str):
 
 def joint_option(key: str, flag: str, help: str):
     """An option setting the [joint] table's ``key``, checked by its rule (JOINT_RULES)."""
-    return click.option(flag, type=float, callback=ruled(JOINT_RULES[key], f"[joint] {key}"), help=help)
+    return click.option(flag, type=PLAIN_FLOAT, callback=ruled(JOINT_RULES[key], f"[joint] {key}"), help=help)
 
 
 #: the options that override a model's parameters (``drydem tilt``, ``montecarlo``, ``shake``):
@@ -101,9 +132,9 @@ MODEL_OPTIONS = {
     "kn": joint_option("kn", "--kn", "Normal joint stiffness, Pa/m (overrides the model file)."),
     "ks": joint_option("ks", "--ks", "Shear joint stiffness, Pa/m."),
     "friction": joint_option("friction", "--friction", "Coulomb friction coefficient."),
-    "points": click.option("--points", type=int, callback=ruled(POINTS, "[contacts] points_per_length"),
+    "points": click.option("--points", type=PLAIN_INT, callback=ruled(POINTS, "[contacts] points_per_length"),
                            help="Sub-contact points per length."),
-    "density": click.option("--density", type=float, callback=ruled(DENSITY, "the density of every block"),
+    "density": click.option("--density", type=PLAIN_FLOAT, callback=ruled(DENSITY, "the density of every block"),
                             help="Density of every block, kg/m3."),
 }
 
@@ -276,14 +307,14 @@ def imperfection_options(command):
     ``height_sd``, ``height_distribution``, ``flatness_sd`` and ``misalignment_sd``; the amplitudes
     are None where not given (:func:`imperfections_from_options` reads them)."""
     options = [
-        click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the imperfections' random draws."),
-        click.option("--height-sd", type=float, metavar="MM", callback=_amplitude_mm,
+        click.option("--seed", type=PlainIntRange(min=0), default=0, show_default=True, help="Seed of the imperfections' random draws."),
+        click.option("--height-sd", type=PLAIN_FLOAT, metavar="MM", callback=_amplitude_mm,
                      help="Imperfect bricks: standard deviation of each brick's height, mm."),
         click.option("--height-distribution", type=click.Choice(["normal", "uniform"]), default="normal", show_default=True,
                      help="Distribution of the heights (uniform: the same standard deviation)."),
-        click.option("--flatness-sd", type=float, metavar="MM", callback=_amplitude_mm,
+        click.option("--flatness-sd", type=PLAIN_FLOAT, metavar="MM", callback=_amplitude_mm,
                      help="Imperfect bricks: each bed face tilted along the wall, its edges this standard deviation off its mid-line, mm."),
-        click.option("--misalignment-sd", type=float, metavar="MM", callback=_amplitude_mm,
+        click.option("--misalignment-sd", type=PLAIN_FLOAT, metavar="MM", callback=_amplitude_mm,
                      help="Imperfect bricks: standard deviation of each brick's placement along the wall, mm."),
     ]
     for option in reversed(options):

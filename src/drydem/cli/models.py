@@ -12,7 +12,7 @@ import click
 from drydem.masonry import designs
 from drydem.errors import DrydemError
 from drydem.cli.common import (
-    _factor, IMPERFECTION_OPTIONS, imperfection_options, imperfections_from_options, main, out_path, resolve_target, unit_option,
+    _factor, IMPERFECTION_OPTIONS, PLAIN_FLOAT, imperfection_options, imperfections_from_options, main, out_path, resolve_target, unit_option,
 )
 
 if TYPE_CHECKING:
@@ -190,7 +190,7 @@ def _imperfect_drawing(found: Target, imperfections: Imperfections, seed: int, f
 @click.option("--strict", is_flag=True, help="Fail if a wall breaks the competition brief (a wall only).")
 @unit_option
 @imperfection_options
-@click.option("--exaggerate", type=float, default=1.0, show_default=True, metavar="FACTOR", callback=_factor,
+@click.option("--exaggerate", type=PLAIN_FLOAT, default=1.0, show_default=True, metavar="FACTOR", callback=_factor,
               help="Draw the imperfections' deviations FACTOR times larger (the same draws), so that a 0.1 mm scatter shows.")
 def show(target: str, out: Path | None, overwrite: bool, strict: bool, unit: str, seed: int, height_sd: float | None, height_distribution: str,
          flatness_sd: float | None, misalignment_sd: float | None, exaggerate: float) -> None:

@@ -10,7 +10,7 @@ import click
 from drydem.masonry import designs
 from drydem.errors import DrydemError
 from drydem.cli.common import (
-    IMPERFECTION_OPTIONS, imperfection_options, imperfections_from_options, main, out_path, resolve_target, results_folder,
+    IMPERFECTION_OPTIONS, PlainIntRange, imperfection_options, imperfections_from_options, main, out_path, resolve_target, results_folder,
     scheduler_option, signals_interrupt, workers_option,
 )
 from drydem.cli.tilting import TiltOptions, tilt_options
@@ -27,7 +27,7 @@ def _samples(ctx, param, value: int) -> int:
 
 @main.command()
 @click.argument("target")
-@click.option("--samples", type=click.IntRange(min=1), default=100, show_default=True, callback=_samples,
+@click.option("--samples", type=PlainIntRange(min=1), default=100, show_default=True, callback=_samples,
               help=f"Imperfect walls analysed, at most {MAX_SAMPLES} ({SAMPLES_REASON}); sample k's seed depends on --seed and k "
                    "only, so more samples extend a run.")
 @imperfection_options

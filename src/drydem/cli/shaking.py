@@ -10,7 +10,7 @@ import click
 
 from drydem.errors import DrydemError
 from drydem.cli.common import (
-    discard_unstarted, joint_law_options, main, model_options, out_path, resolve_target, results_folder, signals_interrupt, threads_option,
+    PLAIN_FLOAT, PLAIN_INT, PlainIntRange, discard_unstarted, joint_law_options, main, model_options, out_path, resolve_target, results_folder, signals_interrupt, threads_option,
     unit_option,
 )
 from drydem.cli.tilting import _render
@@ -55,31 +55,31 @@ class _Restitution(click.ParamType):
                    "PEER NGA .AT2 file (in g).")
 @click.option("--direction", type=click.Choice(["x", "y", "z"]), help="Direction of an .AT2 record or of a --pulse (default x); a CSV "
                                                                        "file names its directions in its header.")
-@click.option("--scale", type=float, default=1.0, show_default=True, help="Multiplies the motion (not 0; negative: the other way).")
+@click.option("--scale", type=PLAIN_FLOAT, default=1.0, show_default=True, help="Multiplies the motion (not 0; negative: the other way).")
 @click.option("--baseline/--no-baseline", default=None,
               help="Baseline-correct the --motion record (the default): a linear baseline subtracted from the acceleration brings "
                    "the table to rest (zero velocity and displacement) at the record's end. Pulses are analytic and never corrected.")
 @click.option("--pulse", type=click.Choice(PULSE_KINDS), help="An analytic pulse instead of a record (with --amplitude and --frequency).")
-@click.option("--amplitude", type=float, help="Peak acceleration of the --pulse, m/s2 (not 0; negative: the other way).")
-@click.option("--frequency", type=float, help="Frequency of the --pulse, Hz (ricker: its peak frequency).")
-@click.option("--cycles", type=int, help="Periods of a --pulse sine (default 1).")
-@click.option("--duration", type=float, help="Analysed time, s (default: the motion's duration; beyond it the table is no longer accelerated).")
-@click.option("--output-interval", type=float, default=0.005, show_default=True,
+@click.option("--amplitude", type=PLAIN_FLOAT, help="Peak acceleration of the --pulse, m/s2 (not 0; negative: the other way).")
+@click.option("--frequency", type=PLAIN_FLOAT, help="Frequency of the --pulse, Hz (ricker: its peak frequency).")
+@click.option("--cycles", type=PLAIN_INT, help="Periods of a --pulse sine (default 1).")
+@click.option("--duration", type=PLAIN_FLOAT, help="Analysed time, s (default: the motion's duration; beyond it the table is no longer accelerated).")
+@click.option("--output-interval", type=PLAIN_FLOAT, default=0.005, show_default=True,
               help="A row of history.csv (and a VTK state) every this many seconds of model time.")
 @click.option("--restitution", type=_Restitution(), metavar="R|housner",
               help="Target coefficient of restitution of the monitored block's rocking impacts, in (0, 1], or 'housner' "
                    "(1 - 1.5 sin^2 alpha): the contact damping ratio is calibrated to it by free rocking of that block.")
-@click.option("--damping-ratio", type=float,
+@click.option("--damping-ratio", type=PLAIN_FLOAT,
               help="Contact damping ratio (of critical), set directly instead of --restitution (default: 0.5 if neither is given).")
-@click.option("--rayleigh-mass", type=float, default=0.0, show_default=True, help="Rayleigh damping, mass term alpha, 1/s.")
-@click.option("--rayleigh-stiffness", type=float, default=0.0, show_default=True, help="Rayleigh damping, stiffness term beta, s.")
+@click.option("--rayleigh-mass", type=PLAIN_FLOAT, default=0.0, show_default=True, help="Rayleigh damping, mass term alpha, 1/s.")
+@click.option("--rayleigh-stiffness", type=PLAIN_FLOAT, default=0.0, show_default=True, help="Rayleigh damping, stiffness term beta, s.")
 @model_options
 @joint_law_options
 @click.option("--monitor", help="Block whose response is recorded (default: the top block nearest the middle).")
 @click.option("--out", type=click.Path(), callback=out_path, help="Results folder (default: results/TARGET-TIME).")
 @click.option("--overwrite", is_flag=True, help="Replace the results of an earlier run in --out (they are kept otherwise).")
 @click.option("--vtk", is_flag=True, help="Write a VTK time series for ParaView (OUT/vtk: blocks and sub-contacts, in model time).")
-@click.option("--save-every", type=click.IntRange(min=1), default=1, show_default=True,
+@click.option("--save-every", type=PlainIntRange(min=1), default=1, show_default=True,
               help="With --vtk: keep the state of every N-th output interval.")
 @click.option("--video", is_flag=True, help="Also render OUT/shake.mp4 (GIF if ffmpeg is missing), a frame per kept state at "
                                              f"{SHAKE_FPS:g} frames per second (--save-every thins them); implies --vtk.")

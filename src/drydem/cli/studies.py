@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from drydem.errors import DrydemError
-from drydem.cli.common import out_path, signals_interrupt, joint_law_options, main, scheduler_option, workers_option
+from drydem.cli.common import PLAIN_FLOAT, joint_law_options, main, out_path, scheduler_option, signals_interrupt, workers_option
 
 
 @main.command()
@@ -111,10 +111,10 @@ def report(results_dir: Path, out: Path | None, overwrite: bool) -> None:
 @main.command()
 @click.argument("results_dir", type=click.Path(path_type=Path))
 @click.option("--designs", default="WD1,WD2,WD3,WD4,WD5,WD6,WD7", show_default=True, help="Walls to fit, comma-separated, each once.")
-@click.option("--kn-min", type=float, default=1e7, show_default=True, help="Smallest kn searched, Pa/m.")
-@click.option("--kn-max", type=float, default=1e9, show_default=True, help="Largest kn searched, Pa/m.")
-@click.option("--ks-ratio", type=float, default=1.0, show_default=True, help="ks = ratio x kn.")
-@click.option("--increment", type=float, default=0.1, show_default=True, help="Tilt step of the (adaptive) runs, deg.")
+@click.option("--kn-min", type=PLAIN_FLOAT, default=1e7, show_default=True, help="Smallest kn searched, Pa/m.")
+@click.option("--kn-max", type=PLAIN_FLOAT, default=1e9, show_default=True, help="Largest kn searched, Pa/m.")
+@click.option("--ks-ratio", type=PLAIN_FLOAT, default=1.0, show_default=True, help="ks = ratio x kn.")
+@click.option("--increment", type=PLAIN_FLOAT, default=0.1, show_default=True, help="Tilt step of the (adaptive) runs, deg.")
 @joint_law_options
 @click.option("--out", type=click.Path(), callback=out_path, help="The calibration's JSON file (default: RESULTS_DIR/calibration.json).")
 @click.option("--overwrite", is_flag=True, help="Replace a finished calibration, or one with other settings, in --out (kept otherwise).")

@@ -12,7 +12,7 @@ import click
 from drydem.errors import DrydemError
 from drydem.model.parameters import CRITERIA
 from drydem.cli.common import (
-    CHECKPOINT, MODEL_OPTIONS, discard_unstarted, given, joint_law_options, main, out_path, resolve_target, results_folder, ruled,
+    CHECKPOINT, MODEL_OPTIONS, PLAIN_FLOAT, PlainIntRange, discard_unstarted, given, joint_law_options, main, out_path, resolve_target, results_folder, ruled,
     signals_interrupt, threads_option, unit_option,
 )
 
@@ -73,13 +73,13 @@ def tilt_options(*, adaptive: bool):
     protocol = "adaptive" if adaptive else "fixed"
     options = [
         *MODEL_OPTIONS.values(),
-        click.option("--increment", type=float, default=0.1, show_default=True, callback=tilt_setting("increment_deg"),
+        click.option("--increment", type=PLAIN_FLOAT, default=0.1, show_default=True, callback=tilt_setting("increment_deg"),
                      help="Tilt step, deg."),
         click.option("--adaptive/--fixed", default=adaptive,
                      help=f"Coarse steps, then bisection down to the increment; or every step one increment (default: {protocol})."),
         click.option("--predictor/--no-predictor", default=True, show_default=True,
                      help="Start each step from the last two equilibria extrapolated (fewer cycles)."),
-        click.option("--stop-displacement", type=float, default=0.10, show_default=True, callback=tilt_setting("stop_displacement_m"),
+        click.option("--stop-displacement", type=PLAIN_FLOAT, default=0.10, show_default=True, callback=tilt_setting("stop_displacement_m"),
                      help="Monitored horizontal displacement that ends the run, m."),
         click.option("--criterion", type=click.Choice(CRITERIA), help="Equilibrium criterion (default: the model file's)."),
         click.option("--loading", type=click.Choice(["tilt", "multiplier"]), default="tilt", show_default=True,
@@ -89,7 +89,7 @@ def tilt_options(*, adaptive: bool):
                           "x loads along y, out of the plane of the walls along x (3D models; a building's long walls)."),
         click.option("--monitor", help="Block whose centroid is monitored (default: the top block nearest the middle in x; "
                                        "with --tilt-axis x, on the leeward wall)."),
-        click.option("--max-angle", type=float, default=80.0, show_default=True, callback=tilt_setting("max_angle_deg"),
+        click.option("--max-angle", type=PLAIN_FLOAT, default=80.0, show_default=True, callback=tilt_setting("max_angle_deg"),
                      help="Largest tilt tried, deg."),
     ]
     names = [f.name for f in fields(TiltOptions)]
@@ -114,7 +114,7 @@ def tilt_options(*, adaptive: bool):
 @click.option("--resume", is_flag=True, help="Go on from the checkpoint in --out (same TARGET and options).")
 @click.option("--overwrite", is_flag=True, help="Replace the results of an earlier run in --out (they are kept otherwise).")
 @click.option("--vtk", is_flag=True, help="Write a VTK time series for ParaView (OUT/vtk: blocks and sub-contacts).")
-@click.option("--save-every", type=click.IntRange(min=1), default=1, show_default=True,
+@click.option("--save-every", type=PlainIntRange(min=1), default=1, show_default=True,
               help="With --vtk: keep every N-th equilibrium state (the states past collapse are all kept).")
 @click.option("--video", is_flag=True, help="Also render OUT/collapse.mp4 (GIF if ffmpeg is missing); implies --vtk.")
 @unit_option
@@ -264,7 +264,7 @@ def _fps(ctx, param, value):
 @main.command()
 @click.argument("result_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
 @click.option("--out", "-o", type=click.Path(dir_okay=False), callback=out_path, help="Video file, .mp4 or .gif (default: RESULT_DIR/collapse.mp4).")
-@click.option("--fps", type=float, default=8.0, show_default=True, callback=_fps,
+@click.option("--fps", type=PLAIN_FLOAT, default=8.0, show_default=True, callback=_fps,
               help="Frames per second, 0.1 to 100 (10 s a frame to the fastest a GIF can show: it counts in hundredths of a second).")
 @click.option("--overwrite", is_flag=True, help="Replace the video if it exists (else an existing file is kept and the command fails).")
 def animate(result_dir: Path, out: Path | None, fps: float, overwrite: bool) -> None:

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from drydem.errors import ModelError
-from drydem.files import PLAIN_INTEGER, PLAIN_NUMBER, write_text
+from drydem.files import PLAIN_INTEGER, PLAIN_NUMBER, regular_file, write_text
 from drydem.model.geometry import convex_hull, far_vertex_problem
 from drydem.model.assembly import Block, Model
 from drydem.model.parameters import FILE_PATH, InstanceOf, Range, check_arguments, shown
@@ -106,7 +106,7 @@ def read_mesh(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], li
     check_reader_arguments("read_mesh", path, unit_m)
     path = Path(path)
     try:
-        data = path.read_bytes()
+        data = regular_file(path, "an OBJ or STL file").read_bytes()  # a pipe would be waited on forever
     except OSError as exc:
         raise ModelError(f"{path}: cannot read: {exc.strerror or exc}") from None
     reader = _read_obj if path.suffix.lower() == ".obj" else _read_stl

@@ -323,13 +323,16 @@ def _protocol(analysis: str, summary: dict) -> str:
 
 
 def _pushover_csv(path: Path) -> list[list[float]]:
-    """A tilt's pushover.csv as a record's curve (:data:`CURVE_FROM_CSV`); RecordError naming the file."""
+    """A tilt's pushover.csv as a record's curve (:data:`CURVE_FROM_CSV`); RecordError naming the
+    file (a pipe, which would be waited on forever, too)."""
     try:
-        with path.open(newline="", encoding="utf-8") as file:
+        with regular_file(path, "a drydem pushover.csv").open(newline="", encoding="utf-8") as file:
             rows = list(csv.reader(file))
         if not rows:  # a run writes the header as it starts
             raise ValueError("no header")
         return [[float(row[k]) for k in CURVE_FROM_CSV] for row in rows[1:]]
+    except ModelError as exc:
+        raise RecordError(str(exc)) from None
     except OSError as exc:
         raise RecordError(f"{path}: cannot read the run's pushover curve ({exc.strerror})") from None
     except (ValueError, IndexError, csv.Error):  # csv.Error: a field past the csv module's limit (131,072 characters)

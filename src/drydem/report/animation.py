@@ -34,6 +34,7 @@ import numpy as np
 from drydem.errors import DrydemError, OutputTakenError
 from drydem.files import regular_file, replaceable, replaced_atomically
 from drydem.io.vtk import FRAME_KINDS, LOAD_AXES, frame_number, frames_csv_rows
+from drydem.model.geometry import MAX_COORDINATE_M
 from drydem.model.parameters import shown
 from drydem.report.plots import draw_displacements, draw_faces_3d, frame_3d, new_figure, one_deep, xz_outline
 
@@ -180,11 +181,8 @@ def _read_frame(file: Path, caption: str, load_direction: int) -> VideoFrame:
     not a finite number (a magnitude also >= 0), or if no block is left in the analysis (nothing
     to draw)."""
     mesh, fields = _read_mesh(file)
-    if not np.isfinite(mesh.points).all():
-        raise DrydemError(f"{file}: points: not all finite numbers (NaN or inf): not a frame drydem writes")
+    _check_frame(file, mesh, fields)
     magnitude = fields["displacement_magnitude"] * 1e3
-    if not (np.isfinite(magnitude) & (magnitude >= 0.0)).all():
-        raise DrydemError(f"{file}: displacement_magnitude: not all finite numbers >= 0: not a frame drydem writes")
     active, fixed = fields["active"].astype(bool), fields["fixed"].astype(bool)
     if not active.any():
         raise DrydemError(f"{file}: no block in the analysis (active = 0 for every block): nothing to draw")
@@ -194,6 +192,33 @@ def _read_frame(file: Path, caption: str, load_direction: int) -> VideoFrame:
     except (IndexError, ValueError) as exc:  # a face naming a point the file lacks; fields and cells of other lengths
         raise DrydemError(f"{file}: cannot read the frame: {exc!r}") from None
     return VideoFrame(blocks, magnitude[active], caption, ~fixed[active], load_direction, len(cells))
+
+
+#: m: how far from the origin a frame's point may be, ten times a model's vertices
+#: (:data:`~drydem.model.geometry.MAX_COORDINATE_M`), for blocks that moved (1e300 failed in Qhull)
+FRAME_REACH_M = 10.0 * MAX_COORDINATE_M
+
+
+def _check_frame(file: Path, mesh, fields: dict[str, np.ndarray]) -> None:
+    """A DrydemError naming ``file`` unless its ``mesh`` is of polyhedra (one a block), its points
+    finite numbers within :data:`FRAME_REACH_M` and its ``fields`` (:data:`FRAME_FIELDS`) one
+    value a block: active and fixed 0 or 1, the displacement magnitude a finite number >= 0.
+    Checked before drawing, which failed on such files in matplotlib or Qhull (a traceback)."""
+    not_ours = "not a frame drydem writes"
+    kinds = sorted({block.type for block in mesh.cells if not block.type.startswith("polyhedron")})
+    if kinds or not mesh.cells:
+        raise DrydemError(f"{file}: cells {', '.join(kinds) or '(none)'}: {not_ours} (one polyhedron a block)")
+    if not np.isfinite(mesh.points).all() or np.abs(mesh.points).max(initial=0.0) > FRAME_REACH_M:
+        raise DrydemError(f"{file}: points: not all finite numbers within {FRAME_REACH_M:g} m of the origin: {not_ours}")
+    blocks = sum(len(block.data) for block in mesh.cells)
+    for name, values in fields.items():
+        if values.shape != (blocks,):
+            raise DrydemError(f"{file}: {name}: shape {values.shape}, not one value a block ({blocks} blocks): {not_ours}")
+    for name in ("active", "fixed"):
+        if not np.isin(fields[name], (0, 1)).all():
+            raise DrydemError(f"{file}: {name}: values other than 0 and 1: {not_ours}")
+    if not (np.isfinite(fields["displacement_magnitude"]) & (fields["displacement_magnitude"] >= 0.0)).all():
+        raise DrydemError(f"{file}: displacement_magnitude: not all finite numbers >= 0: {not_ours}")
 
 
 def _load_direction(row: dict) -> int:

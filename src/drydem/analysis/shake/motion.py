@@ -383,10 +383,11 @@ def read_csv_motion(path: str | Path) -> GroundMotion:
     skipped. A ModelError names the file, the line and the rule broken."""
     path = Path(path)
     rows = csv.reader(_read_text(path, "CSV motion", "utf-8-sig").splitlines())
-    header = [name.strip() for name in next(rows, [])]
+    cells = _csv_rows(path, rows)
+    header = [name.strip() for name in next(cells, [])]
     present = _present_columns(path, header)
     samples, lines = [], []
-    for row in rows:
+    for row in cells:
         if not any(cell.strip() for cell in row):
             continue
         if len(row) != len(header):
@@ -401,6 +402,19 @@ def read_csv_motion(path: str | Path) -> GroundMotion:
         acceleration[:, ACCELERATION_COLUMNS.index(name)] = table[:, column]
     time, notes = _checked_times(path, table[:, 0], lines)
     return GroundMotion(time, _moving(path, acceleration), path.name, notes=notes, source=str(path))
+
+
+def _csv_rows(path: Path, rows):
+    """The rows of the csv.reader ``rows``; a ModelError naming the file and the line the csv
+    module cannot read (a field longer than its limit, 131,072 characters)."""
+    while True:
+        try:
+            row = next(rows)
+        except StopIteration:
+            return
+        except csv.Error as exc:
+            raise ModelError(f"{path}: line {rows.line_num}: not a CSV row ({exc}); a motion's rows hold one number a column") from None
+        yield row
 
 
 def _present_columns(path: Path, header: list[str]) -> list[str]:

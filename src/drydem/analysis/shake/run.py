@@ -43,7 +43,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from drydem.analysis.shake.motion import DIRECTIONS, GroundMotion
+from drydem.analysis.shake.motion import DIRECTIONS, STEPS_PER_PERIOD, GroundMotion
 from drydem.analysis.shake.restitution import RockingBlock, calibrated_damping_ratio, housner_restitution
 from drydem.analysis.shake.settings import DURATION, HOUSNER, MONITOR_FELL, History, ShakeFrame, ShakeResult, ShakeSettings
 from drydem.analysis.support import dropped_out, lost_drops, too_soft_joints
@@ -90,6 +90,10 @@ def shake_analysis(
     unresolved = settings.motion.resolution_problem(sim.timestep)
     if unresolved is not None:
         raise ModelError(f"{model.source}: {unresolved}")
+    if settings.analysed_s < STEPS_PER_PERIOD * sim.timestep:  # 1e-300 s ran no cycle and reported "no block fell"
+        raise ModelError(f"{model.source}: duration_s = {settings.analysed_s:g} s (--duration) spans fewer than {STEPS_PER_PERIOD} "
+                         f"timesteps of {sim.timestep:.3g} s (the model's at the start of the shaking): the table would hardly move; "
+                         f"give at least {STEPS_PER_PERIOD * sim.timestep:.3g} s")
     if settings.output_interval_s < sim.timestep:  # a row per cycle at most: the history would not be at the interval recorded
         raise ModelError(f"{model.source}: output_interval_s = {settings.output_interval_s:g} s (--output-interval) is shorter than "
                          f"the timestep, {sim.timestep:.3g} s (the model's at the start of the shaking): the history has a row at "

@@ -38,7 +38,9 @@ SETTING_RANGES = {
     # divided by a difference of tilts lost to round-off
     "increment_deg": Range(1e-3, 90.0, high_open=True, unit="deg"),
     "refinements": Range(0, 12, integer=True),
-    "stop_displacement_m": Range(0.0, 100.0, low_open=True, unit="m"),
+    # a nanometre: the joints' elastic shear at the first step can exceed it, and a stop
+    # displacement below it (1e-300 m) measures nothing but round-off
+    "stop_displacement_m": Range(1e-9, 100.0, unit="m"),
     "max_angle_deg": Range(0.0, 90.0, low_open=True, high_open=True, unit="deg"),
     "lost_drop_heights": LOST_DROP_HEIGHTS,
     "chunk_cycles": SOLVER_RULES["max_cycles"],  # a check of the monitored point at most as far apart as one equilibrium's cycles may be
