@@ -55,8 +55,14 @@ def test_a_source_that_is_no_utf8_file_name_is_a_text():
 
 def test_a_block_name_utf8_cannot_write_is_refused_before_any_file(tmp_path):
     # a lone surrogate made a model that save_model and write_mesh failed on with a UnicodeEncodeError
-    with pytest.raises(ModelError, match=r"block '\\ud800' name = '\\ud800': must be a non-empty text of characters UTF-8 can write"):
+    with pytest.raises(ModelError, match=r"block '\\ud800' name = '\\ud800': must be a non-empty text on one line, of printable "
+                                         "characters UTF-8 can write"):
         dd.Block(name="\ud800", shape=dd.box([0, 0, 0], BRICK))
+    # found by a hunt: a NUL went raw into OBJ and 3DEC files, U+2028 broke a 3DEC group name's line
+    for name in ("a\x00b", "a\x0bb", "a\u2028b", "a\tb", "two\nlines"):
+        with pytest.raises(ModelError, match="must be a non-empty text on one line, of printable characters"):
+            dd.Block(name=name, shape=dd.box([0, 0, 0], BRICK))
+    assert dd.Block(name="pierre n° 3 (é)", shape=dd.box([0, 0, 0], BRICK)).name == "pierre n° 3 (é)"
     model = stack_model([BRICK[2]])
     save_model(model, tmp_path / "m.toml")
     assert load_model(tmp_path / "m.toml").block_name == model.block_name

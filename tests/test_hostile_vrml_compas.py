@@ -252,6 +252,26 @@ def test_a_compas_element_on_two_graph_nodes_is_refused_naming_it(tmp_path):
         read_compas(path)
 
 
+@pytest.mark.parametrize("edit, message", [
+    (lambda model: model["data"]["graph"].__setitem__("edge", []), "graph edges: must be a JSON object, not []"),
+    (lambda model: model["data"]["tree"].__setitem__("root", 0), "tree root: must be a JSON object, not 0"),
+    (lambda model: model["data"].__setitem__("materials", ""), 'materials: must be a JSON object, not ""'),
+    (lambda model: model["data"]["graph"].__setitem__("node", {"1_0": {"element": "g1"}}), "graph node '1_0': a key must be an integer"),
+    (lambda model: model["data"]["graph"].__setitem__("node", {" 2 ": {"element": "g1"}}), "graph node ' 2 ': a key must be an integer"),
+])
+def test_a_compas_part_of_the_wrong_kind_is_refused_even_when_empty(tmp_path, edit, message):
+    """Found by a hunt: [], 0 and "" passed as an absent part (read by ``or {}``), and int() read
+    the node keys 1_0 and " 2 " (10 and 2); null still stands for an absent part, as compas writes it."""
+    model = block_model([])
+    edit(model)
+    path = json_file(tmp_path, model)
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}: {re.escape(message)}"):
+        read_compas(path)
+    model = block_model([])
+    model["data"]["graph"]["edge"] = model["data"]["tree"]["root"] = None
+    assert [block.name for block in read_compas(json_file(tmp_path, model, "nulls.json"))[0]] == ["B"]
+
+
 @pytest.mark.parametrize("density", [-1000, 0, 1e-300, 1e299])
 def test_a_compas_material_density_out_of_range_is_refused_naming_the_file_and_element(tmp_path, density):
     path = json_file(tmp_path, block_model([], density=density))

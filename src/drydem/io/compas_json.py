@@ -55,7 +55,7 @@ from pathlib import Path
 import numpy as np
 
 from drydem.errors import ModelError
-from drydem.files import read_text, write_text
+from drydem.files import PLAIN_INTEGER, read_text, write_text
 from drydem.io.mesh import check_reader_arguments, closed_convex_block
 from drydem.model.assembly import Block, Model
 from drydem.model.parameters import DENSITY, FILE_PATH, InstanceOf, check_arguments, shown
@@ -194,7 +194,7 @@ def _mesh_part(data, name: str | None, index: int, where: str) -> _Part:
     a name is called "Mesh", as compas calls it."""
     where = where if name is None else f"{where} {name!r}"
     mesh = _mesh(data, where)
-    attributes = _object(mesh["data"].get("attributes") or {}, f"{where}: attributes")
+    attributes = _optional_object(mesh["data"].get("attributes"), f"{where}: attributes")
     fixed = _flag(attributes.get(SUPPORT_KEY, False), f"{where}: {SUPPORT_KEY}")
     return _Part(name or "Mesh", index, mesh, np.eye(4), fixed, None, where)
 
@@ -213,7 +213,7 @@ def _model_parts(data: dict, source: str) -> list[_Part]:
     """The blocks of a compas_dem BlockModel, in graph-node order, placed in model coordinates."""
     body = _object(data.get("data"), f"{source}: data")
     elements = _object(body.get("elements"), f"{source}: elements")
-    materials = _object(body.get("materials") or {}, f"{source}: materials")
+    materials = _optional_object(body.get("materials"), f"{source}: materials")
     graph = _object(body.get("graph"), f"{source}: graph")
     model_matrix = _matrix(body.get("transformation"), f"{source}: the model's transformation")
     parents = _parents(_object(body.get("tree"), f"{source}: tree"), elements, source)
@@ -251,7 +251,7 @@ def _element(elements: dict, guid: str, source: str) -> dict:
 
 def _edges(graph: dict, source: str) -> list[tuple[str, object]]:
     """Each edge of a compas Graph's adjacency ``edge`` (u -> v -> attributes), as (u-v, attributes)."""
-    edges = _object(graph.get("edge") or {}, f"{source}: graph edges")
+    edges = _optional_object(graph.get("edge"), f"{source}: graph edges")
     return [(f"{u}-{v}", attributes)
             for u, nbrs in edges.items() for v, attributes in _object(nbrs, f"{source}: graph edge {u}").items()]
 
@@ -262,7 +262,7 @@ def _parents(tree: dict, elements: dict, source: str) -> dict[str, list[str]]:
     parents: dict[str, list[str]] = {}
 
     def walk(node, above: list[str]) -> None:
-        for child in _list(_object(node, f"{source}: tree node").get("children") or [], f"{source}: tree children"):
+        for child in _optional_list(_object(node, f"{source}: tree node").get("children"), f"{source}: tree children"):
             guid = _object(child, f"{source}: tree node").get("element")
             if guid is not None and (not isinstance(guid, str) or guid not in elements):
                 raise ModelError(f"{source}: the tree names the element {guid!r}, which is not in the model's elements")
@@ -273,14 +273,14 @@ def _parents(tree: dict, elements: dict, source: str) -> dict[str, list[str]]:
                 parents[guid] = above
             walk(child, above if guid is None else [guid, *above])
 
-    walk(tree.get("root") or {}, [])
+    walk(_optional_object(tree.get("root"), f"{source}: tree root"), [])
     return parents
 
 
 def _block(part: _Part, name: str, unit_m: float) -> Block:
     """The closed convex block of a part's mesh, placed by its matrix, times ``unit_m``."""
     data, where = part.mesh["data"], part.where
-    defaults = _object(data.get("default_vertex_attributes") or {}, f"{where}: default_vertex_attributes")
+    defaults = _optional_object(data.get("default_vertex_attributes"), f"{where}: default_vertex_attributes")
     vertices = _object(data.get("vertex"), f"{where}: vertex")
     index = {key: k for k, key in enumerate(vertices)}
     points = np.array([[_number(_object(attributes, f"{where}: vertex {key}").get(axis, defaults.get(axis)),
@@ -344,10 +344,10 @@ def _density(material, materials: dict, where: str) -> float | None:
 
 
 def _key(key: str, where: str) -> int:
-    try:
-        return int(key)
-    except ValueError:
-        raise ModelError(f"{where} {key!r}: a key must be an integer") from None
+    """A compas Graph's node key, a whole number written in ASCII digits (int() also takes 1_0 and " 2 ")."""
+    if not PLAIN_INTEGER.fullmatch(key):
+        raise ModelError(f"{where} {key!r}: a key must be an integer")
+    return int(key)
 
 
 def _number(value, where: str) -> float:
@@ -369,6 +369,17 @@ def _object(value, where: str) -> dict:
     if not isinstance(value, dict):
         raise ModelError(f"{where}: must be a JSON object, not {json.dumps(value)[:40]}")
     return value
+
+
+def _optional_object(value, where: str) -> dict:
+    """A JSON object that compas may leave out or write as null (then empty); anything else,
+    [] or 0 or "" included, is refused as :func:`_object` refuses it."""
+    return {} if value is None else _object(value, where)
+
+
+def _optional_list(value, where: str) -> list:
+    """A JSON list that compas may leave out or write as null (then empty), as :func:`_optional_object`."""
+    return [] if value is None else _list(value, where)
 
 
 def _list(value, where: str) -> list:

@@ -21,6 +21,7 @@ import math
 import numbers
 import os
 import sys
+import unicodedata
 from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, fields
 from types import SimpleNamespace
@@ -182,10 +183,12 @@ TEXT = Text()
 class Name(Text):
     """A block's name: a :class:`Text` of characters that UTF-8 can write, as every file drydem
     writes a model to (TOML, OBJ, STL, VTK, compas JSON) holds it (a lone surrogate, U+D800
-    alone, is none: save_model and write_mesh failed on it with a UnicodeEncodeError)."""
+    alone, is none: save_model and write_mesh failed on it with a UnicodeEncodeError), on one
+    line and printable: no control character (a NUL went raw into OBJ and 3DEC files) nor line
+    or paragraph separator (U+2028 broke a 3DEC group name's line)."""
 
     def __contains__(self, value) -> bool:
-        if not super().__contains__(value):
+        if not super().__contains__(value) or any(unicodedata.category(c) in ("Cc", "Zl", "Zp") for c in value):
             return False
         try:
             value.encode("utf-8")
@@ -194,7 +197,7 @@ class Name(Text):
         return True
 
     def __str__(self) -> str:
-        return "must be a non-empty text of characters UTF-8 can write"
+        return "must be a non-empty text on one line, of printable characters UTF-8 can write"
 
 
 #: the rule of every block name
