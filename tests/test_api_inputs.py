@@ -185,6 +185,8 @@ GRAVITY_METHODS = {
     ([np.inf, 0, -9.81], "gravity = [inf, 0.0, -9.81]: must be three finite numbers in m/s2"),
     ([0, 0, -1e6], "gravity = [0.0, 0.0, -1000000.0]: its magnitude 1000000 m/s2 must be at most 1000 m/s2"),
     ([800, 0, -800], "gravity = [800.0, 0.0, -800.0]: its magnitude 1131.37085 m/s2 must be at most 1000 m/s2"),
+    # found by a hunt: the norm of 1e300 overflowed (a RuntimeWarning, "magnitude inf")
+    ([0, 0, -1e300], "gravity = [0.0, 0.0, -1e+300]: its magnitude 1e+300 m/s2 must be at most 1000 m/s2"),
 ])
 def test_a_gravity_that_is_no_vector_of_real_numbers_within_its_bound_is_refused(model, method, gravity, words):
     """A gravity of booleans or texts was taken as numbers, complex ones or a dict failed with a

@@ -155,7 +155,8 @@ def test_a_pushover_csv_empty_or_with_a_nan_or_an_absurd_tilt_is_named_corrupt(t
     bad = run_folder(tmp_path, "bad", tilt_summary())
     (bad.parent / "pushover.csv").write_text(content)
     stderr, text = report(tmp_path)
-    assert f"corrupt record left out: {bad.parent}" in stderr and message in stderr
+    # the file named is the curve's (a hunt found its rows blamed on summary.json)
+    assert f"corrupt record left out: {bad.parent / 'pushover.csv'}: " in stderr and message in stderr
     assert "1 runs recorded (0 failed)" in text and GOOD_TILT_ROW in text
 
 

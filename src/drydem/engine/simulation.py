@@ -16,6 +16,7 @@ Equilibrium (3DEC's ``solve``): cycle until
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -377,7 +378,7 @@ class Simulation:
                              "(not texts, booleans or complex numbers)")
         if not np.isfinite(g).all():
             raise ModelError(f"{where} = {shown(g.tolist())}: must be three finite numbers in m/s2")
-        magnitude = float(np.linalg.norm(g))
+        magnitude = math.hypot(*g)  # scaled: np.linalg.norm of 1e300 overflowed to inf, with a RuntimeWarning
         if magnitude > MAX_ACCELERATION_M_S2:
             raise ModelError(f"{where} = {shown(g.tolist())}: its magnitude {magnitude:.9g} m/s2 must be at most "
                              f"{MAX_ACCELERATION_M_S2:g} m/s2 (about 100 g, past any earthquake record or shaking table)")

@@ -307,10 +307,11 @@ def run_folder_record(folder: Path) -> dict | None:
                    friction=joint.get("friction"), points=contacts.get("points_per_length"),
                    increment_deg=settings.get("increment_deg") if analysis == "tilt" else None,
                    joint_law=joint_law_text(law) if law.get("model", "constant") != "constant" else None)
-    curve = _pushover_csv(Path(folder) / PUSHOVER_FILE) if analysis == "tilt" else []
-    problem = _result_problem(spec, summary, curve)
-    if problem is not None:
-        raise RecordError(f"{path}: {problem}")
+    curve_path = Path(folder) / PUSHOVER_FILE
+    curve = _pushover_csv(curve_path) if analysis == "tilt" else []
+    for named, problem in ((curve_path, _curve_problem(curve)), (path, _result_problem(spec, summary, curve))):
+        if problem is not None:  # a row of the curve is pushover.csv's, not summary.json's
+            raise RecordError(f"{named}: {problem}")
     return {"id": Path(folder).resolve().name, "spec": asdict(spec), "status": "ok", "error": None, "summary": summary,
             "pushover": curve}
 

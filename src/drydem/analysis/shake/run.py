@@ -175,7 +175,7 @@ def settle(sim: Simulation, lost_drop_heights: float) -> None:
 def damping_ratio(model: Model, monitor: int, settings: ShakeSettings) -> tuple[float, float | None]:
     """The contacts' damping ratio zeta and the restitution it was calibrated to (None when zeta is set)."""
     if settings.damping_ratio is not None:
-        return settings.damping_ratio, None
+        return float(settings.damping_ratio) + 0.0, None  # + 0.0: a given -0.0 is reported as 0
     target = housner_target(model, monitor) if settings.restitution == HOUSNER else settings.restitution
     return calibrated_damping_ratio(model, monitor, target), target
 
