@@ -37,24 +37,25 @@ class _Plain:
     pulse of 5 m/s2) and other scripts' digits; then click's own conversion and range."""
 
     pattern: re.Pattern
+    kind: str
     written: str
 
     def convert(self, value, param, ctx):
         if isinstance(value, str) and not self.pattern.fullmatch(value.strip()):
-            self.fail(f"{value!r} is not a valid {self.written}; not 1_0 nor 0x10)", param, ctx)
+            self.fail(f"{value!r} is not a valid {self.kind} ({self.written}; not 1_0 nor 0x10)", param, ctx)
         return super().convert(value, param, ctx)
 
 
 class PlainFloat(_Plain, click.types.FloatParamType):
-    pattern, written = PLAIN_NUMBER, "float (ASCII digits, an optional sign, point and exponent"
+    pattern, kind, written = PLAIN_NUMBER, "float", "ASCII digits, an optional sign, point and exponent"
 
 
 class PlainInt(_Plain, click.types.IntParamType):
-    pattern, written = PLAIN_INTEGER, "integer (ASCII digits and an optional sign"
+    pattern, kind, written = PLAIN_INTEGER, "integer", "ASCII digits and an optional sign"
 
 
 class PlainIntRange(_Plain, click.IntRange):
-    pattern, written = PlainInt.pattern, PlainInt.written
+    pattern, kind, written = PlainInt.pattern, PlainInt.kind, PlainInt.written
 
 
 PLAIN_FLOAT, PLAIN_INT = PlainFloat(), PlainInt()

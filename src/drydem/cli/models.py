@@ -12,7 +12,8 @@ import click
 from drydem.masonry import designs
 from drydem.errors import DrydemError
 from drydem.cli.common import (
-    _factor, IMPERFECTION_OPTIONS, PLAIN_FLOAT, imperfection_options, imperfections_from_options, main, out_path, resolve_target, unit_option,
+    _factor, IMPERFECTION_OPTIONS, PLAIN_FLOAT, imperfection_options, imperfections_from_options, main, out_path, resolve_target,
+    unit_option,
 )
 
 if TYPE_CHECKING:

@@ -12,8 +12,8 @@ import click
 from drydem.errors import DrydemError
 from drydem.model.parameters import CRITERIA
 from drydem.cli.common import (
-    CHECKPOINT, MODEL_OPTIONS, PLAIN_FLOAT, PlainIntRange, discard_unstarted, given, joint_law_options, main, out_path, resolve_target, results_folder, ruled,
-    signals_interrupt, threads_option, unit_option,
+    CHECKPOINT, MODEL_OPTIONS, PLAIN_FLOAT, PlainIntRange, discard_unstarted, given, joint_law_options, main, out_path, resolve_target,
+    results_folder, ruled, signals_interrupt, threads_option, unit_option,
 )
 
 if TYPE_CHECKING:
