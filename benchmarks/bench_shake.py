@@ -19,6 +19,8 @@ import time
 import numpy as np
 
 from drydem.analysis.shake import GroundMotion, ShakeSettings, shake_analysis
+from drydem.analysis.shake.run import settle
+from drydem.engine.simulation import Simulation
 from drydem.io.target import load_target
 from drydem.model.parameters import G, JointMaterial
 
@@ -55,15 +57,16 @@ def main() -> None:
           f"{'max rot (rad)':>13} {'overturned':>10}")
     for kn in args.kn:
         model = wall.replace(joint=JointMaterial(kn=kn, ks=kn, friction=wall.joint.friction))
+        settings = ShakeSettings(motion=motion, contact_damping_ratio=0.2)
         start = time.perf_counter()
-        shake_analysis(model, ShakeSettings(motion=motion, duration_s=1e-9, contact_damping_ratio=0.2))
-        settle = time.perf_counter() - start
+        settle(Simulation(model), settings.lost_drop_heights)  # the analysis' first stage alone, timed apart
+        settled = time.perf_counter() - start
         start = time.perf_counter()
-        result = shake_analysis(model, ShakeSettings(motion=motion, contact_damping_ratio=0.2))
-        shake = time.perf_counter() - start - settle
+        result = shake_analysis(model, settings)
+        shake = time.perf_counter() - start - settled
         goal = GOAL_S.get(kn)
         print(
-            f"{kn:10.3g} {result.cycles:9d} {result.timestep_s:9.3g} {settle:10.2f} {shake:9.2f} {result.duration_s / shake:9.2f} "
+            f"{kn:10.3g} {result.cycles:9d} {result.timestep_s:9.3g} {settled:10.2f} {shake:9.2f} {result.duration_s / shake:9.2f} "
             f"{'-' if goal is None else f'{goal:.1f}':>9} {result.max_rotation_rad:13.3g} {result.overturned!s:>10}",
             flush=True,
         )

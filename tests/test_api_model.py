@@ -59,7 +59,7 @@ def test_a_block_name_utf8_cannot_write_is_refused_before_any_file(tmp_path):
                                          "characters UTF-8 can write"):
         dd.Block(name="\ud800", shape=dd.box([0, 0, 0], BRICK))
     # found by a hunt: a NUL went raw into OBJ and 3DEC files, U+2028 broke a 3DEC group name's line
-    for name in ("a\x00b", "a\x0bb", "a\u2028b", "a\tb", "two\nlines"):
+    for name in ("a\x00b", "a\x0bb", "a\u2028b", "a\tb", "two\nlines", "a\x7fb"):
         with pytest.raises(ModelError, match="must be a non-empty text on one line, of printable characters"):
             dd.Block(name=name, shape=dd.box([0, 0, 0], BRICK))
     assert dd.Block(name="pierre n° 3 (é)", shape=dd.box([0, 0, 0], BRICK)).name == "pierre n° 3 (é)"
