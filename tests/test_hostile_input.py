@@ -19,7 +19,7 @@ from drydem.cli import main
 from drydem.engine.checkpoint import DIGEST, digest
 from drydem.errors import DrydemError
 from drydem.files import WRITING, lock_exclusively, partial_name, unlock
-from drydem.io.results import FOLDER_LOCK
+from drydem.io.results import FOLDER_LOCK, RUN_MARK
 
 #: a brick on a base: the cheapest model that tilts (slides at atan 0.5 = 26.6 deg)
 BRICK_ON_BASE = """\
@@ -109,19 +109,46 @@ def test_a_results_folder_holding_a_run_is_never_replaced_silently(tmp_path):
     assert refused(run("tilt", path, "--out", out, "--resume", "--overwrite"), "give one of them")
 
 
+def test_overwrite_deletes_no_file_of_a_run_s_name_that_no_drydem_run_wrote(tmp_path):
+    """Found by a hunt: --overwrite deleted a user's samples/ and vtk/ (a folder with no drydem
+    run in it), the model file the run read from inside them, and a motion record named
+    history.csv that shake then replaced by its output. Only a folder a drydem run marked
+    (RUN_MARK), or a finished run's summary.json, has outputs to delete."""
+    path, out = model_file(tmp_path), tmp_path / "project"
+    (out / "samples").mkdir(parents=True)
+    (out / "vtk").mkdir()
+    (out / "samples" / "heights.csv").write_text("lab data")
+    model = out / "samples" / "brick.toml"
+    model.write_text(path.read_text())
+    for options in ([], ["--overwrite"]):
+        assert refused(run("tilt", model, "--out", out, "--increment", "2", *options),
+                       "project: holds samples, vtk, named as a run's results but not written there by a drydem run")
+    assert (out / "samples" / "heights.csv").read_text() == "lab data" and model.is_file() and not (out / RUN_MARK).exists()
+    assert run("tilt", path, "--out", out / "run", "--increment", "2").exit_code == 0  # a run's own folder: marked
+    assert (out / "run" / RUN_MARK).is_file()
+    (out / "run" / "vtk").mkdir()
+    assert run("tilt", path, "--out", out / "run", "--increment", "2", "--overwrite").exit_code == 0
+    assert not (out / "run" / "vtk").exists() and (out / "run" / "summary.json").is_file()
+    # a run refused once its folder was made, before any result (the shaking's start): no mark left
+    assert refused(run("shake", path, "--pulse", "one-sine", "--amplitude", "1", "--frequency", "5", "--damping-ratio", "0.1",
+                       "--duration", "1e-9", "--out", tmp_path / "instant"), "spans fewer than 20 timesteps")
+    assert list((tmp_path / "instant").iterdir()) == []
+
+
 def test_a_results_folder_another_run_is_writing_in_is_refused_and_left_alone(tmp_path):
     """Two runs given one --out, both started before either wrote, used to both pass the
     "already holds a run" check and replace each other's files (last one wins)."""
     path, out = model_file(tmp_path), tmp_path / "run"
     out.mkdir()
     (out / "checkpoint.npz").write_bytes(b"the other run's")
+    (out / RUN_MARK).write_text("a drydem run's folder")
     lock = out / FOLDER_LOCK
     held = lock_exclusively(lock)  # another run (a lock is per open file, so one in this process is another's)
     try:
         for options in ([], ["--overwrite"], ["--resume"]):
             assert refused(run("tilt", path, "--out", out, "--increment", "2", *options), "run: another drydem run is writing there")
         assert refused(run("limit", path, "--out", out), "another drydem run is writing there")
-        assert sorted(p.name for p in out.iterdir()) == [FOLDER_LOCK, "checkpoint.npz"]
+        assert sorted(p.name for p in out.iterdir()) == [RUN_MARK, FOLDER_LOCK, "checkpoint.npz"]
         assert (out / "checkpoint.npz").read_bytes() == b"the other run's"
     finally:
         unlock(lock, held)
@@ -170,6 +197,7 @@ def test_a_folder_a_run_is_writing_in_is_neither_animated_nor_swept_into(tmp_pat
     path, out = model_file(tmp_path), tmp_path / "run"
     (tmp_path / "study.toml").write_text('[study]\nname = "s"\n[[grid]]\ntargets = ["brick.toml"]\n')
     (out / "vtk").mkdir(parents=True)
+    (out / RUN_MARK).write_text("a drydem run's folder")
     held = lock_exclusively(out / FOLDER_LOCK)
     try:
         assert refused(run("animate", out), "run: another drydem run is writing there; animate it once the run has ended")

@@ -15,6 +15,7 @@ from click.testing import CliRunner
 
 import drydem as dd
 from drydem.cli import PULSE_KINDS, main
+from drydem.io.results import RUN_MARK
 from conftest import stack_model
 
 #: the first five columns of history.csv: a public interface
@@ -166,7 +167,7 @@ def test_a_csv_record_is_scaled_and_baseline_corrected(files, tmp_path):
 def test_an_overturning_pulse_names_the_block_and_overwrite_replaces_only_the_earlier_run(files, tmp_path):
     out = tmp_path / "over"
     out.mkdir()
-    for name in ("summary.json", "history.csv", "shake.mp4", "notes.txt"):
+    for name in (RUN_MARK, "summary.json", "history.csv", "shake.mp4", "notes.txt"):  # an earlier run's folder, and a note
         (out / name).write_text("earlier\n")
     result = shake(files["block"], "--pulse", "one-sine", "--amplitude", "30", "--frequency", "5", "--duration", "0.3",
                    "--damping-ratio", "0.05", "--output-interval", "0.01", "--out", out, "--overwrite")
@@ -178,7 +179,7 @@ def test_an_overturning_pulse_names_the_block_and_overwrite_replaces_only_the_ea
     assert summary["duration_s"] == pytest.approx(fallen["time_s"]) and fallen["time_s"] < 0.3
     assert summary["max_rotation_rad"] > math.radians(80)
     assert "overturned      yes: 1 block fell: 'block0' at" in result.output and "the monitored block 'block0' fell" in result.output
-    assert sorted(p.name for p in out.iterdir()) == ["history.csv", "history.png", "notes.txt", "summary.json"]
+    assert sorted(p.name for p in out.iterdir()) == [RUN_MARK, "history.csv", "history.png", "notes.txt", "summary.json"]
     assert (out / "notes.txt").read_text() == "earlier\n"
 
 
@@ -320,10 +321,11 @@ def test_housners_restitution_of_a_squat_block_is_refused_before_the_run(files, 
 def test_an_existing_results_folder_is_kept_without_overwrite(files, tmp_path):
     out = tmp_path / "taken"
     out.mkdir()
+    (out / RUN_MARK).write_text("a drydem run's folder")
     (out / "summary.json").write_text("earlier\n")
     result = shake(files["block"], *PULSE, "--out", out)
     assert result.exit_code == 1 and "already holds another run (summary.json); pass --overwrite" in result.output
-    assert [p.name for p in out.iterdir()] == ["summary.json"] and (out / "summary.json").read_text() == "earlier\n"
+    assert sorted(p.name for p in out.iterdir()) == [RUN_MARK, "summary.json"] and (out / "summary.json").read_text() == "earlier\n"
 
 
 def test_an_interrupted_shake_keeps_the_rows_written_so_far(files, tmp_path):

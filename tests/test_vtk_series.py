@@ -12,6 +12,7 @@ from drydem.analysis.tilt import TiltSettings, tilt_analysis
 from drydem.cli import main
 from drydem.files import WRITING, lock_exclusively, partial_name, unlock
 from drydem.io.model_file import save_model
+from drydem.io.results import RUN_MARK
 from drydem.io.vtk import VtkSeries
 from conftest import layout_blocks
 
@@ -115,7 +116,8 @@ def test_nothing_is_written_without_the_flags(wall, tmp_path):
     out = tmp_path / "run"
     result = CliRunner().invoke(main, ["tilt", str(model_file), "--increment", "10", "--out", str(out)])
     assert result.exit_code == 0, result.output
-    assert sorted(p.name for p in out.iterdir()) == ["checkpoint.npz", "mechanism.png", "pushover.csv", "pushover.png", "summary.json"]
+    assert sorted(p.name for p in out.iterdir()) == [RUN_MARK, "checkpoint.npz", "mechanism.png", "pushover.csv", "pushover.png",
+                                                     "summary.json"]
 
 
 def test_animate_names_a_folder_without_a_series(tmp_path):

@@ -27,7 +27,7 @@ import numpy as np
 
 from drydem import __version__
 from drydem.errors import DrydemError
-from drydem.files import WRITING, held, locked_by_another, replaceable, replaced_atomically, writable_folder
+from drydem.files import WRITING, held, locked_by_another, regular_file, replaceable, replaced_atomically, writable_folder
 
 if TYPE_CHECKING:  # annotations only: importing the limit analysis takes scipy.optimize, a third of a second
     from drydem.analysis.limit import LimitResult, LimitSettings
@@ -263,26 +263,68 @@ def prepared_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | No
     unless the run goes on from it (``resume``; None for a run that cannot, so the message does
     not offer it) or ``overwrite`` is asked, which deletes the
     earlier run's ``outputs`` first, so no stale file (an old video, VTK frames) is left beside
-    the new results; other files are kept. A path that is not a folder, or cannot be made or
-    written in, is refused with the reason (:func:`drydem.files.writable_folder`).
+    the new results; other files are kept. Only a drydem run's outputs are deleted
+    (:func:`drydem_run_folder`): files of those names that no drydem run wrote there (a user's
+    samples/ or vtk/, a motion record called history.csv, a model file inside them: found by a
+    hunt, each deleted) are refused, with ``overwrite`` too. The run marks the folder as its own (:data:`RUN_MARK`) for the
+    block, and leaves the mark if it wrote anything. A path that is not a folder, or cannot be
+    made or written in, is refused with the reason (:func:`drydem.files.writable_folder`).
     """
     refuse_if_written(folder, RUN_BUSY_ADVICE)  # before writable_folder makes it inside another run's
     folder = writable_folder(folder)
     busy = f"{folder}: another drydem run is writing there; {RUN_BUSY_ADVICE}"
     with held(folder / FOLDER_LOCK, busy):  # taken for this run: being_written only looked
-        present = sorted(p.name for p in folder.iterdir() if not is_lock(p.name))
+        present = _present(folder)
         ours = [name for name in present if name in outputs]
-        if present and not (resume or overwrite):
-            go_on = "" if resume is None else ", --resume to go on with it (a run of this command)"
-            others = f"{', '.join(present[:5])}{', ...' if len(present) > 5 else ''}"
-            raise DrydemError(f"{folder}: already holds another run ({', '.join(ours)}); pass --overwrite to replace it{go_on}, "
-                              "or another --out" if ours else
-                              f"{folder}: already holds other files ({others}); pass --overwrite to write the run beside them "
-                              "(they are kept), or another --out")
+        _check_outputs(folder, present, ours, resume=resume, overwrite=overwrite)
         for name in ours if overwrite and not resume else ():
             path = folder / name
             shutil.rmtree(path) if path.is_dir() and not path.is_symlink() else path.unlink()
-        yield folder
+        (folder / RUN_MARK).write_text(f"a results folder of drydem {__version__}: drydem tilt, limit, shake or montecarlo\n")
+        try:
+            yield folder
+        finally:
+            if not _present(folder):  # a run refused before its first result leaves the folder as it found it
+                (folder / RUN_MARK).unlink(missing_ok=True)
+
+
+#: the file by which a results folder is a drydem run's (:func:`prepared_folder`)
+RUN_MARK = ".drydem-run"
+
+
+def _present(folder: Path) -> list[str]:
+    """The names in ``folder`` but drydem's locks and its :data:`RUN_MARK`, sorted."""
+    return sorted(p.name for p in folder.iterdir() if not is_lock(p.name) and p.name != RUN_MARK)
+
+
+def _check_outputs(folder: Path, present: list[str], ours: list[str], *, resume: bool | None, overwrite: bool) -> None:
+    """The rule of :func:`prepared_folder` on what ``folder`` holds (``present``, of which
+    ``ours`` are named as a run's outputs): DrydemError if the run would replace or mix with
+    them unasked, or if ``overwrite`` would delete files no drydem run wrote there (a run that
+    goes on, ``resume``, is checked by what it reads: a checkpoint's digest and fingerprint)."""
+    if ours and not resume and not drydem_run_folder(folder):
+        raise DrydemError(f"{folder}: holds {', '.join(ours)}, named as a run's results but not written there by a drydem run "
+                          f"(no {RUN_MARK} nor drydem summary.json): drydem deletes no file it did not write; move them away, "
+                          "or give another --out")
+    if present and not (resume or overwrite):
+        go_on = "" if resume is None else ", --resume to go on with it (a run of this command)"
+        others = f"{', '.join(present[:5])}{', ...' if len(present) > 5 else ''}"
+        raise DrydemError(f"{folder}: already holds another run ({', '.join(ours)}); pass --overwrite to replace it{go_on}, "
+                          "or another --out" if ours else
+                          f"{folder}: already holds other files ({others}); pass --overwrite to write the run beside them "
+                          "(they are kept), or another --out")
+
+
+def drydem_run_folder(folder: Path) -> bool:
+    """Whether ``folder`` holds a drydem run's results: its :data:`RUN_MARK`, or a summary.json
+    of drydem (its drydem_version: a finished run of a drydem before the mark)."""
+    if (folder / RUN_MARK).is_file():
+        return True
+    try:
+        summary = json.loads(regular_file(folder / "summary.json", "").read_text(encoding="utf-8"))
+    except (DrydemError, OSError, ValueError, RecursionError):
+        return False
+    return isinstance(summary, dict) and "drydem_version" in summary
 
 
 def records_folder(folder: Path, command: str = "sweep") -> Path:
