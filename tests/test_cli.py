@@ -1,6 +1,7 @@
 """The command line: drydem check."""
 
 import math
+import sys
 
 import pytest
 from click.testing import CliRunner
@@ -275,3 +276,59 @@ def test_limit_writes_its_summary_and_mechanism(tmp_path):
     assert summary["method"] == "non-associative" and "Optimal" in summary["solver_status"]
     assert summary["collapse_angle_deg"] == pytest.approx(math.degrees(math.atan(summary["load_multiplier"])))
     assert (out / "mechanism.png").stat().st_size > 10_000
+
+
+def _raise(exc):
+    def raising(*args, **kwargs):
+        raise exc
+    return raising
+
+
+def _system_error_from_an_interrupt():
+    try:
+        raise KeyboardInterrupt
+    except KeyboardInterrupt:
+        try:
+            raise SystemError("<function _numba_unpickle> returned a result with an exception set")
+        except SystemError as exc:
+            return exc
+
+
+@pytest.mark.parametrize("raised, code", [
+    (KeyboardInterrupt(), 130),  # click's standalone mode said "Aborted!" and exited 1
+    (_system_error_from_an_interrupt(), 130),  # numba loading a kernel when Ctrl-C came: a traceback
+])
+def test_the_drydem_program_exits_130_on_a_ctrl_c_no_command_has_taken_over(monkeypatch, capsys, raised, code):
+    """Found by a hunt: Ctrl-C while the target was read (before a command's own handler)."""
+    import drydem.cli.tilting
+    from drydem.cli import console
+
+    monkeypatch.setattr(drydem.cli.tilting, "resolve_target", _raise(raised))
+    monkeypatch.setattr(sys, "argv", ["drydem", "tilt", "WD3"])
+    with pytest.raises(SystemExit) as ended:
+        console()
+    assert ended.value.code == code and "interrupted (SIGINT)" in capsys.readouterr().err
+
+
+def test_the_drydem_program_lets_other_system_errors_through(monkeypatch):
+    import drydem.cli.tilting
+    from drydem.cli import console
+
+    monkeypatch.setattr(drydem.cli.tilting, "resolve_target", _raise(SystemError("a bug")))
+    monkeypatch.setattr(sys, "argv", ["drydem", "tilt", "WD3"])
+    with pytest.raises(SystemError, match="a bug"):
+        console()
+
+
+def test_the_drydem_program_exits_as_click_does_on_usage_errors_and_help(monkeypatch, capsys):
+    from drydem.cli import console
+
+    for argv, code in ((["drydem", "tilt", "WD3", "--increment", "0"], 2), (["drydem", "nosuch"], 2), (["drydem", "--help"], None)):
+        monkeypatch.setattr(sys, "argv", argv)
+        try:
+            console()
+            ended = None
+        except SystemExit as exc:
+            ended = exc.code
+        assert ended in ((code,) if code else (None, 0)), (argv, ended)
+    assert "Invalid value for '--increment'" in capsys.readouterr().err

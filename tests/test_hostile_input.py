@@ -4,6 +4,7 @@ a traceback or a silent acceptance; and no result is lost. (Walls and layouts:
 test_walls.py / test_layout.py; sweeps: test_hostile_sweep.py; geometry files and other
 outputs: test_hostile_io.py.)"""
 
+import json
 import os
 import re
 import zipfile
@@ -133,6 +134,48 @@ def test_overwrite_deletes_no_file_of_a_run_s_name_that_no_drydem_run_wrote(tmp_
     assert refused(run("shake", path, "--pulse", "one-sine", "--amplitude", "1", "--frequency", "5", "--damping-ratio", "0.1",
                        "--duration", "1e-9", "--out", tmp_path / "instant"), "spans fewer than 20 timesteps")
     assert list((tmp_path / "instant").iterdir()) == []
+
+
+@pytest.mark.parametrize("failure, code, said", [
+    (OSError(28, "No space left on device", "mechanism.png"), 1, "mechanism.png: cannot write (No space left on device)"),
+    (KeyboardInterrupt(), 130, "interrupted (SIGINT) while writing the results"),
+])
+def test_a_tilt_stopped_while_writing_its_results_is_no_finished_run_and_resume_writes_them(tmp_path, monkeypatch, failure, code, said):
+    """Found by a hunt: summary.json was written first, so a full disk or a Ctrl-C while the
+    figures were drawn left a folder without mechanism.png that --resume called finished (and a
+    traceback, or "Aborted!" and exit 1). summary.json is now written last."""
+    from drydem.report import plots
+
+    path, out = model_file(tmp_path), tmp_path / "run"
+    draw = plots.mechanism_figure
+    monkeypatch.setattr(plots, "mechanism_figure", lambda *args, **kwargs: (_ for _ in ()).throw(failure))
+    result = run("tilt", path, "--out", out, "--increment", "2")
+    assert result.exit_code == code and said in result.output and "holds no finished run (no summary.json)" in result.output
+    assert not (out / "summary.json").exists() and not (out / "mechanism.png").exists()
+    monkeypatch.setattr(plots, "mechanism_figure", draw)
+    resumed = run("tilt", path, "--out", out, "--increment", "2", "--resume")
+    assert resumed.exit_code == 0 and "nothing to resume" not in resumed.output, resumed.output
+    assert (out / "summary.json").is_file() and (out / "mechanism.png").is_file()
+    fresh = run("tilt", path, "--out", tmp_path / "fresh", "--increment", "2")
+    assert json.loads((out / "summary.json").read_text())["collapse_angle_deg"] == json.loads(
+        (tmp_path / "fresh" / "summary.json").read_text())["collapse_angle_deg"] and fresh.exit_code == 0
+
+
+def test_a_tilt_whose_first_checkpoint_cannot_be_written_leaves_no_run_to_resume(tmp_path, monkeypatch):
+    """Found by a hunt (an --out path too long for the checkpoint's lock): the run failed after
+    its first pushover row, which then made the same command refuse, offering --resume with no
+    checkpoint to go on from."""
+    from drydem.analysis.tilt import checkpointing
+
+    def full(*args, **kwargs):
+        raise OSError(36, "File name too long", "checkpoint.npz")
+
+    path, out = model_file(tmp_path), tmp_path / "run"
+    monkeypatch.setattr(checkpointing, "save", full)
+    assert refused(run("tilt", path, "--out", out, "--increment", "2"), "checkpoint.npz: cannot write results (File name too long)")
+    assert list(out.iterdir()) == []
+    monkeypatch.undo()
+    assert run("tilt", path, "--out", out, "--increment", "2").exit_code == 0
 
 
 def test_a_results_folder_another_run_is_writing_in_is_refused_and_left_alone(tmp_path):

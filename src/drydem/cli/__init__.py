@@ -6,6 +6,9 @@ commands, one module per kind of work, each thin over the Python API: :mod:`~dry
 
 import atexit
 import gc
+import sys
+
+import click
 
 from drydem.cli import limits, models, montecarlo, shaking, studies, tilting
 from drydem.cli.common import main
@@ -24,6 +27,37 @@ def console() -> None:
     kernels leave: they would free nothing the end of the process does not, and took 0.1-0.4 s
     of a one-block tilt's 2.5-3.5 s (measured 2026-11-26, benchmarks/bench_start.py). Files are
     closed by the code that writes them, never by a collection. :func:`main` itself, which
-    tests and scripts call in a process that goes on, leaves the collector alone."""
+    tests and scripts call in a process that goes on, leaves the collector alone.
+
+    A Ctrl-C that no command has taken over yet (while Python imports, or a model is read)
+    exits 130 as one a command takes does, not click's "Aborted!" and 1; so does one that
+    reached a compiled kernel being loaded, which numba turns into a SystemError (found by a
+    hunt: a traceback)."""
     atexit.register(gc.freeze)
-    main()
+    try:
+        main(standalone_mode=False)
+    except click.ClickException as exc:  # what click's standalone mode does with them
+        exc.show()
+        sys.exit(exc.exit_code)
+    except click.exceptions.Abort:
+        _interrupted()
+    except SystemError as exc:
+        if not _caused_by_interrupt(exc):
+            raise
+        _interrupted()
+
+
+def _interrupted() -> None:
+    click.echo("\ninterrupted (SIGINT)", err=True)
+    sys.exit(130)
+
+
+def _caused_by_interrupt(exc: BaseException | None) -> bool:
+    """Whether a KeyboardInterrupt is in ``exc``'s chain of causes and contexts."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False

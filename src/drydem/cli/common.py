@@ -253,8 +253,9 @@ def results_folder(out: Path | None, name: str, *, resume: bool | None = False, 
 
 
 def discard_unstarted(table: Path, series) -> None:
-    """Remove what a run refused before its first result wrote: ``table`` (pushover.csv or
-    history.csv, its header only) and the folder of ``series`` (a VTK series with no state;
+    """Remove what a run refused before its first result (a tilt: before its first checkpoint,
+    from which alone it could go on) wrote: ``table`` (pushover.csv or history.csv) and the
+    folder of ``series`` (a VTK series with no state;
     None: none). The run's folder held neither before (:func:`results_folder`); left there, they
     made the same --out refuse the corrected command without --overwrite."""
     table.unlink(missing_ok=True)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -168,43 +169,62 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
         click.echo("warning: [solver] damping = 0: dynamic relaxation has nothing to dissipate energy with and may never "
                    "reach equilibrium", err=True)
     go_on = "the same command plus --resume" if out is not None else f"the same command plus --out {folder} --resume"
-    with signals_interrupt() as received, tqdm(desc="tilting", unit=" cycles", unit_scale=True, leave=False) as bar:
+    with signals_interrupt() as received:
+        with tqdm(desc="tilting", unit=" cycles", unit_scale=True, leave=False) as bar:
 
-        def progress(theta, cycles, ux):
-            bar.update(cycles - bar.n)
-            bar.set_postfix_str(f"{theta:.2f} deg, u{'xy'[settings.load_direction]} {ux * 1e3:.2f} mm")
+            def progress(theta, cycles, ux):
+                bar.update(cycles - bar.n)
+                bar.set_postfix_str(f"{theta:.2f} deg, u{'xy'[settings.load_direction]} {ux * 1e3:.2f} mm")
 
-        series = writer = None
-        try:
-            series = (VtkSeries(folder / "vtk", model, every=save_every, resume=resume, load_direction=settings.load_direction)
-                      if vtk or video else None)
-            writer = PushoverWriter(folder)
-            result = tilt_analysis(
-                model, settings, on_record=writer, on_progress=progress, on_frame=series,
-                checkpoint=folder / CHECKPOINT, resume=resume,
-            )
-        except DrydemError as exc:
-            if writer is not None and not writer.rows and not resume:
-                discard_unstarted(writer.path, series)
-            raise click.ClickException(str(exc)) from None
-        except OSError as exc:
-            raise click.ClickException(f"{exc.filename or folder}: cannot write results ({exc.strerror or exc})") from None
-        except KeyboardInterrupt:
-            saved = f"the run is saved in {folder / CHECKPOINT} (up to {CHECKPOINT_EVERY_S:g} s before)" if (folder / CHECKPOINT).is_file() else "no equilibrium was reached yet"
-            click.echo(f"\ninterrupted ({received.name}); {saved}. Go on with {go_on}", err=True)
-            raise SystemExit(128 + received.number) from None
-    _tilt_outputs(found, model, result, folder, series)
+            series = writer = None
+            try:
+                series = (VtkSeries(folder / "vtk", model, every=save_every, resume=resume, load_direction=settings.load_direction)
+                          if vtk or video else None)
+                writer = PushoverWriter(folder)
+                result = tilt_analysis(
+                    model, settings, on_record=writer, on_progress=progress, on_frame=series,
+                    checkpoint=folder / CHECKPOINT, resume=resume,
+                )
+            except (DrydemError, OSError) as exc:
+                if writer is not None and not resume and not (folder / CHECKPOINT).is_file():
+                    # nothing to go on from: rows without a checkpoint (its first save failed)
+                    # made the same command refuse, offering a --resume that could not resume
+                    discard_unstarted(writer.path, series)
+                raise click.ClickException(str(exc) if isinstance(exc, DrydemError) else
+                                           f"{exc.filename or folder}: cannot write results ({exc.strerror or exc})") from None
+            except KeyboardInterrupt:
+                saved = (f"the run is saved in {folder / CHECKPOINT} (up to {CHECKPOINT_EVERY_S:g} s before)"
+                         if (folder / CHECKPOINT).is_file() else "no equilibrium was reached yet")
+                click.echo(f"\ninterrupted ({received.name}); {saved}. Go on with {go_on}", err=True)
+                raise SystemExit(128 + received.number) from None
+        _written(lambda: _tilt_outputs(found, model, result, folder, series), folder, received, go_on)
     if video:
         _render(series.folder, folder / "collapse.mp4", fps=8.0)
     if result.ended_by in (NO_EQUILIBRIUM_UNDER_GRAVITY, NO_EQUILIBRIUM):
         raise SystemExit(1)
 
+
+def _written(write: Callable[[], None], folder: Path, received, go_on: str) -> None:
+    """``write()`` the results of a finished analysis; a failure to write them (a full disk) or
+    an interruption is said without a traceback: summary.json is written last, so the folder
+    then holds no finished run and ``go_on`` (--resume, from the checkpoint) writes them all."""
+    unfinished = f"{folder} holds no finished run (no summary.json); {go_on} writes the results again"
+    try:
+        write()
+    except (DrydemError, OSError) as exc:
+        reason = str(exc) if isinstance(exc, DrydemError) else f"{exc.filename or folder}: cannot write ({exc.strerror or exc})"
+        raise click.ClickException(f"{reason}; {unfinished}") from None
+    except KeyboardInterrupt:
+        click.echo(f"\ninterrupted ({received.name}) while writing the results; {unfinished}", err=True)
+        raise SystemExit(128 + received.number) from None
+
+
 def _tilt_outputs(found: Target, model: Model, result, folder: Path, series) -> None:
-    """Write summary.json and the figures of a tilting analysis and print what it found."""
+    """Write the figures and, last (a finished run's mark: :func:`_written`), summary.json of a
+    tilting analysis, and print what it found."""
     from drydem.io.results import tilt_summary, write_summary
     from drydem.report.plots import mechanism_figure, pushover_figure
 
-    write_summary(folder, {"target": found.recorded} | tilt_summary(result, model))
     pushover_figure(result, folder / "pushover.png", title=found.name)
     last = result.last_equilibrium_deg
     lost_by_then = frozenset(name for name, theta in result.lost_blocks if last is not None and theta <= last)
@@ -215,6 +235,7 @@ def _tilt_outputs(found: Target, model: Model, result, folder: Path, series) -> 
     ]
     mechanism_figure(model, states, folder / "mechanism.png", monitored=result.monitored_block,
                      load_direction=result.settings.load_direction)
+    write_summary(folder, {"target": found.recorded} | tilt_summary(result, model))
     for line in _tilt_verdict(result, model):
         click.echo(line)
     dls = result.drift_limit_angles_deg
