@@ -257,13 +257,26 @@ def check_resumable(folder: Path, settings: MonteCarloSettings, wall: Wall) -> N
         recorded = None
     if not isinstance(recorded, dict):  # "settings": "x" was an AttributeError
         raise MonteCarloError(f"{path}: not the summary of a drydem montecarlo run; --resume needs the --out of one")
-    current = settings.identity(wall)
-    differ = sorted(key for key in current.keys() | recorded.keys() if current.get(key) != recorded.get(key))
+    differ = differences(recorded, settings.identity(wall))
     if differ:
-        raise MonteCarloError(f"{folder}: the recorded run had other settings ({', '.join(differ)}: "
-                              + "; ".join(f"{key} {recorded.get(key)} there, {current.get(key)} now" for key in differ)
+        raise MonteCarloError(f"{folder}: the recorded run had other settings ({', '.join(key for key, _, _ in differ)}: "
+                              + "; ".join(f"{key} {there} there, {now} now" for key, there, now in differ)
                               + "); resume with the same options, or start another --out")
     check_samples_kept(folder, settings)
+
+
+def differences(recorded: Mapping, current: Mapping, within: str = "") -> list[tuple[str, object, object]]:
+    """(key, recorded value, current value) of every setting that differs, tables looked into
+    (``tilt.increment_deg``, not the whole tilt table: found by a hunt, the message dumped it),
+    sorted by key; an absent one is None."""
+    found = []
+    for key in sorted(recorded.keys() | current.keys(), key=str):
+        there, now = recorded.get(key), current.get(key)
+        if isinstance(there, Mapping) and isinstance(now, Mapping):
+            found += differences(there, now, f"{within}{key}.")
+        elif there != now:
+            found.append((f"{within}{key}", there, now))
+    return found
 
 
 def statistics(values) -> dict:
