@@ -266,9 +266,10 @@ def prepared_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | No
     the new results; other files are kept. Only a drydem run's outputs are deleted
     (:func:`drydem_run_folder`): files of those names that no drydem run wrote there (a user's
     samples/ or vtk/, a motion record called history.csv, a model file inside them: found by a
-    hunt, each deleted) are refused, with ``overwrite`` too. The run marks the folder as its own (:data:`RUN_MARK`) for the
-    block, and leaves the mark if it wrote anything. A path that is not a folder, or cannot be
-    made or written in, is refused with the reason (:func:`drydem.files.writable_folder`).
+    hunt, each deleted) are refused, with ``overwrite`` too. The run marks the folder as its
+    own (:data:`RUN_MARK`) for the block, and leaves the mark if it wrote anything. A path that
+    is not a folder, or cannot be made or written in, is refused with the reason
+    (:func:`drydem.files.writable_folder`).
     """
     refuse_if_written(folder, RUN_BUSY_ADVICE)  # before writable_folder makes it inside another run's
     folder = writable_folder(folder)
