@@ -62,10 +62,10 @@ def limit(target, non_associative, friction, tilt_axis, out, overwrite, unit) ->
             stop.set()
             ticker.join()
     runtime = time.perf_counter() - start
-    write_summary(out, {"target": found.recorded} | limit_summary(result, settings, model, runtime))
     label = "LA-NA" if non_associative else "LA-A"
     limit_mechanism_figure(model, result, out / "mechanism.png", title=f"{label} mechanism (shape exaggerated)",
                            load_direction=LOAD_DIRECTION[tilt_axis])
+    write_summary(out, {"target": found.recorded} | limit_summary(result, settings, model, runtime))  # last, as a tilt's
     click.echo(f"{found.name}: {label} load multiplier (along {'xy'[tilt_axis == 'x']}) {result.load_multiplier:.4f}, collapse angle {result.collapse_angle_deg:.2f} deg")
     if non_associative:
         state = "converged" if result.converged else "NOT converged (last iterate reported)"

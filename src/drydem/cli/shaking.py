@@ -259,9 +259,10 @@ def _shake_outputs(found: Target, model: Model, result, folder: Path, series, *,
     from drydem.report.plots import history_figure
 
     write_history_csv(folder, result.history)
-    write_summary(folder, shake_summary(result, model, scale=scale, baseline_corrected=baseline_corrected))
     history_figure(result.history, folder / "history.png", title=f"{found.name}: {result.settings.motion.name}",
                    monitored=result.monitored_block, fallen=result.fallen_blocks)
+    # last, as a tilt's: a folder with summary.json holds a finished run, its figure included
+    write_summary(folder, shake_summary(result, model, scale=scale, baseline_corrected=baseline_corrected))
     settings, motion = result.settings, result.settings.motion
     if result.fallen_blocks:
         fell = "; ".join(f"{name!r} at {time_s:.3f} s ({rule})" for name, time_s, rule in result.fallen_blocks[:5])
