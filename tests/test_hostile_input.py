@@ -137,7 +137,7 @@ def test_overwrite_deletes_no_file_of_a_run_s_name_that_no_drydem_run_wrote(tmp_
 
 
 @pytest.mark.parametrize("failure, code, said", [
-    (OSError(28, "No space left on device", "mechanism.png"), 1, "mechanism.png: cannot write (No space left on device)"),
+    (OSError(28, "No space left on device", "mechanism.png"), 1, "mechanism.png: cannot write results (No space left on device)"),
     (KeyboardInterrupt(), 130, "interrupted (SIGINT) while writing the results"),
 ])
 def test_a_tilt_stopped_while_writing_its_results_is_no_finished_run_and_resume_writes_them(tmp_path, monkeypatch, failure, code, said):

@@ -190,8 +190,7 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
                     # nothing to go on from: rows without a checkpoint (its first save failed)
                     # made the same command refuse, offering a --resume that could not resume
                     discard_unstarted(writer.path, series)
-                raise click.ClickException(str(exc) if isinstance(exc, DrydemError) else
-                                           f"{exc.filename or folder}: cannot write results ({exc.strerror or exc})") from None
+                raise click.ClickException(_failure(exc, folder)) from None
             except KeyboardInterrupt:
                 saved = (f"the run is saved in {folder / CHECKPOINT} (up to {CHECKPOINT_EVERY_S:g} s before)"
                          if (folder / CHECKPOINT).is_file() else "no equilibrium was reached yet")
@@ -204,6 +203,12 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
         raise SystemExit(1)
 
 
+def _failure(exc: DrydemError | OSError, folder: Path) -> str:
+    """What went wrong, for the user: a DrydemError's own message, or the file an OSError names
+    (else ``folder``) and why it could not be written."""
+    return str(exc) if isinstance(exc, DrydemError) else f"{exc.filename or folder}: cannot write results ({exc.strerror or exc})"
+
+
 def _written(write: Callable[[], None], folder: Path, received, go_on: str) -> None:
     """``write()`` the results of a finished analysis; a failure to write them (a full disk) or
     an interruption is said without a traceback: summary.json is written last, so the folder
@@ -212,8 +217,7 @@ def _written(write: Callable[[], None], folder: Path, received, go_on: str) -> N
     try:
         write()
     except (DrydemError, OSError) as exc:
-        reason = str(exc) if isinstance(exc, DrydemError) else f"{exc.filename or folder}: cannot write ({exc.strerror or exc})"
-        raise click.ClickException(f"{reason}; {unfinished}") from None
+        raise click.ClickException(f"{_failure(exc, folder)}; {unfinished}") from None
     except KeyboardInterrupt:
         click.echo(f"\ninterrupted ({received.name}) while writing the results; {unfinished}", err=True)
         raise SystemExit(128 + received.number) from None
