@@ -249,6 +249,28 @@ def failed_sample(wall, settings, index):
     return {"summary": {"sample": sample}, "pushover": []}
 
 
+def test_drydem_montecarlo_exits_1_naming_its_failed_samples(tall_brick, tmp_path, monkeypatch):
+    """A failed sample (an error, not an outcome) is left out of the statistics; the command
+    says so and exits 1, so that a script does not take the statistics for the whole run's."""
+    from contextlib import contextmanager
+
+    from drydem.parametric import workers
+
+    @contextmanager
+    def threads(count, scheduler):
+        with ThreadPoolExecutor(1) as pool:
+            yield workers.Workers(pool, "1 thread", 1)
+
+    monkeypatch.setattr(montecarlo_module, "run_sample", failed_sample)
+    monkeypatch.setattr(workers, "open_workers", threads)
+    out = tmp_path / "run"
+    result = run(tall_brick, "--samples", 2, "--height-sd", HEIGHT_SD_MM, "--out", out)
+    assert result.exit_code == 1, result.output
+    assert "failed: sample 0 (seed" in result.output and "failed: sample 1 (seed" in result.output
+    assert f"2 of 2 samples failed (each named above, its error in its summary.json under {out / 'samples'})" in result.output
+    assert (out / "summary.json").is_file()
+
+
 class Stop(Exception):
     """An interruption after some samples."""
 

@@ -1,6 +1,7 @@
 """Parametric studies: local and Dask runs agree, a killed sweep resumes, failures are recorded."""
 
 import json
+from dataclasses import asdict
 
 import pytest
 
@@ -114,6 +115,7 @@ def test_a_failing_run_is_recorded_and_the_sweep_goes_on(study_file, tmp_path):
     assert records[good.id]["status"] == "ok"
     # retried on request only
     assert [s.id for s in pending([bad, good], tmp_path / "results").todo] == []
+    assert pending([bad, good], tmp_path / "results").failed == 1
     assert [s.id for s in pending([bad, good], tmp_path / "results", retry_failed=True).todo] == [bad.id]
 
 
@@ -190,3 +192,26 @@ def test_a_run_analyses_its_target_with_its_overrides_as_the_cli_does():
     assert plain.model().joint == load_target("WD1").model.joint
     with pytest.raises(ModelError, match=r"\[joint\] friction = -1.0: must be a number in \(0, 10\]"):
         RunSpec(analysis="tilt", target="WD1", protocol="fixed", friction=-1.0).model()
+
+
+def test_drydem_sweep_exits_1_while_a_run_of_the_study_is_recorded_as_failed(study_file, tmp_path):
+    """A script tells a complete study from its exit status: a failed run (recorded now, or
+    before and not retried) makes the sweep exit 1 naming the count and --retry-failed."""
+    from click.testing import CliRunner
+
+    from drydem.cli import main
+    from drydem.parametric.records import write_record
+
+    study_file.write_text(STUDY[:STUDY.index("[[grid]]")] + STUDY[STUDY.index('[[grid]]\nname = "limit"'):])
+    runs = load_study(study_file).runs
+    out = tmp_path / "results"
+    write_record(out, {"id": runs[0].id, "spec": asdict(runs[0]), "status": "failed", "error": "ModelError: made up"})
+    result = CliRunner().invoke(main, ["sweep", str(study_file), "--out", str(out), "--workers", "1"])
+    assert result.exit_code == 1, result.output
+    assert "1 runs done (0 failed), 1 skipped" in result.output
+    assert "the study is not complete: 0 runs failed now and 1 recorded as failed before" in result.output
+    assert "--retry-failed" in result.output
+    result = CliRunner().invoke(main, ["sweep", str(study_file), "--out", str(out), "--workers", "1", "--retry-failed"])
+    assert result.exit_code == 0, result.output
+    assert "1 runs done (0 failed), 1 skipped" in result.output
+    assert {r["status"] for r in load_records(out).valid} == {"ok"}

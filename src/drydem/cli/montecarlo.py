@@ -52,7 +52,7 @@ def montecarlo(target, samples, seed, height_sd, height_distribution, flatness_s
     when interrupted (--resume goes on)."""
     from tqdm import tqdm
 
-    from drydem.parametric.montecarlo import MonteCarloSettings, check_resumable, experiment, monte_carlo, sample_model
+    from drydem.parametric.montecarlo import SAMPLES_FOLDER, MonteCarloSettings, check_resumable, experiment, monte_carlo, sample_model
     from drydem.analysis.tilt import monitor_index
     from drydem.parametric.workers import open_workers
 
@@ -109,6 +109,11 @@ def montecarlo(target, samples, seed, height_sd, height_distribution, flatness_s
         raise click.ClickException(str(exc)) from None
     _montecarlo_outputs(found.name, outcome.summary, folder, measured)
     click.echo(f"{outcome.finished} samples run, {outcome.skipped} recorded before; results in {folder}")
+    failed = sum(sample["status"] == "failed" for sample in outcome.summary["samples"])
+    if failed:
+        raise click.ClickException(f"{failed} of {samples} samples failed (each named above, its error in its summary.json under "
+                                   f"{folder / SAMPLES_FOLDER}), left out of the statistics; --resume runs a sample again "
+                                   "whose folder is removed")
     if outcome.summary["collapse_angle_deg"]["count"] == 0:
         raise SystemExit(1)
 

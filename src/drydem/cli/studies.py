@@ -77,6 +77,10 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
     if outcome.elsewhere:
         click.echo(f"{outcome.elsewhere} runs left to another sweep working on {out} (it holds their claims, runs/*.lock); "
                    "run this command again once it has finished to check that every run is recorded")
+    if outcome.failed or outcome.failed_before:
+        before = f" and {outcome.failed_before} recorded as failed before" if outcome.failed_before else ""
+        raise click.ClickException(f"the study is not complete: {outcome.failed} runs failed now{before} (each record in "
+                                   f"{out / 'runs'} holds its error); fix the cause and run again with --retry-failed")
 
 
 @main.command()

@@ -86,12 +86,14 @@ def shake_summary(result, spec: RunSpec, motion, model) -> dict:
 @dataclass(frozen=True)
 class Pending:
     """What a sweep has to run: ``todo`` (no record, a corrupt one, or a failed one when retried),
-    how many runs are ``recorded``, the ``corrupt`` records' errors, and for each run to do the
-    identity of its record file when looked at (:func:`_identity`), to tell after claiming it
-    whether another sweep recorded it meanwhile."""
+    how many runs are ``recorded`` (``failed`` of them recorded as failed and not retried), the
+    ``corrupt`` records' errors, and for each run to do the identity of its record file when
+    looked at (:func:`_identity`), to tell after claiming it whether another sweep recorded it
+    meanwhile."""
 
     todo: list[RunSpec]
     recorded: int
+    failed: int
     corrupt: list[RecordError]
     seen: dict[str, tuple[int, int] | None]
 
@@ -104,21 +106,23 @@ def pending(runs: Iterable[RunSpec], results: Path, *, retry_failed: bool = Fals
     folder = Path(results) / "runs"
     if folder.exists() and not folder.is_dir():
         raise SweepError(f"{folder}: exists and is not a folder, where a sweep writes its records; move it away or give another --out")
-    todo, corrupt, seen = [], [], {}
+    todo, corrupt, seen, failed = [], [], {}, 0
     for spec in runs:
         path = record_path(results, spec.id)
         identity = _identity(path)
         if identity is not None and not path.is_file():
             raise SweepError(f"{path}: is not a file but where the record of run {spec.id} goes; move it away")
         try:
-            needed = identity is None or (read_record(path)["status"] == "failed" and retry_failed)
+            was_failed = identity is not None and read_record(path)["status"] == "failed"
         except RecordError as exc:
             corrupt.append(exc)
-            needed = True
-        if needed:
+            was_failed = None
+        if identity is None or was_failed is None or (was_failed and retry_failed):
             todo.append(spec)
             seen[spec.id] = identity
-    return Pending(todo, len(runs) - len(todo), corrupt, seen)
+        else:
+            failed += was_failed
+    return Pending(todo, len(runs) - len(todo), failed, corrupt, seen)
 
 
 def _identity(path: Path) -> tuple[int, int] | None:
@@ -151,13 +155,15 @@ def release(results: Path, run_id: str, fd: int) -> None:
 @dataclass(frozen=True)
 class SweepOutcome:
     """How a sweep went: runs ``finished`` now (``failed`` of them failed), ``skipped`` (validly
-    recorded, before the sweep or by another sweep since), ``elsewhere`` (being computed by
+    recorded, before the sweep or by another sweep since; ``failed_before`` of them recorded as
+    failed before the sweep and not retried), ``elsewhere`` (being computed by
     another sweep on the same folder, left to it), ``corrupt`` (the errors of the records found
     corrupt, each naming its file: run again, unless left to another sweep)."""
 
     finished: int
     skipped: int
     failed: int
+    failed_before: int = 0
     elsewhere: int = 0
     corrupt: tuple[str, ...] = ()
 
@@ -212,8 +218,8 @@ def sweep(runs: Iterable[RunSpec], results: Path, executor: Executor, *, retry_f
     finally:
         for spec, fd in claims.values():
             release(results, spec.id, fd)
-    return SweepOutcome(finished=finished, skipped=plan.recorded + skipped, failed=failed, elsewhere=elsewhere,
-                        corrupt=tuple(str(exc) for exc in plan.corrupt))
+    return SweepOutcome(finished=finished, skipped=plan.recorded + skipped, failed=failed, failed_before=plan.failed,
+                        elsewhere=elsewhere, corrupt=tuple(str(exc) for exc in plan.corrupt))
 
 
 def records_dataframe(results: Path):
