@@ -311,3 +311,17 @@ def test_a_blank_compas_mesh_name_is_refused_naming_the_file(tmp_path):
     path.write_text(json.dumps([unit_mesh() | {"name": "   "}]))
     with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}: mesh 0: the name '   ' is blank; give the mesh a name, or none"):
         read_compas(path)
+
+
+def test_compas_vertices_used_by_no_face_are_left_out_with_a_note(tmp_path):
+    # left in an earlier note: compas allows them (faces deleted), and they were dropped silently
+    mesh = unit_mesh()
+    for key in range(100, 107):
+        mesh["data"]["vertex"][str(key)] = {"x": 5.0, "y": 5.0, "z": 5.0}
+    path = tmp_path / "spare.json"
+    path.write_text(json.dumps([mesh]))
+    blocks, notes = read_compas(path)
+    assert notes == [f"{path}: mesh 0 'M': vertices 100, 101, 102, 103, 104 and 2 more are used by no face: left out of the block"]
+    assert blocks[0].shape.vertices.max() == 1.0 and len(blocks[0].shape.vertices) == 8  # the unit cube, not the spare vertices' hull
+    path.write_text(json.dumps([unit_mesh()]))
+    assert read_compas(path)[1] == []

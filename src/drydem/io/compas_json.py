@@ -115,7 +115,19 @@ def read_compas(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], 
     shared = [name for name, n in counts.items() if n > 1]
     notes = [f"{path}: {sum(counts[n] for n in shared)} blocks share the names {', '.join(map(repr, shared))}: "
              f"each is named NAME-N after its position in the file (graph node or list index)"] if shared else []
-    return blocks, notes
+    return blocks, notes + [note for part in parts if (note := _unused_vertices(part)) is not None]
+
+
+def _unused_vertices(part: _Part) -> str | None:
+    """A note naming the vertices of a part's mesh that no face uses (legal in compas, say after
+    faces were deleted; the block is its faces' surface, so they are left out), None if none."""
+    data = part.mesh["data"]
+    used = {str(key) for face in data["face"].values() for key in face}
+    unused = [key for key in data["vertex"] if key not in used]
+    if not unused:
+        return None
+    shown_keys = ", ".join(unused[:5]) + (f" and {len(unused) - 5} more" if len(unused) > 5 else "")
+    return f"{part.where}: vertices {shown_keys} are used by no face: left out of the block"
 
 
 def _integer(digits: str, source: str) -> int:
