@@ -125,30 +125,11 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
     .wrl/.obj/.stl/.json): collapse angle, pushover curve, Eurocode 8 drift-limit angles, plots.
     Exits 1 when equilibrium could not be reached within max_cycles (no verdict), 130 or 143
     when interrupted (the last equilibrium is kept for --resume)."""
-    from tqdm import tqdm
-
-    from drydem.analysis.tilt import CHECKPOINT_EVERY_S, NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY, check_loading, monitor_index, tilt_analysis
-    from drydem.analysis.tilt.checkpointing import check_fingerprint, fingerprint
-    from drydem.engine.checkpoint import load_checkpoint
-    from drydem.io.results import PushoverWriter
-    from drydem.io.vtk import VtkSeries
+    from drydem.analysis.tilt import NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY
 
     found = resolve_target(target, unit)
     try:
-        model = found.model.overridden(**tilt.model_overrides())
-        settings = tilt.settings()
-        check_loading(model, settings)
-        monitor_index(model, tilt.monitor, settings.tilt_axis)
-        if resume and overwrite:
-            raise DrydemError("--resume goes on from the run in --out and --overwrite deletes it: give one of them")
-        if given("save_every") and not (vtk or video):
-            raise DrydemError(f"--save-every {save_every} thins the VTK series: it needs --vtk or --video")
-        if resume and (out is None or not (out / CHECKPOINT).is_file()):
-            raise DrydemError(f"--resume needs --out DIR holding a {CHECKPOINT} from an earlier run" + (f" ({out} has none)" if out else ""))
-        folder = results_folder(out, found.name, resume=resume, overwrite=overwrite)
-        if resume:
-            _, saved = load_checkpoint(folder / CHECKPOINT)
-            check_fingerprint(folder / CHECKPOINT, saved, fingerprint(model, settings))
+        model, settings, folder, saved = _tilt_plan(found, tilt, out, resume, overwrite, vtk or video, save_every)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     if resume and (folder / "summary.json").is_file():
@@ -158,17 +139,65 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
         click.echo(f"{folder} holds a finished run of these options (summary.json): nothing to resume, its results are kept "
                    "(--overwrite runs it again" + ("; drydem animate renders its VTK series" if video else "") + ")")
         return
+    _announce_tilt(found, model, settings, folder, saved)
+    go_on = "the same command plus --resume" if out is not None else f"the same command plus --out {folder} --resume"
+    result, series = _run_tilt(found, model, settings, folder, resume=resume, series=vtk or video, save_every=save_every, go_on=go_on)
+    if video:
+        _render(series.folder, folder / "collapse.mp4", fps=8.0)
+    if result.ended_by in (NO_EQUILIBRIUM_UNDER_GRAVITY, NO_EQUILIBRIUM):
+        raise SystemExit(1)
+
+
+def _tilt_plan(found: Target, tilt: TiltOptions, out: Path | None, resume: bool, overwrite: bool, series: bool, save_every: int):
+    """The model, settings and results folder of a tilt, and the checkpoint's saved state when
+    resuming (else None); DrydemError for options that contradict each other or the folder."""
+    from drydem.analysis.tilt import check_loading, monitor_index
+    from drydem.analysis.tilt.checkpointing import check_fingerprint, fingerprint
+    from drydem.engine.checkpoint import load_checkpoint
+
+    model = found.model.overridden(**tilt.model_overrides())
+    settings = tilt.settings()
+    check_loading(model, settings)
+    monitor_index(model, tilt.monitor, settings.tilt_axis)
+    if resume and overwrite:
+        raise DrydemError("--resume goes on from the run in --out and --overwrite deletes it: give one of them")
+    if given("save_every") and not series:
+        raise DrydemError(f"--save-every {save_every} thins the VTK series: it needs --vtk or --video")
+    if resume and (out is None or not (out / CHECKPOINT).is_file()):
+        raise DrydemError(f"--resume needs --out DIR holding a {CHECKPOINT} from an earlier run" + (f" ({out} has none)" if out else ""))
+    folder = results_folder(out, found.name, resume=resume, overwrite=overwrite)
+    saved = None
+    if resume:
+        _, saved = load_checkpoint(folder / CHECKPOINT)
+        check_fingerprint(folder / CHECKPOINT, saved, fingerprint(model, settings))
+    return model, settings, folder, saved
+
+
+def _announce_tilt(found: Target, model: Model, settings, folder: Path, saved: dict | None) -> None:
+    """Say what is tilted, how, where the results go and, resuming, from where."""
     click.echo(f"{found.name} ({found.path}): {model.n_blocks} blocks, {model.joint.stiffness_text}, "
                f"mu {model.joint.friction:g}, {model.contacts.points_per_length} points per length -> {folder}")
     if settings.tilt_axis != "y":
         click.echo(f"tilting about {settings.tilt_axis}: the lateral load acts along {'xy'[settings.load_direction]}")
-    if resume:
+    if saved is not None:
         click.echo(f"resuming from {folder / CHECKPOINT}: last equilibrium at {float(saved['theta_deg']):g} deg "
                    f"({len(saved['records'])} equilibrium states)")
     if model.solver.damping == 0:
         click.echo("warning: [solver] damping = 0: dynamic relaxation has nothing to dissipate energy with and may never "
                    "reach equilibrium", err=True)
-    go_on = "the same command plus --resume" if out is not None else f"the same command plus --out {folder} --resume"
+
+
+def _run_tilt(found: Target, model: Model, settings, folder: Path, *, resume: bool, series: bool, save_every: int, go_on: str):
+    """Tilt with a progress bar, writing pushover rows, checkpoints (and VTK frames if
+    ``series``) as it goes, then its results (:func:`_tilt_outputs`); the result and the VTK
+    series (None without one). An interruption or a failure to write ends the command, saying
+    what was kept and ``go_on``."""
+    from tqdm import tqdm
+
+    from drydem.analysis.tilt import CHECKPOINT_EVERY_S, tilt_analysis
+    from drydem.io.results import PushoverWriter
+    from drydem.io.vtk import VtkSeries
+
     with signals_interrupt() as received:
         with tqdm(desc="tilting", unit=" cycles", unit_scale=True, leave=False) as bar:
 
@@ -176,31 +205,26 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
                 bar.update(cycles - bar.n)
                 bar.set_postfix_str(f"{theta:.2f} deg, u{'xy'[settings.load_direction]} {ux * 1e3:.2f} mm")
 
-            series = writer = None
+            frames = writer = None
             try:
-                series = (VtkSeries(folder / "vtk", model, every=save_every, resume=resume, load_direction=settings.load_direction)
-                          if vtk or video else None)
+                frames = (VtkSeries(folder / "vtk", model, every=save_every, resume=resume, load_direction=settings.load_direction)
+                          if series else None)
                 writer = PushoverWriter(folder)
-                result = tilt_analysis(
-                    model, settings, on_record=writer, on_progress=progress, on_frame=series,
-                    checkpoint=folder / CHECKPOINT, resume=resume,
-                )
+                result = tilt_analysis(model, settings, on_record=writer, on_progress=progress, on_frame=frames,
+                                       checkpoint=folder / CHECKPOINT, resume=resume)
             except (DrydemError, OSError) as exc:
                 if writer is not None and not resume and not (folder / CHECKPOINT).is_file():
                     # nothing to go on from: rows without a checkpoint (its first save failed)
                     # made the same command refuse, offering a --resume that could not resume
-                    discard_unstarted(writer.path, series)
+                    discard_unstarted(writer.path, frames)
                 raise click.ClickException(_failure(exc, folder)) from None
             except KeyboardInterrupt:
-                saved = (f"the run is saved in {folder / CHECKPOINT} (up to {CHECKPOINT_EVERY_S:g} s before)"
-                         if (folder / CHECKPOINT).is_file() else "no equilibrium was reached yet")
-                click.echo(f"\ninterrupted ({received.name}); {saved}. Go on with {go_on}", err=True)
+                kept = (f"the run is saved in {folder / CHECKPOINT} (up to {CHECKPOINT_EVERY_S:g} s before)"
+                        if (folder / CHECKPOINT).is_file() else "no equilibrium was reached yet")
+                click.echo(f"\ninterrupted ({received.name}); {kept}. Go on with {go_on}", err=True)
                 raise SystemExit(128 + received.number) from None
-        _written(lambda: _tilt_outputs(found, model, result, folder, series), folder, received, go_on)
-    if video:
-        _render(series.folder, folder / "collapse.mp4", fps=8.0)
-    if result.ended_by in (NO_EQUILIBRIUM_UNDER_GRAVITY, NO_EQUILIBRIUM):
-        raise SystemExit(1)
+        _written(lambda: _tilt_outputs(found, model, result, folder, frames), folder, received, go_on)
+    return result, frames
 
 
 def _failure(exc: DrydemError | OSError, folder: Path) -> str:
