@@ -161,6 +161,23 @@ def test_a_tilt_stopped_while_writing_its_results_is_no_finished_run_and_resume_
         (tmp_path / "fresh" / "summary.json").read_text())["collapse_angle_deg"] and fresh.exit_code == 0
 
 
+@pytest.mark.parametrize("command, figure", [
+    (("limit",), "limit_mechanism_figure"),
+    (("shake", "--pulse", "one-sine", "--amplitude", "1", "--frequency", "5", "--duration", "0.05"), "history_figure"),
+])
+def test_a_limit_or_shake_that_cannot_write_its_figure_says_so_without_a_traceback(tmp_path, monkeypatch, command, figure):
+    """A full disk while drawing the figures: a traceback for limit (shake said it); now both
+    name the file and say the folder holds no summary.json, which is written last."""
+    from drydem.report import plots
+
+    failure = OSError(28, "No space left on device", f"{figure}.png")
+    monkeypatch.setattr(plots, figure, lambda *args, **kwargs: (_ for _ in ()).throw(failure))
+    out = tmp_path / "run"
+    assert refused(run(command[0], model_file(tmp_path), *command[1:], "--out", out),
+                   f"{figure}.png: cannot write results (No space left on device)", "no summary.json")
+    assert not (out / "summary.json").exists()
+
+
 def test_a_tilt_whose_first_checkpoint_cannot_be_written_leaves_no_run_to_resume(tmp_path, monkeypatch):
     """Found by a hunt (an --out path too long for the checkpoint's lock): the run failed after
     its first pushover row, which then made the same command refuse, offering --resume with no

@@ -269,6 +269,13 @@ def test_drydem_montecarlo_exits_1_naming_its_failed_samples(tall_brick, tmp_pat
     assert "failed: sample 0 (seed" in result.output and "failed: sample 1 (seed" in result.output
     assert f"2 of 2 samples failed (each named above, its error in its summary.json under {out / 'samples'})" in result.output
     assert (out / "summary.json").is_file()
+    # a full disk while writing a sample, or the histogram: said, no traceback
+    full = OSError(28, "No space left on device", "sample.csv")
+    monkeypatch.setattr(montecarlo_module, "write_sample", lambda *args: (_ for _ in ()).throw(full))
+    result = run(tall_brick, "--samples", 3, "--height-sd", HEIGHT_SD_MM, "--out", out, "--resume")
+    assert result.exit_code == 1 and isinstance(result.exception, SystemExit), result.output
+    assert f"sample.csv: cannot write results (No space left on device); the finished samples are recorded in {out}; " \
+           "go on with the same command plus --resume" in result.output
 
 
 class Stop(Exception):

@@ -263,6 +263,23 @@ def discard_unstarted(table: Path, series) -> None:
         shutil.rmtree(series.folder, ignore_errors=True)
 
 
+def failure_message(exc: DrydemError | OSError, folder: Path) -> str:
+    """What went wrong while a run wrote its results, for the user: a DrydemError's own message,
+    or the file an OSError (a full disk, a folder made read-only) names, else ``folder``, and why
+    it could not be written."""
+    return str(exc) if isinstance(exc, DrydemError) else f"{exc.filename or folder}: cannot write results ({exc.strerror or exc})"
+
+
+@contextmanager
+def writing_results(folder: Path, *, unfinished: str = ""):
+    """Within it, a DrydemError or an OSError ends the command with :func:`failure_message`
+    (then ``unfinished``: what the folder holds now and how to go on), without a traceback."""
+    try:
+        yield
+    except (DrydemError, OSError) as exc:
+        raise click.ClickException(failure_message(exc, folder) + unfinished) from None
+
+
 class _Received:
     """The signal that interrupted a command: its name and number (SIGINT until told otherwise)."""
 

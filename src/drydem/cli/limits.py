@@ -9,7 +9,9 @@ import time
 import click
 
 from drydem.errors import DrydemError
-from drydem.cli.common import joint_option, main, out_path, resolve_target, results_folder, threads_option, unit_option
+from drydem.cli.common import (
+    joint_option, main, out_path, resolve_target, results_folder, threads_option, unit_option, writing_results,
+)
 
 
 @main.command()
@@ -63,9 +65,10 @@ def limit(target, non_associative, friction, tilt_axis, out, overwrite, unit) ->
             ticker.join()
     runtime = time.perf_counter() - start
     label = "LA-NA" if non_associative else "LA-A"
-    limit_mechanism_figure(model, result, out / "mechanism.png", title=f"{label} mechanism (shape exaggerated)",
-                           load_direction=LOAD_DIRECTION[tilt_axis])
-    write_summary(out, {"target": found.recorded} | limit_summary(result, settings, model, runtime))  # last, as a tilt's
+    with writing_results(out, unfinished=f"; {out} holds no finished run (no summary.json)"):
+        limit_mechanism_figure(model, result, out / "mechanism.png", title=f"{label} mechanism (shape exaggerated)",
+                               load_direction=LOAD_DIRECTION[tilt_axis])
+        write_summary(out, {"target": found.recorded} | limit_summary(result, settings, model, runtime))  # last, as a tilt's
     click.echo(f"{found.name}: {label} load multiplier (along {'xy'[tilt_axis == 'x']}) {result.load_multiplier:.4f}, collapse angle {result.collapse_angle_deg:.2f} deg")
     if non_associative:
         state = "converged" if result.converged else "NOT converged (last iterate reported)"

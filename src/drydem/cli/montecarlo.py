@@ -11,7 +11,7 @@ from drydem.masonry import designs
 from drydem.errors import DrydemError
 from drydem.cli.common import (
     IMPERFECTION_OPTIONS, PlainIntRange, imperfection_options, imperfections_from_options, main, out_path, resolve_target, results_folder,
-    scheduler_option, signals_interrupt, workers_option,
+    failure_message, scheduler_option, signals_interrupt, workers_option, writing_results,
 )
 from drydem.cli.tilting import TiltOptions, tilt_options
 from drydem.parametric.limits import MAX_SAMPLES, SAMPLES, SAMPLES_REASON
@@ -83,6 +83,8 @@ def montecarlo(target, samples, seed, height_sd, height_distribution, flatness_s
     about = {"name": found.name, "path": str(found.path), "experiment": measured}
     protocol = f"{'adaptive' if tilt.adaptive else 'fixed'} {tilt.increment:g} deg"
     click.echo(f"{found.name} ({found.path}): {samples} samples ({imperfections}), seed {settings.seed}, {protocol}; in {folder}")
+    go_on = f"the same command plus {'' if out is not None else f'--out {folder} '}--resume"
+    kept = f"the finished samples are recorded in {folder}; go on with {go_on}"
     try:
         with open_workers(workers, scheduler) as pool, signals_interrupt() as received, \
                 tqdm(total=samples, desc="samples", unit=" sample") as bar:
@@ -101,13 +103,15 @@ def montecarlo(target, samples, seed, height_sd, height_distribution, flatness_s
             try:
                 outcome = monte_carlo(found.wall, settings, folder, pool.executor, target=about, in_flight=pool.slots, on_sample=done,
                                       on_plan=planned)
+            except OSError as exc:  # a full disk
+                raise click.ClickException(f"{failure_message(exc, folder)}; {kept}") from None
             except KeyboardInterrupt:
-                click.echo(f"\ninterrupted ({received.name}); the finished samples are recorded in {folder}; go on with the same "
-                           f"command plus {'' if out is not None else f'--out {folder} '}--resume", err=True)
+                click.echo(f"\ninterrupted ({received.name}); {kept}", err=True)
                 raise SystemExit(128 + received.number) from None
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
-    _montecarlo_outputs(found.name, outcome.summary, folder, measured)
+    with writing_results(folder):
+        _montecarlo_outputs(found.name, outcome.summary, folder, measured)
     click.echo(f"{outcome.finished} samples run, {outcome.skipped} recorded before; results in {folder}")
     failed = sum(sample["status"] == "failed" for sample in outcome.summary["samples"])
     if failed:

@@ -10,8 +10,8 @@ import click
 
 from drydem.errors import DrydemError
 from drydem.cli.common import (
-    PLAIN_FLOAT, PLAIN_INT, PlainIntRange, discard_unstarted, joint_law_options, main, model_options, out_path, resolve_target,
-    results_folder, signals_interrupt, threads_option, unit_option,
+    PLAIN_FLOAT, PLAIN_INT, PlainIntRange, discard_unstarted, failure_message, joint_law_options, main, model_options, out_path,
+    resolve_target, results_folder, signals_interrupt, threads_option, unit_option, writing_results,
 )
 from drydem.cli.tilting import _render
 
@@ -126,11 +126,9 @@ def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequenc
     click.echo(f"{found.name} ({found.path}): {model.n_blocks} blocks, {model.joint.stiffness_text}, "
                f"mu {model.joint.friction:g}, {model.contacts.points_per_length} points per length; {ground.name}, "
                f"PGA {ground.pga_m_s2:.4g} m/s2, {settings.analysed_s:g} s -> {folder}")
-    try:
+    with writing_results(folder):
         series = ShakeSeries(folder / "vtk", model, every=save_every, load_direction=ground.main_direction) if vtk or video else None
         live = _LiveHistory(HistoryWriter(folder), series)
-    except OSError as exc:
-        raise click.ClickException(f"{exc.filename or folder}: cannot write results ({exc.strerror or exc})") from None
     total = settings.analysed_s
     bar_format = "{l_bar}{bar}| {n:.3f}/{total:.3f} s [{elapsed}<{remaining}{postfix}]"
     with signals_interrupt() as received, tqdm(total=total, desc="shaking", unit=" s", bar_format=bar_format, leave=False) as bar:
@@ -142,23 +140,17 @@ def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequenc
         try:
             result = shake_analysis(model, settings, on_progress=progress, on_frame=live,
                                     on_note=lambda note: bar.write(f"note: {note}", file=sys.stderr))
-        except DrydemError as exc:
-            if not live.writer.rows:
+        except (DrydemError, OSError) as exc:
+            if isinstance(exc, DrydemError) and not live.writer.rows:
                 discard_unstarted(live.writer.path, live.series)
-            raise click.ClickException(str(exc)) from None
-        except OSError as exc:
-            raise click.ClickException(f"{exc.filename or folder}: cannot write results ({exc.strerror or exc})") from None
+            raise click.ClickException(failure_message(exc, folder)) from None
         except KeyboardInterrupt:
             click.echo(f"\ninterrupted ({received.name}) at {live.time_s:.3f} s of {total:g} s; the history so far is in "
                        f"{live.writer.path} ({live.writer.rows} rows), "
                        "no summary.json", err=True)
             raise SystemExit(128 + received.number) from None
-    try:
+    with writing_results(folder, unfinished=f"; {folder} holds the history but no summary.json"):
         _shake_outputs(found, model, result, folder, live.series, scale=scale, baseline_corrected=corrected)
-    except DrydemError as exc:
-        raise click.ClickException(str(exc)) from None
-    except OSError as exc:
-        raise click.ClickException(f"{exc.filename or folder}: cannot write results ({exc.strerror or exc})") from None
     if video:
         _render(live.series.folder, folder / "shake.mp4", fps=SHAKE_FPS)
 

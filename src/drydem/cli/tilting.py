@@ -14,7 +14,7 @@ from drydem.errors import DrydemError
 from drydem.model.parameters import CRITERIA
 from drydem.cli.common import (
     CHECKPOINT, MODEL_OPTIONS, PLAIN_FLOAT, PlainIntRange, discard_unstarted, given, joint_law_options, main, out_path, resolve_target,
-    results_folder, ruled, signals_interrupt, threads_option, unit_option,
+    failure_message, results_folder, ruled, signals_interrupt, threads_option, unit_option, writing_results,
 )
 
 if TYPE_CHECKING:
@@ -217,7 +217,7 @@ def _run_tilt(found: Target, model: Model, settings, folder: Path, *, resume: bo
                     # nothing to go on from: rows without a checkpoint (its first save failed)
                     # made the same command refuse, offering a --resume that could not resume
                     discard_unstarted(writer.path, frames)
-                raise click.ClickException(_failure(exc, folder)) from None
+                raise click.ClickException(failure_message(exc, folder)) from None
             except KeyboardInterrupt:
                 kept = (f"the run is saved in {folder / CHECKPOINT} (up to {CHECKPOINT_EVERY_S:g} s before)"
                         if (folder / CHECKPOINT).is_file() else "no equilibrium was reached yet")
@@ -227,21 +227,14 @@ def _run_tilt(found: Target, model: Model, settings, folder: Path, *, resume: bo
     return result, frames
 
 
-def _failure(exc: DrydemError | OSError, folder: Path) -> str:
-    """What went wrong, for the user: a DrydemError's own message, or the file an OSError names
-    (else ``folder``) and why it could not be written."""
-    return str(exc) if isinstance(exc, DrydemError) else f"{exc.filename or folder}: cannot write results ({exc.strerror or exc})"
-
-
 def _written(write: Callable[[], None], folder: Path, received, go_on: str) -> None:
     """``write()`` the results of a finished analysis; a failure to write them (a full disk) or
     an interruption is said without a traceback: summary.json is written last, so the folder
     then holds no finished run and ``go_on`` (--resume, from the checkpoint) writes them all."""
     unfinished = f"{folder} holds no finished run (no summary.json); {go_on} writes the results again"
     try:
-        write()
-    except (DrydemError, OSError) as exc:
-        raise click.ClickException(f"{_failure(exc, folder)}; {unfinished}") from None
+        with writing_results(folder, unfinished=f"; {unfinished}"):
+            write()
     except KeyboardInterrupt:
         click.echo(f"\ninterrupted ({received.name}) while writing the results; {unfinished}", err=True)
         raise SystemExit(128 + received.number) from None
