@@ -217,14 +217,17 @@ class TiltResult:
 
 
 def monitored_block(model: Model, tilt_axis: str = "y") -> int:
-    """The movable block whose top is highest; ties go to the one nearest the middle of the
-    wall in x (the mean x of the movable blocks' centroids; the walls are drawn along x). With
-    ``tilt_axis`` "x" (the load along y), remaining ties go to the block farthest along +y: of a
-    building, the top middle block of the leeward wall running along x (wall 2), which the load
-    pushes out of its plane and away from the building."""
+    """The top block nearest the middle of the wall in x (the mean x of the movable blocks'
+    centroids; the walls are drawn along x). The top blocks are the movable ones whose top is
+    above the centroid of the highest: the top course of a wall, whose tops differ by the
+    imperfections of its bricks (a fraction of a millimetre; the highest alone would be the
+    tallest brick, anywhere along the course) while the course below ends half a brick lower.
+    With ``tilt_axis`` "x" (the load along y), remaining ties go to the block farthest along +y:
+    of a building, the top middle block of the leeward wall running along x (wall 2), which the
+    load pushes out of its plane and away from the building."""
     movable = np.flatnonzero(model.block_movable)
     tops = np.array([model.block_shape[b].vertices[:, 2].max() for b in movable])
-    highest = movable[tops >= tops.max() - 1e-9 * model.contact_tolerance]
+    highest = movable[tops > model.block_centroid[movable[np.argmax(tops)], 2]]
     middle = np.mean([model.block_shape[b].centroid[0] for b in movable])
     off = np.abs(model.block_centroid[highest, 0] - middle)
     if tilt_axis == "x":
