@@ -195,3 +195,15 @@ def test_what_3dec_cannot_take_is_refused_before_writing(tmp_path, change, messa
     assert result.exit_code == 1 and message in result.output and "Traceback" not in result.output
     assert out.read_text() == "the old file"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["model.dat", "model.toml"]
+
+
+@pytest.mark.parametrize("solver, criterion", [
+    (dd.SolverSettings(ratio=1e-6), "ratio: the largest unbalanced force over the mean block weight below 1e-06"),
+    (dd.SolverSettings(criterion="velocity", max_velocity=1e-9), "velocity: the largest block point speed below 1e-09 m/s"),
+])
+def test_the_closing_comment_gives_the_models_own_criterion(solver, criterion):
+    # found by a hunt: it always said ratio-local 1e-5, whatever the model's [solver] said
+    model = held_and_heavy_model().replace(solver=solver)
+    last = threedec_commands(model).splitlines()[-1]
+    assert f"the convergence criterion ({criterion})" in last
+    assert f"model solve ratio-local {solver.ratio!r}" in last

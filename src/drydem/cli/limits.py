@@ -16,7 +16,7 @@ from drydem.cli.common import (
 
 @main.command()
 @click.argument("target")
-@click.option("--non-associative", is_flag=True, help="Friction without dilatancy (iterative LP of Gilbert et al. 2006).")
+@click.option("--non-associative", is_flag=True, help="Friction without dilatancy (the iterative scheme of Gilbert et al. 2006).")
 @joint_option("friction", "--friction", "Coulomb friction coefficient (overrides the model file).")
 @click.option("--tilt-axis", type=click.Choice(["y", "x"]), default="y", show_default=True,
               help="Axis the table tilts about: y, the live load along x (in the plane of a wall along x); "
@@ -28,8 +28,9 @@ from drydem.cli.common import (
 def limit(target, non_associative, friction, tilt_axis, out, overwrite, unit) -> None:
     """Limit analysis of TARGET: the largest horizontal load multiplier (tilt angle atan(lambda))
     that rigid blocks can carry, with its collapse mechanism. Each stage is printed to stderr
-    as it starts, with the time so far: finding the contacts, assembling the LP (its size),
-    solving it with HiGHS, and each non-associative iteration with its lambda so far."""
+    as it starts, with the time so far: finding the contacts, assembling the problem (its
+    size), solving it (in-plane models: a linear program, HiGHS; 3D: a second-order cone
+    program, Clarabel), and each non-associative iteration with its lambda so far."""
     from drydem.analysis.limit import LimitSettings, limit_analysis
     from drydem.model.parameters import LOAD_DIRECTION
     from drydem.io.results import limit_summary, write_summary

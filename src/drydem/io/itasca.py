@@ -63,7 +63,7 @@ import numpy as np
 from drydem import __version__
 from drydem.errors import ModelError
 from drydem.model.assembly import Model
-from drydem.model.parameters import G
+from drydem.model.parameters import G, SolverSettings
 
 #: the group slots that hold each block's drydem name and its support group
 NAME_SLOT, SUPPORT_SLOT = "drydem", "support"
@@ -171,8 +171,15 @@ def _not_written(model: Model) -> list[str]:
     return [f"; not written, 3DEC does it its own way: drydem's sub-contact grid ({density.along} points per length, "
             f"{density.across} across y) and contact tolerance ({model.contact_tolerance:.4g} m): 3DEC triangulates the faces "
             "(block face triangulate refines them);",
-            f"; the convergence criterion ({model.solver.criterion}) and the analysis (drydem tilt, drydem shake): "
-            "settle under gravity with e.g. model solve ratio-local 1e-5"]
+            f"; the convergence criterion ({_criterion(model.solver)}) and the analysis (drydem tilt, drydem shake): "
+            f"settle under gravity with e.g. model solve ratio-local {_number(model.solver.ratio)} (3DEC's ratio is its own measure)"]
+
+
+def _criterion(solver: SolverSettings) -> str:
+    """drydem's equilibrium criterion in words, with its value."""
+    if solver.criterion == "velocity":
+        return f"velocity: the largest block point speed below {_number(solver.max_velocity)} m/s"
+    return f"ratio: the largest unbalanced force over the mean block weight below {_number(solver.ratio)}"
 
 
 def _block_range(name: str) -> str:
