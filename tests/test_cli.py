@@ -184,6 +184,10 @@ def test_designs_lists_the_seven_walls_with_their_brief_check():
         assert team in line and line.endswith("ok")
     assert "perforated_wall" in result.output and "breaks it: 4 lintels, not 1" in result.output
     assert "reconstructions" in lines[-1]
+    # found by a hunt: a wall's count left out the fixed base, a building's held it, under one
+    # header; the walls now count bricks, as `drydem check` says (171 blocks: 170 movable, 1 fixed)
+    assert lines[0].split()[3] == "bricks" and next(line for line in lines if line.startswith("WD3 ")).split()[-2] == "170"
+    assert "a building's blocks include its fixed base" in result.output
 
 
 def test_show_draws_a_wall_and_strict_fails_on_a_brief_violation(tmp_path):

@@ -146,11 +146,12 @@ def _settle(sim: Simulation) -> None:
 @main.command(name="designs")
 def list_designs() -> None:
     """List the built-in walls: WD1-WD7 (reconstructions of the seed paper's competition walls)
-    and the examples, with their void ratio, block count and the competition-brief check; and
-    the built-in 3D buildings (building-small, building-large)."""
+    and the examples, with their void ratio, bricks (the model has one block more, the fixed
+    base) and the competition-brief check; and the built-in 3D buildings (building-small,
+    building-large) with their blocks, the fixed base among them."""
     from drydem.masonry.brief import brief_violations
 
-    click.echo(f"{'name':<16} {'title':<28} {'voids':>6} {'blocks':>6}  brief")
+    click.echo(f"{'name':<16} {'title':<28} {'voids':>6} {'bricks':>6}  brief")
     for name in designs.names():
         wall = resolve_target(name).wall
         violations = brief_violations(wall)
@@ -164,7 +165,8 @@ def list_designs() -> None:
         title = f"{spec.storeys} storeys, {spec.windows_per_wall} windows a wall"
         plan = f"{spec.length_m:g} x {spec.width_m:g} m"
         click.echo(f"{name:<16} {title:<28} {plan:>13} {spec.block_count:>6}")
-    click.echo("\nThe buildings (drydem.masonry.building) are 3D: --tilt-axis x loads their long walls out of plane.")
+    click.echo("\nA wall's model has its bricks and a fixed base; a building's blocks include its fixed base.")
+    click.echo("The buildings (drydem.masonry.building) are 3D: --tilt-axis x loads their long walls out of plane.")
     click.echo("WD1-WD7 are reconstructions that obey the brief, not the original drawings (drydem show NAME draws one).")
 
 def _imperfect_drawing(found: Target, imperfections: Imperfections, seed: int, factor: float) -> tuple[Model, str]:
