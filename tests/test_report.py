@@ -270,6 +270,25 @@ def test_a_run_folder_of_a_paper_wall_goes_to_the_papers_tables(tmp_path):
     assert f"| WD3 | 19.8 | 20.1 | {angle:.1f} |" in section(text, "Table 3") and "Your targets" not in text
 
 
+def test_two_runs_of_a_paper_wall_at_one_kn_show_the_finer_and_name_the_other(tmp_path):
+    """Found by a hunt: of two fixed-step runs of WD3 at kn = 3e7 (3 deg and 0.1 deg steps) Table
+    3 showed whichever record was found first, the other nowhere. The finer increment is shown
+    (then adaptive before fixed, as before), and the other is named below the tables."""
+    from dataclasses import replace as replaced
+
+    coarse, fine = (tilt_record("WD3", 3e7, protocol="fixed") for _ in range(2))
+    for record, increment, angle in ((coarse, 3.0, 18.0), (fine, 0.1, 20.0)):
+        spec = replaced(RunSpec(**record["spec"]), increment_deg=increment)
+        record |= {"id": spec.id, "spec": spec.__dict__}
+        record["summary"]["collapse_angle_deg"] = angle
+        write_record(tmp_path, record)
+    text = build_report(tmp_path).markdown.read_text()
+    assert "| WD3 | 19.8 | 20.1 | 20.0 |" in section(text, "Table 3")
+    assert "Also recorded, in no table or figure" in text
+    assert f"- `{coarse['id']}`: WD3, kn 3e+07 Pa/m, ks 3e+07 Pa/m, fixed, increment 3 deg: collapse angle 18.0 deg" in text
+    assert f"`{fine['id']}`:" not in text
+
+
 def test_a_broken_run_folder_is_named_and_left_out_and_an_empty_folder_has_nothing_to_report(tmp_path):
     empty = CliRunner().invoke(main, ["report", str(tmp_path)])
     assert empty.exit_code == 1 and f"{tmp_path}: nothing to report: no runs/ folder" in empty.output

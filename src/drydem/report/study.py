@@ -127,13 +127,23 @@ class Runs:
                 and (protocol is None or r["spec"]["protocol"] == protocol)]
 
     def tilt(self, design: str, kn: float, *, ks: float | None = None, points: int = POINTS, protocol: str | None = None) -> dict | None:
-        """The tilting run of ``design`` at constant kn (ks = kn by default); adaptive preferred
-        to fixed (both find the collapse angle within one increment)."""
+        """The tilting run of ``design`` at constant kn (ks = kn by default): of several,
+        :func:`_preferred`'s first."""
         ks = kn if ks is None else ks
         found = [r for r in self.tilts(design, protocol=protocol)
                  if _close(r["spec"]["kn"], kn) and _close(r["spec"]["ks"], ks) and r["spec"]["points"] in (points, None)]
-        found.sort(key=lambda r: r["spec"]["protocol"] != "adaptive")
-        return found[0] if found else None
+        return min(found, key=_preferred) if found else None
+
+    def left_out(self) -> list[dict]:
+        """The constant-joint tilting runs of the paper's walls that no table or figure shows:
+        another run of the same wall, kn, ks, points and protocol is preferred to each
+        (:func:`_preferred`)."""
+        groups: dict[tuple, list[dict]] = {}
+        for r in self.ok:
+            spec = r["spec"]
+            if spec["analysis"] == "tilt" and joint_law(r) is None and paper_wall(r) is not None:
+                groups.setdefault((paper_wall(r), spec["kn"], spec["ks"], spec["points"], spec["protocol"]), []).append(r)
+        return [r for group in groups.values() for r in sorted(group, key=_preferred)[1:]]
 
     def angle(self, design: str, kn: float, **kw) -> float | None:
         run = self.tilt(design, kn, **kw)
@@ -164,6 +174,14 @@ class Runs:
         """The kn of the constant-joint tilting runs of ``design`` with ks = kn, sorted."""
         return sorted({r["spec"]["kn"] for r in self.tilts(design, protocol=protocol)
                        if r["spec"]["kn"] is not None and _close(r["spec"]["ks"], r["spec"]["kn"])})
+
+
+def _preferred(record: dict) -> tuple:
+    """The order in which tilting runs of one wall and joints are shown: adaptive before fixed
+    (both find the collapse angle within one increment), then the finest increment, then by
+    id (not by the order the folders were found in)."""
+    spec = record["spec"]
+    return spec["protocol"] != "adaptive", spec["increment_deg"] or math.inf, record["id"]
 
 
 def _close(a, b) -> bool:
@@ -272,8 +290,15 @@ def _figures_folder(out: Path, overwrite: bool) -> Path:
 
 
 def _paper_tables(runs: Runs, paper: dict) -> list[str]:
-    """The paper's Tables 2-4, drydem's values beside the published ones."""
-    return [_table2(runs, paper), _table3(runs, paper), _table4(runs, paper)]
+    """The paper's Tables 2-4, drydem's values beside the published ones, then the runs of its
+    walls they leave out (:meth:`Runs.left_out`), named."""
+    left_out = runs.left_out()
+    shown = ("Also recorded, in no table or figure (another run of the same wall, joints, points and protocol is shown: "
+             "adaptive, then the finest increment, preferred):\n\n"
+             + "\n".join(f"- `{r['id']}`: {paper_wall(r)}, {_joints(r)}, {r['spec']['protocol']}, increment "
+                          f"{_cell(r['spec']['increment_deg'], '{:g}')} deg: collapse angle {angle_text(r['summary'])} deg"
+                          for r in left_out))
+    return [_table2(runs, paper), _table3(runs, paper), _table4(runs, paper), *([shown] if left_out else [])]
 
 
 def _paper_figures(figures: Path, runs: Runs, paper: dict) -> list[str]:
