@@ -112,16 +112,19 @@ def pending(runs: Iterable[RunSpec], results: Path, *, retry_failed: bool = Fals
         identity = _identity(path)
         if identity is not None and not path.is_file():
             raise SweepError(f"{path}: is not a file but where the record of run {spec.id} goes; move it away")
-        try:
-            was_failed = identity is not None and read_record(path)["status"] == "failed"
-        except RecordError as exc:
-            corrupt.append(exc)
-            was_failed = None
-        if identity is None or was_failed is None or (was_failed and retry_failed):
+        needed = identity is None
+        if not needed:
+            try:
+                was_failed = read_record(path)["status"] == "failed"
+            except RecordError as exc:
+                corrupt.append(exc)
+                needed = True
+            else:
+                needed = was_failed and retry_failed
+                failed += was_failed and not retry_failed
+        if needed:
             todo.append(spec)
             seen[spec.id] = identity
-        else:
-            failed += was_failed
     return Pending(todo, len(runs) - len(todo), failed, corrupt, seen)
 
 
