@@ -94,9 +94,7 @@ def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequenc
     response, row by row as the run goes), history.png and summary.json (whether and when blocks
     fell, peak and residual response, PGA, damping). Exits 130 or 143 when interrupted (the
     history so far is kept)."""
-    from tqdm import tqdm
-
-    from drydem.analysis.shake import HOUSNER, ShakeSettings, shake_analysis
+    from drydem.analysis.shake import HOUSNER, ShakeSettings
     from drydem.analysis.shake.run import check_held_axes, housner_target
     from drydem.analysis.tilt import monitor_index
     from drydem.io.results import HistoryWriter
@@ -129,6 +127,20 @@ def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequenc
     with writing_results(folder):
         series = ShakeSeries(folder / "vtk", model, every=save_every, load_direction=ground.main_direction) if vtk or video else None
         live = _LiveHistory(HistoryWriter(folder), series)
+    result = _run_shake(model, settings, folder, live)
+    with writing_results(folder, unfinished=f"; {folder} holds the history but no summary.json"):
+        _shake_outputs(found, model, result, folder, live.series, scale=scale, baseline_corrected=corrected)
+    if video:
+        _render(live.series.folder, folder / "shake.mp4", fps=SHAKE_FPS)
+
+
+def _run_shake(model: Model, settings, folder: Path, live: _LiveHistory):
+    """Shake with a progress bar, ``live`` writing the history (and VTK frames) as it goes; the
+    result. An error or an interruption ends the command, saying what the folder keeps."""
+    from tqdm import tqdm
+
+    from drydem.analysis.shake import shake_analysis
+
     total = settings.analysed_s
     bar_format = "{l_bar}{bar}| {n:.3f}/{total:.3f} s [{elapsed}<{remaining}{postfix}]"
     with signals_interrupt() as received, tqdm(total=total, desc="shaking", unit=" s", bar_format=bar_format, leave=False) as bar:
@@ -138,21 +150,16 @@ def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequenc
             bar.set_postfix_str(f"rotation {rotation_rad:.3g} rad")
 
         try:
-            result = shake_analysis(model, settings, on_progress=progress, on_frame=live,
-                                    on_note=lambda note: bar.write(f"note: {note}", file=sys.stderr))
+            return shake_analysis(model, settings, on_progress=progress, on_frame=live,
+                                  on_note=lambda note: bar.write(f"note: {note}", file=sys.stderr))
         except (DrydemError, OSError) as exc:
             if isinstance(exc, DrydemError) and not live.writer.rows:
                 discard_unstarted(live.writer.path, live.series)
             raise click.ClickException(failure_message(exc, folder)) from None
         except KeyboardInterrupt:
             click.echo(f"\ninterrupted ({received.name}) at {live.time_s:.3f} s of {total:g} s; the history so far is in "
-                       f"{live.writer.path} ({live.writer.rows} rows), "
-                       "no summary.json", err=True)
+                       f"{live.writer.path} ({live.writer.rows} rows), no summary.json", err=True)
             raise SystemExit(128 + received.number) from None
-    with writing_results(folder, unfinished=f"; {folder} holds the history but no summary.json"):
-        _shake_outputs(found, model, result, folder, live.series, scale=scale, baseline_corrected=corrected)
-    if video:
-        _render(live.series.folder, folder / "shake.mp4", fps=SHAKE_FPS)
 
 
 def _shake_motion_options(motion, pulse, amplitude, frequency, cycles, baseline) -> None:
