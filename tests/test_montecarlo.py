@@ -5,6 +5,7 @@ on the number of samples, resumption, --overwrite and bad inputs."""
 import json
 import math
 import re
+import shutil
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict
@@ -255,6 +256,7 @@ def test_drydem_montecarlo_exits_1_naming_its_failed_samples(tall_brick, tmp_pat
     from contextlib import contextmanager
 
     from drydem.parametric import workers
+    from drydem.parametric.montecarlo import run_sample, write_sample
 
     @contextmanager
     def threads(count, scheduler):
@@ -276,6 +278,14 @@ def test_drydem_montecarlo_exits_1_naming_its_failed_samples(tall_brick, tmp_pat
     assert result.exit_code == 1 and isinstance(result.exception, SystemExit), result.output
     assert f"sample.csv: cannot write results (No space left on device); the finished samples are recorded in {out}; " \
            "go on with the same command plus --resume" in result.output
+    # as the message says, --resume runs a failed sample again once its folder is removed
+    monkeypatch.setattr(montecarlo_module, "write_sample", write_sample)
+    monkeypatch.setattr(montecarlo_module, "run_sample", run_sample)
+    shutil.rmtree(out / "samples" / "0000")
+    result = run(tall_brick, "--samples", 2, "--height-sd", HEIGHT_SD_MM, "--out", out, "--resume")
+    assert result.exit_code == 1 and "1 samples run, 1 recorded before" in result.output, result.output
+    assert "1 of 2 samples failed" in result.output and "failed: sample 1 (seed" in result.output
+    assert "failed: sample 0" not in result.output
 
 
 class Stop(Exception):
