@@ -479,6 +479,32 @@ def test_a_number_option_takes_plain_digits_only(tmp_path, command, option, valu
     assert not (tmp_path / "never").exists()
 
 
+def test_a_limit_analysis_stops_at_once_when_interrupted_while_the_solver_runs(tmp_path, monkeypatch):
+    """Found by a hunt: HiGHS, in compiled code, kept Ctrl-C waiting until it had solved
+    (minutes on large models), and SIGTERM ended the command without a word. The solver now
+    runs in a thread of its own; here one that would take a minute, interrupted by SIGTERM
+    after 0.5 s, ends the command at once (exit 143), and its folder is left empty."""
+    import signal
+    import threading
+    import time
+
+    from drydem.analysis import limit as limit_module
+
+    def slow(model, settings, on_progress=None):
+        on_progress("solving a problem that takes a minute")
+        time.sleep(60.0)
+
+    monkeypatch.setattr(limit_module, "limit_analysis", slow)
+    threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGTERM)).start()
+    out = tmp_path / "run"
+    start = time.perf_counter()
+    result = run("limit", model_file(tmp_path), "--out", out)
+    assert time.perf_counter() - start < 10.0
+    assert result.exit_code == 143 and "interrupted (SIGTERM) while solving a problem that takes a minute; a limit analysis " \
+        "keeps no partial result: nothing is written" in result.output, result.output
+    assert list(out.iterdir()) == []
+
+
 def test_limit_names_its_friction_option_out_of_range(tmp_path):
     result = run("limit", model_file(tmp_path), "--friction", "0", "--out", tmp_path / "never")
     assert result.exit_code == 2 and refused(result, "Invalid value for '--friction': 0.0: must be a number in (0, 10] ([joint] friction)")

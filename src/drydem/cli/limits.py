@@ -5,13 +5,18 @@ from __future__ import annotations
 import sys
 import threading
 import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import click
 
 from drydem.errors import DrydemError
 from drydem.cli.common import (
-    joint_option, main, out_path, resolve_target, results_folder, threads_option, unit_option, writing_results,
+    joint_option, main, out_path, resolve_target, results_folder, signals_interrupt, threads_option, unit_option, writing_results,
 )
+
+if TYPE_CHECKING:
+    from drydem.analysis.limit import LimitResult
 
 
 @main.command()
@@ -35,7 +40,6 @@ def limit(target, non_associative, friction, tilt_axis, out, overwrite, unit) ->
     from drydem.model.parameters import LOAD_DIRECTION
     from drydem.io.results import limit_summary, write_summary
     from drydem.report.plots import limit_mechanism_figure
-    from tqdm import tqdm
 
     found = resolve_target(target, unit)
     try:  # before the analysis, which can take minutes
@@ -45,25 +49,7 @@ def limit(target, non_associative, friction, tilt_axis, out, overwrite, unit) ->
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     start = time.perf_counter()
-    # a line per stage (kept), and under it a bar with the stage and the time it has taken so far,
-    # redrawn every second by a thread: HiGHS lets Python run while it solves (minutes on large models)
-    with tqdm(bar_format="{desc} ({elapsed})", desc="starting", leave=False) as bar:
-
-        def progress(stage: str) -> None:
-            bar.write(f"[{time.perf_counter() - start:7.1f} s] {stage}", file=sys.stderr)
-            bar.set_description_str(stage.split(" (")[0], refresh=False)
-            bar.reset()
-
-        stop = threading.Event()
-        ticker = threading.Thread(target=_refresh_every_second, args=(bar, stop), daemon=True)
-        ticker.start()
-        try:
-            result = limit_analysis(model, settings, on_progress=progress)
-        except DrydemError as exc:
-            raise click.ClickException(str(exc)) from None
-        finally:
-            stop.set()
-            ticker.join()
+    result = _solve_interruptibly(lambda progress: limit_analysis(model, settings, on_progress=progress), start)
     runtime = time.perf_counter() - start
     label = "LA-NA" if non_associative else "LA-A"
     with writing_results(out, unfinished=f"; {out} holds no finished run (no summary.json)"):
@@ -77,7 +63,42 @@ def limit(target, non_associative, friction, tilt_axis, out, overwrite, unit) ->
     click.echo(f"solver          {result.status}; {runtime:.1f} s; results in {out}")
 
 
-def _refresh_every_second(bar, stop: threading.Event) -> None:
-    """Redraw ``bar`` (its elapsed time) every second until ``stop`` is set."""
-    while not stop.wait(1.0):
-        bar.refresh()
+def _solve_interruptibly(solve: Callable[[Callable[[str], None]], LimitResult], start: float) -> LimitResult:
+    """``solve(progress)`` in a thread of its own, while this one redraws a bar under the line
+    each stage prints (stderr), with the stage's time so far, every second (HiGHS and Clarabel
+    let Python run while they solve, minutes on large models) and takes Ctrl-C and SIGTERM: a
+    solver in compiled code sees neither (found by a hunt: Ctrl-C was ignored, and the run
+    finished and exited 0 minutes later). Interrupted, the command ends at once (130 or 143):
+    a limit analysis has no partial result to keep, and the solver's thread, a daemon, ends
+    with the process."""
+    from tqdm import tqdm
+
+    outcome: dict = {}
+    with signals_interrupt() as received, tqdm(bar_format="{desc} ({elapsed})", desc="starting", leave=False) as bar:
+
+        def progress(stage: str) -> None:
+            bar.write(f"[{time.perf_counter() - start:7.1f} s] {stage}", file=sys.stderr)
+            bar.set_description_str(stage.split(" (")[0], refresh=False)
+            bar.reset()
+
+        def run() -> None:
+            try:
+                outcome["result"] = solve(progress)
+            except BaseException as exc:  # handed to the waiting thread, which raises it
+                outcome["error"] = exc
+
+        solver = threading.Thread(target=run, name="drydem-limit", daemon=True)
+        solver.start()
+        try:
+            while solver.is_alive():
+                solver.join(1.0)
+                bar.refresh()
+        except KeyboardInterrupt:
+            click.echo(f"\ninterrupted ({received.name}) while {bar.desc or 'starting'}; a limit analysis keeps no partial "
+                       "result: nothing is written", err=True)
+            raise SystemExit(128 + received.number) from None
+    if isinstance(outcome.get("error"), DrydemError):
+        raise click.ClickException(str(outcome["error"])) from None
+    if "error" in outcome:
+        raise outcome["error"]
+    return outcome["result"]
