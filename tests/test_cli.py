@@ -314,6 +314,32 @@ def test_the_drydem_program_exits_130_on_a_ctrl_c_no_command_has_taken_over(monk
     assert ended.value.code == code and "interrupted (SIGINT)" in capsys.readouterr().err
 
 
+def test_a_sigterm_that_escapes_a_command_is_named_sigterm(monkeypatch, capsys):
+    """Found by a hunt: a SIGTERM whose KeyboardInterrupt reached numba loading a kernel (a
+    SystemError, as the previous test makes it) was reported as "interrupted (SIGINT)", 130."""
+    import os
+    import signal
+    import time
+
+    import drydem.cli.tilting
+    from drydem.cli import console
+    from drydem.cli.common import signals_interrupt
+
+    def loading_a_kernel(*args, **kwargs):
+        with signals_interrupt():
+            try:
+                os.kill(os.getpid(), signal.SIGTERM)
+                time.sleep(5.0)
+            except KeyboardInterrupt as exc:
+                raise SystemError("numba: error in a kernel's loading") from exc
+
+    monkeypatch.setattr(drydem.cli.tilting, "resolve_target", loading_a_kernel)
+    monkeypatch.setattr(sys, "argv", ["drydem", "tilt", "WD3"])
+    with pytest.raises(SystemExit) as ended:
+        console()
+    assert ended.value.code == 143 and "interrupted (SIGTERM)" in capsys.readouterr().err
+
+
 def test_the_drydem_program_lets_other_system_errors_through(monkeypatch):
     import drydem.cli.tilting
     from drydem.cli import console

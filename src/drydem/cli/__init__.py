@@ -48,8 +48,13 @@ def console() -> None:
 
 
 def _interrupted() -> None:
-    click.echo("\ninterrupted (SIGINT)", err=True)
-    sys.exit(130)
+    """End the process as interrupted by the signal received (SIGINT unless a command's
+    :func:`~drydem.cli.common.signals_interrupt` saw another: found by a hunt, a SIGTERM that
+    reached numba loading a kernel was called SIGINT)."""
+    from drydem.cli.common import LAST_RECEIVED
+
+    click.echo(f"\ninterrupted ({LAST_RECEIVED.name})", err=True)
+    sys.exit(128 + LAST_RECEIVED.number)
 
 
 def _caused_by_interrupt(exc: BaseException | None) -> bool:

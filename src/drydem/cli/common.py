@@ -286,11 +286,18 @@ class _Received:
     name, number = "SIGINT", int(signal.SIGINT)
 
 
+#: the signal that interrupted the last command run in this process: for
+#: :func:`drydem.cli.console`, which names it where an interruption escaped the command
+LAST_RECEIVED = _Received()
+
+
 @contextmanager
 def signals_interrupt():
     """SIGTERM (a kill, a scheduler's time limit) interrupts like Ctrl-C: KeyboardInterrupt,
-    so that the command says what it saved and how to go on. Yields what was received."""
-    received = _Received()
+    so that the command says what it saved and how to go on. Yields what was received (also
+    kept in :data:`LAST_RECEIVED`)."""
+    received = LAST_RECEIVED
+    received.name, received.number = "SIGINT", int(signal.SIGINT)
 
     def interrupt(number, frame):
         received.name, received.number = signal.Signals(number).name, number
