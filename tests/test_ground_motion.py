@@ -491,6 +491,19 @@ def test_a_baseline_correction_of_one_long_step_and_short_ones_is_refused():
 # ---------------------------------------------------------------- per explicit cycle
 
 
+def test_a_record_sampled_finer_than_the_timestep_gets_a_note_on_aliasing():
+    """Found by a hunt: a record sampled finer than the timestep is read at the cycles' times,
+    and its content above half the cycle rate turns into slower motion, without a word."""
+    fine = motion(np.arange(101) * 1e-4, np.ones(101))
+    note = fine.aliasing_note(2e-4)
+    assert note == ("test record is sampled every 0.0001 s at its finest, finer than the timestep, 0.0002 s: it is read at the "
+                    "cycles' times, so its content above 2500 Hz (half the cycle rate) is aliased into slower motion; filter the "
+                    "record below that frequency if it has any")
+    assert fine.aliasing_note(1e-4) is None and fine.aliasing_note(5e-5) is None
+    sine = pulse("sine", amplitude_m_s2=1.0, frequency_hz=3.0, cycles=2, direction="x")  # analytic: no note
+    assert sine.aliasing_note(1.0 / 3.0 / 20) is None
+
+
 def test_the_acceleration_per_cycle_is_exact_at_the_sample_times():
     dt = 0.01
     acceleration = np.random.default_rng(2).normal(0.0, 1.0, 30)

@@ -275,6 +275,16 @@ def test_damping_that_shortens_the_timestep_tenfold_is_said_before_the_shaking(f
     assert json.loads((tmp_path / "0.03" / "summary.json").read_text())["cycles"] > 1000
 
 
+def test_a_record_sampled_finer_than_the_timestep_is_run_with_a_note(files, tmp_path):
+    # found by a hunt: the aliasing of such a record went unsaid
+    record = tmp_path / "fine.csv"
+    times = np.arange(20001) * 2.5e-6  # 0.05 s, sampled far finer than the block's timestep
+    record.write_text("time_s,acc_x_m_s2\n" + "".join(f"{t:.17g},{math.sin(2 * math.pi * 20 * t):.17g}\n" for t in times))
+    result = shake(files["block"], "--motion", record, "--no-baseline", "--damping-ratio", "0.05", "--out", tmp_path / "run")
+    assert result.exit_code == 0, result.output
+    assert "note: " in result.output and "is sampled every 2.5e-06 s at its finest, finer than the timestep" in result.output
+
+
 def test_a_duration_of_fewer_than_twenty_timesteps_is_refused_at_the_run_start(files, tmp_path):
     """Found by a hunt: --duration 1e-300 ran no cycle and reported "no block fell" under a PGA
     the table never reached."""

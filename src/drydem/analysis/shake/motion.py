@@ -266,6 +266,21 @@ class GroundMotion:
         return (f"{self.label}: {what}, {span:.4g} s, spans {span / dt_s:.3g} timesteps of {dt_s:.3g} s (the model's at the start "
                 f"of the shaking); the analysis follows a motion only over at least {STEPS_PER_PERIOD} timesteps: {advice}")
 
+    def aliasing_note(self, dt_s: float) -> str | None:
+        """A note if a record is sampled finer than the timestep ``dt_s`` (s), else None: the
+        table's acceleration is read at the cycles' times (:meth:`per_cycle`), so the record's
+        content above half the cycle rate, 1 / (2 dt), is aliased into slower motion (found by
+        a hunt: a 5.4 kHz vibration of 6 m/s2, which moves a table by nanometres, read every
+        1.8e-4 s became a 1 Hz motion of 6 m/s2 and moved a block 21 mm). A pulse is
+        analytic and its period spans at least STEPS_PER_PERIOD timesteps
+        (:meth:`resolution_problem`): None."""
+        finest = float(np.diff(self.time_s).min())
+        if self.period_s is not None or finest >= dt_s * (1.0 - 1e-6):  # a step of dt in times rounded off is not finer
+            return None
+        return (f"{self.label} is sampled every {finest:.3g} s at its finest, finer than the timestep, {dt_s:.3g} s: it is read at "
+                f"the cycles' times, so its content above {0.5 / dt_s:.4g} Hz (half the cycle rate) is aliased into slower motion; "
+                "filter the record below that frequency if it has any")
+
     def per_cycle(self, dt_s: float, cycles: int, start_s: float = 0.0) -> np.ndarray:
         """(cycles, 3) the table's acceleration at each explicit cycle, m/s2.
 

@@ -67,8 +67,9 @@ def shake_analysis(
     """The time history of ``model`` under ``settings.motion`` (module docstring).
 
     ``on_progress(time_s, cycles, rotation_rad)`` and ``on_frame(frame)`` are called at every
-    output interval; ``on_note(text)`` once before the shaking if the viscous damping shortens
-    the timestep more than SLOW_DAMPING_FACTOR-fold (:func:`slow_damping_note`). Every argument
+    output interval; ``on_note(text)`` before the shaking if the viscous damping shortens the
+    timestep more than SLOW_DAMPING_FACTOR-fold (:func:`slow_damping_note`) and if a record is
+    sampled finer than the timestep (:meth:`GroundMotion.aliasing_note`). Every argument
     is checked first: ModelError naming each one that is not what it must be (a model,
     settings, None or a function)."""
     check_arguments("shake_analysis", {"model": InstanceOf(Model), "settings": InstanceOf(ShakeSettings), "on_progress": CALLBACK,
@@ -90,6 +91,9 @@ def shake_analysis(
     unresolved = settings.motion.resolution_problem(sim.timestep)
     if unresolved is not None:
         raise ModelError(f"{model.source}: {unresolved}")
+    note = settings.motion.aliasing_note(sim.timestep)
+    if note is not None and on_note is not None:
+        on_note(note)
     if settings.analysed_s < STEPS_PER_PERIOD * sim.timestep:  # 1e-300 s ran no cycle and reported "no block fell"
         raise ModelError(f"{model.source}: duration_s = {settings.analysed_s:g} s (--duration) spans fewer than {STEPS_PER_PERIOD} "
                          f"timesteps of {sim.timestep:.3g} s (the model's at the start of the shaking): the table would hardly move; "
