@@ -292,7 +292,7 @@ ZERO_ONE = [[0, 0, 0], [1, 0, 0]]
     (dict(time_s=[0, 1], acceleration_m_s2=[["0", "0", "0"], ["1", "0", "0"]]), "m: acceleration_m_s2 must be an array of real numbers"),
     (dict(time_s=[0, 1], acceleration_m_s2=[[0, 0, 0], [True, 0, 0]]), "m: acceleration_m_s2 must be an array of real numbers"),
     (dict(time_s=[0, 1], acceleration_m_s2=np.array([[0, 0, 0], [1 + 5j, 0, 0]])),
-     "m: acceleration_m_s2 must be an array of real numbers (no texts, booleans or complex numbers), got shape (2, 3) complex128"),
+     "m: acceleration_m_s2 must be an array of real numbers (no texts, booleans, complex numbers or masked values), got shape (2, 3) complex128"),
     (dict(time_s=[0, 1, [2]], acceleration_m_s2=ZERO_ONE + [[0, 0, 0]]), "m: time_s must be an array of real numbers"),
     (dict(time_s=[0, 1], acceleration_m_s2=ZERO_ONE, name=5), "GroundMotion name = 5: must be a non-empty text"),
     (dict(time_s=[0, 1], acceleration_m_s2=ZERO_ONE, name=" "), "GroundMotion name = ' ': must be a non-empty text"),

@@ -59,6 +59,7 @@ def refused(error, *fragments, call):
     ("velocity", np.zeros(2), "state.velocity must be a (2, 3) array"),
     ("angular_velocity", np.zeros((3, 2)), "state.angular_velocity must be a (2, 3) array"),
     ("position", np.zeros((2, 3), dtype=object), "got shape (2, 3) object"),
+    ("position", np.ma.masked_array(np.zeros((2, 3)), mask=np.eye(2, 3)), "state.position must be a (2, 3) array"),
     ("position", np.array([[0.0, 0.0, 0.0], [np.nan, 0.0, 0.0]]), "state.position must be a (2, 3) array of finite numbers, got nan at (1, 0)"),
     ("velocity", np.array([[0.0, 0.0, 0.0], [np.inf, 0.0, 0.0]]), "state.velocity must be a (2, 3) array of finite numbers"),
     ("velocity", np.zeros((2, 3), dtype=bool), "state.velocity"),
@@ -175,7 +176,7 @@ GRAVITY_METHODS = {
     (np.array([0, 0, 1], dtype=bool), "gravity = shape (3,) bool: must be [gx, gy, gz]"),
     (["0", "0", "-9.81"], "gravity = ['0', '0', '-9.81']: must be [gx, gy, gz]"),
     ("abc", "gravity = 'abc': must be [gx, gy, gz]"),
-    ([0, 0, -9.81 + 1j], "gravity = [0, 0, (-9.81+1j)]: must be [gx, gy, gz], three real numbers in m/s2 (not texts, booleans or complex"),
+    ([0, 0, -9.81 + 1j], "gravity = [0, 0, (-9.81+1j)]: must be [gx, gy, gz], three real numbers in m/s2 (not texts, booleans, complex"),
     ({0: 0, 1: 0, 2: -9.81}, "gravity = {0: 0, 1: 0, 2: -9.81}: must be [gx, gy, gz]"),
     ((x for x in [0, 0, -9.81]), "gravity = <generator object"),
     ([0, 1], "gravity = [0, 1]: must be [gx, gy, gz]"),
@@ -187,6 +188,9 @@ GRAVITY_METHODS = {
     ([800, 0, -800], "gravity = [800.0, 0.0, -800.0]: its magnitude 1131.37085 m/s2 must be at most 1000 m/s2"),
     # found by a hunt: the norm of 1e300 overflowed (a RuntimeWarning, "magnitude inf")
     ([0, 0, -1e300], "gravity = [0.0, 0.0, -1e+300]: its magnitude 1e+300 m/s2 must be at most 1000 m/s2"),
+    # found by a hunt: a masked value (a missing one) was read as the data under the mask
+    (np.ma.masked_array([0.0, 0.0, -9.81], mask=[0, 0, 1]), "gravity = shape (3,) float64: must be [gx, gy, gz], three real "
+     "numbers in m/s2 (not texts, booleans, complex numbers or masked values)"),
 ])
 def test_a_gravity_that_is_no_vector_of_real_numbers_within_its_bound_is_refused(model, method, gravity, words):
     """A gravity of booleans or texts was taken as numbers, complex ones or a dict failed with a

@@ -616,3 +616,17 @@ def test_a_vtk_series_keeps_every_positive_integer_th_state_only(tmp_path, every
     model = load_model(model_file(tmp_path))
     with pytest.raises(dd.ModelError, match=rf"VtkSeries every = {every!r}: must be an integer in \[1, inf\)"):
         VtkSeries(tmp_path / "vtk", model, every=every)
+
+
+@pytest.mark.parametrize("command", ["tilt", "montecarlo"])
+def test_a_stop_displacement_below_the_dls_drift_of_the_wall_is_refused(tmp_path, command):
+    """Found by a hunt: a wall of 20 m bricks (40 m high) "collapsed" at 17 deg having moved the
+    default 0.10 m, a drift of 0.25 %, and stood to 26 deg given 5 m. A stop displacement below
+    1 % of the height (the DLS drift) would end the run before the drift limits it reports."""
+    wall = tmp_path / "big.toml"
+    wall.write_text('[brick]\nlength_m = 20\nheight_m = 20\nwidth_m = 20\n[supports]\nfix_y = true\n[layout]\ncourses = """\nb1Bb\n2B\n"""\n')
+    extra = ["--height-sd", "1"] if command == "montecarlo" else []
+    assert refused(run(command, wall, *extra, "--out", tmp_path / "run"),
+                   "stop_displacement_m = 0.1 m (--stop-displacement) is a drift of 0.25% of the wall's 40 m height, below the 1% "
+                   "of the damage limitation state: the analysis would end there and call it a collapse; give at least 0.4 m")
+    assert not (tmp_path / "run").exists()

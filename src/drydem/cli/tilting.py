@@ -151,13 +151,14 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
 def _tilt_plan(found: Target, tilt: TiltOptions, out: Path | None, resume: bool, overwrite: bool, series: bool, save_every: int):
     """The model, settings and results folder of a tilt, and the checkpoint's saved state when
     resuming (else None); DrydemError for options that contradict each other or the folder."""
-    from drydem.analysis.tilt import check_loading, monitor_index
+    from drydem.analysis.tilt import check_loading, check_stop_displacement, monitor_index
     from drydem.analysis.tilt.checkpointing import check_fingerprint, fingerprint
     from drydem.engine.checkpoint import load_checkpoint
 
     model = found.model.overridden(**tilt.model_overrides())
     settings = tilt.settings()
     check_loading(model, settings)
+    check_stop_displacement(model, settings)
     monitor_index(model, tilt.monitor, settings.tilt_axis)
     if resume and overwrite:
         raise DrydemError("--resume goes on from the run in --out and --overwrite deletes it: give one of them")

@@ -369,13 +369,13 @@ class Simulation:
 
     def _gravity(self, gravity, method: str) -> np.ndarray:
         """``gravity`` (m/s2) as a float64 (3,) array; ModelError naming ``method`` and gravity
-        unless it is three finite real numbers (an array, a list or a tuple: no texts, booleans
-        or complex numbers) of magnitude at most :data:`~drydem.model.parameters.MAX_ACCELERATION_M_S2`."""
+        unless it is three finite real numbers (an array, a list or a tuple: no texts, booleans,
+        complex numbers or masked values) of magnitude at most :data:`~drydem.model.parameters.MAX_ACCELERATION_M_S2`."""
         where = f"{self.model.source}: {method} gravity"
         g = real_array(gravity)
         if g is None or g.shape != (3,):
             raise ModelError(f"{where} = {given(gravity)}: must be [gx, gy, gz], three real numbers in m/s2 "
-                             "(not texts, booleans or complex numbers)")
+                             "(not texts, booleans, complex numbers or masked values)")
         if not np.isfinite(g).all():
             raise ModelError(f"{where} = {shown(g.tolist())}: must be three finite numbers in m/s2")
         magnitude = math.hypot(*g)  # scaled: np.linalg.norm of 1e300 overflowed to inf, with a RuntimeWarning

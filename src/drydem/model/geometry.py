@@ -197,7 +197,11 @@ def described(value) -> str:
 def real_array(value) -> np.ndarray | None:
     """``value`` (an array, or nested lists of numbers) as a new C-ordered float64 array; None
     where it is no array of real numbers: texts, booleans (no number here, though NumPy would
-    make True 1.0), complex numbers (NumPy would drop their imaginary parts), objects, ragged lists."""
+    make True 1.0), complex numbers (NumPy would drop their imaginary parts), objects, ragged
+    lists, a masked array with masked values (missing ones, which NumPy would read as the data
+    under the mask; found by a hunt)."""
+    if np.ma.is_masked(value):
+        return None
     try:
         array = np.asarray(value)
     except (TypeError, ValueError):  # ragged lists

@@ -141,8 +141,8 @@ class GroundMotion:
         time, acceleration = real_array(self.time_s), real_array(self.acceleration_m_s2)
         for field, array in (("time_s", time), ("acceleration_m_s2", acceleration)):
             if array is None:
-                raise ModelError(f"{self.label}: {field} must be an array of real numbers (no texts, booleans or complex "
-                                 f"numbers), got {given(getattr(self, field))}")
+                raise ModelError(f"{self.label}: {field} must be an array of real numbers (no texts, booleans, complex numbers or masked "
+                                 f"values), got {given(getattr(self, field))}")
         problem = _samples_problem(time, acceleration)
         if problem is not None:
             raise ModelError(f"{self.label}: {problem}")
