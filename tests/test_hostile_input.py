@@ -630,3 +630,38 @@ def test_a_stop_displacement_below_the_dls_drift_of_the_wall_is_refused(tmp_path
                    "stop_displacement_m = 0.1 m (--stop-displacement) is a drift of 0.25% of the wall's 40 m height, below the 1% "
                    "of the damage limitation state: the analysis would end there and call it a collapse; give at least 0.4 m")
     assert not (tmp_path / "run").exists()
+
+
+FAR_STIFF_BRICK = """[material]
+density = 2000.0
+[joint]
+kn = 1e15
+ks = 1e15
+friction = 0.8
+[solver]
+max_cycles = 20000
+[supports]
+fix_y = true
+[[block]]
+name = "base"
+fixed = true
+box = { min = [-0.05, -0.006, 9.99], max = [0.05, 0.006, 10.0] }
+[[block]]
+name = "brick"
+box = { min = [-0.0125, -0.006, 10.0], max = [0.0125, 0.006, 10.0055] }
+"""
+
+
+def test_a_model_round_off_keeps_from_equilibrium_is_not_told_to_raise_max_cycles(tmp_path):
+    """Found by a hunt: a brick 10 m up on kn = 1e15 Pa/m keeps an unbalanced-force ratio of
+    about 1 % (positions known to 1.8e-15 m, times kn A = 3e11 N/m, over its 0.032 N weight)
+    however long it cycles, and was told to raise max_cycles; WD3's floor is 1e-8."""
+    from drydem.analysis.support import roundoff_ratio
+    from drydem.io.target import load_target
+
+    path = model_file(tmp_path, FAR_STIFF_BRICK, "far.toml")
+    assert 0.005 < roundoff_ratio(load_target(str(path)).model) < 0.05
+    assert roundoff_ratio(load_target("WD3").model.overridden(kn=1e10, ks=1e10)) < 1e-7
+    result = run("tilt", path, "--out", tmp_path / "run")
+    assert result.exit_code == 1 and "no equilibrium under gravity within [solver] max_cycles = 20000" in result.output
+    assert "round-off keeps the unbalanced-force ratio at about 0.016" in result.output and "raise max_cycles" not in result.output

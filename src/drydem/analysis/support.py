@@ -129,4 +129,18 @@ def too_soft_joints(model, blocks) -> str:
             f"thick there, and as much on every face{more}, so it sinks through its base; stiffen [joint] kn")
 
 
+def roundoff_ratio(model) -> float:
+    """About the smallest unbalanced-force ratio (the largest unbalanced force over the mean
+    block weight, [solver] ratio) that round-off lets the cycles reach: positions are known to
+    the spacing of doubles at the model's farthest coordinate, which a joint of stiffness kn
+    under a block's largest face A turns into a force of kn A spacing. Found by a hunt: a 1 um
+    cube of density 1 on kn = 1e15 Pa/m (about 2 %), or a brick 10 m up on kn = 1e15 (about
+    1 %), never reaches 1e-5, and was told to raise max_cycles; WD3 on kn = 1e10 is at 6e-9."""
+    movable = [model.block_shape[b] for b in np.flatnonzero(model.block_movable)]
+    farthest = max(float(np.abs(shape.vertices).max()) for shape in movable)
+    area = max(shape.face_area(f) for shape in movable for f in range(len(shape.faces)))
+    weight = float(model.block_mass[model.block_movable].mean()) * G
+    return model.joint.kn * area * float(np.spacing(farthest)) / weight
+
+
 compiled_cache.check(__name__)  # last: none of the functions above is loaded from a stale cache

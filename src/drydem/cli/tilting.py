@@ -283,15 +283,28 @@ def _tilt_verdict(result, model: Model) -> list[str]:
         return [f"the model cannot stand under its own weight: {what} (state in mechanism.png)" + (f"; {soft}" if soft else "")]
     if result.ended_by == NO_EQUILIBRIUM_UNDER_GRAVITY:
         return [f"no equilibrium under gravity within [solver] max_cycles = {model.solver.max_cycles}: no verdict on whether it "
-                "stands; raise max_cycles (or check damping) and run again"]
+                f"stands; {_more_cycles(model, 'raise max_cycles (or check damping) and run again')}"]
     if result.ended_by == MAXIMUM_ANGLE:
         return [f"no collapse up to {result.last_equilibrium_deg:.2f} deg (the last step within max_angle_deg = "
                 f"{result.settings.max_angle_deg:g})"]
     if result.ended_by == NO_EQUILIBRIUM:
         return [f"last equilibrium {result.last_equilibrium_deg:.2f} deg; the next step reached no equilibrium within [solver] "
                 f"max_cycles = {model.solver.max_cycles} and did not collapse either: no collapse angle "
-                "(raise max_cycles to decide)"]
+                f"({_more_cycles(model, 'raise max_cycles to decide')})"]
     return [f"collapse angle  {result.collapse_angle_deg:.2f} deg (load multiplier {result.load_multiplier:.4f}; ended by {result.ended_by})"]
+
+
+def _more_cycles(model: Model, advice: str) -> str:
+    """``advice`` (more cycles), unless round-off keeps the unbalanced-force ratio above the
+    criterion (:func:`drydem.analysis.support.roundoff_ratio`), where no number of cycles helps."""
+    from drydem.analysis.support import roundoff_ratio
+
+    floor = roundoff_ratio(model)
+    if model.solver.criterion != "ratio" or floor < model.solver.ratio:
+        return advice
+    return (f"round-off keeps the unbalanced-force ratio at about {floor:.2g} (kn times a block's largest face times the spacing of "
+            f"doubles at the farthest coordinate, over the mean block weight) against [solver] ratio = {model.solver.ratio:g}: "
+            "more cycles cannot reach it; bring the model near the origin, soften [joint] kn or raise ratio")
 
 
 def _fps(ctx, param, value):
