@@ -206,6 +206,8 @@ def _run_tilt(found: Target, model: Model, settings, folder: Path, *, resume: bo
                 bar.update(cycles - bar.n)
                 bar.set_postfix_str(f"{theta:.2f} deg, u{'xy'[settings.load_direction]} {ux * 1e3:.2f} mm")
 
+            # before the first cycle count: minutes on 10^4-10^5 blocks (found by a hunt: a bar that looked hung)
+            bar.set_postfix_str("finding the contacts, then settling under gravity")
             frames = writer = None
             try:
                 frames = (VtkSeries(folder / "vtk", model, every=save_every, resume=resume, load_direction=settings.load_direction)
