@@ -135,7 +135,7 @@ def roundoff_ratio(model) -> float:
     the spacing of doubles at the model's farthest coordinate, which a joint of stiffness kn
     under a block's largest face A turns into a force of kn A spacing. Found by a hunt: a 1 um
     cube of density 1 on kn = 1e15 Pa/m (about 2 %), or a brick 10 m up on kn = 1e15 (about
-    1 %), never reaches 1e-5, and was told to raise max_cycles; WD3 on kn = 1e10 is at 6e-9."""
+    1 %), never reaches 1e-5, and was told to raise max_cycles; WD3 on kn = 1e10 is at 1e-8."""
     movable = [model.block_shape[b] for b in np.flatnonzero(model.block_movable)]
     farthest = max(float(np.abs(shape.vertices).max()) for shape in movable)
     area = max(shape.face_area(f) for shape in movable for f in range(len(shape.faces)))

@@ -136,14 +136,16 @@ class Runs:
 
     def left_out(self) -> list[dict]:
         """The constant-joint tilting runs of the paper's walls that no table or figure shows:
-        another run of the same wall, kn, ks, points and protocol is preferred to each
-        (:func:`_preferred`)."""
-        groups: dict[tuple, list[dict]] = {}
-        for r in self.ok:
-            spec = r["spec"]
-            if spec["analysis"] == "tilt" and joint_law(r) is None and paper_wall(r) is not None:
-                groups.setdefault((paper_wall(r), spec["kn"], spec["ks"], spec["points"], spec["protocol"]), []).append(r)
-        return [r for group in groups.values() for r in sorted(group, key=_preferred)[1:]]
+        :meth:`tilt` gives another for the run's own wall, kn, ks, points and protocol (one
+        preferred, :func:`_preferred`), or none (a run without its kn recorded)."""
+        return [r for r in self.ok if r["spec"]["analysis"] == "tilt" and joint_law(r) is None and paper_wall(r) is not None
+                and self._shown(r) is not r]
+
+    def _shown(self, record: dict) -> dict | None:
+        spec = record["spec"]
+        if spec["kn"] is None:
+            return None
+        return self.tilt(paper_wall(record), spec["kn"], ks=spec["ks"], points=spec["points"] or POINTS, protocol=spec["protocol"])
 
     def angle(self, design: str, kn: float, **kw) -> float | None:
         run = self.tilt(design, kn, **kw)
