@@ -215,3 +215,13 @@ def test_drydem_sweep_exits_1_while_a_run_of_the_study_is_recorded_as_failed(stu
     assert result.exit_code == 0, result.output
     assert "1 runs done (0 failed), 1 skipped" in result.output
     assert {r["status"] for r in load_records(out).valid} == {"ok"}
+
+
+def test_a_study_tilting_a_wall_too_tall_for_the_stop_displacement_is_refused_before_any_run(study_file):
+    # as drydem tilt refuses it: 0.10 m is 0.25 % of a 40 m wall, and reaching it is no collapse
+    (study_file.parent / "stack.toml").write_text(WALL_FILE.format(courses="b1Bb\n2B\n").replace("0.025", "20").replace(
+        "0.0055", "20").replace("0.012", "20"))
+    with pytest.raises(ModelError, match=r"stop_displacement_m = 0.1 m \(--stop-displacement\) is a drift of 0.25% of the wall's 40 m "
+                                         r"height") as caught:
+        load_study(study_file)
+    assert str(caught.value).startswith(str(study_file))

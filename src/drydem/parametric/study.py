@@ -483,7 +483,11 @@ def _problems(model, spec: RunSpec, motion=None) -> list[str]:
     cannot be), as the run itself builds them (the rules are the parameter classes', written
     once), each override alone so that one bad value does not hide another."""
     checks = [lambda key=key: _override(model, spec, key) for key in OVERRIDES if not (key == "ks" and spec.ks is spec.kn)]
-    if spec.analysis != "shake":
+    if spec.analysis == "tilt":  # and its stop displacement, the default's, against the wall's height
+        from drydem.analysis.tilt import TiltSettings, check_stop_displacement
+
+        checks += [spec.tilt_settings, lambda: check_stop_displacement(model, TiltSettings())]
+    elif spec.analysis != "shake":
         checks.append(spec.tilt_settings)  # a limit run's increment is unused, but is part of its id
     else:
         from drydem.analysis.shake.run import check_held_axes
