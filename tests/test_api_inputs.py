@@ -60,6 +60,11 @@ def refused(error, *fragments, call):
     ("angular_velocity", np.zeros((3, 2)), "state.angular_velocity must be a (2, 3) array"),
     ("position", np.zeros((2, 3), dtype=object), "got shape (2, 3) object"),
     ("position", np.ma.masked_array(np.zeros((2, 3)), mask=np.eye(2, 3)), "state.position must be a (2, 3) array"),
+    # found by a hunt: a block at 1e300 m was cycled with its corners merged, 1e200 m/s overflowed
+    ("position", [[0.0, 0.0, 0.0], [1e300, 0.0, 0.0]], "state.position[1] = [1e+300, 0.0, 0.0]: its entries must be within +-1e+12 (m)"),
+    ("velocity", [[0.0, 0.0, 0.0], [0.0, 0.0, -1e200]], "state.velocity[1] = [0.0, 0.0, -1e+200]: its entries must be within +-1e+08 (m/s)"),
+    ("angular_velocity", [[0.0, 1e9, 0.0], [0.0, 0.0, 0.0]], "state.angular_velocity[0] = [0.0, 1000000000.0, 0.0]: its entries must be "
+     "within +-1e+08 (rad/s)"),
     ("position", np.array([[0.0, 0.0, 0.0], [np.nan, 0.0, 0.0]]), "state.position must be a (2, 3) array of finite numbers, got nan at (1, 0)"),
     ("velocity", np.array([[0.0, 0.0, 0.0], [np.inf, 0.0, 0.0]]), "state.velocity must be a (2, 3) array of finite numbers"),
     ("velocity", np.zeros((2, 3), dtype=bool), "state.velocity"),

@@ -16,6 +16,13 @@ QUATERNION_TOLERANCE = 1e-6
 #: norms within this of 1 are left as they are (the cycles keep them so, to round-off), so that a
 #: state handed back (a snapshot restored) goes on bit for bit
 ROUND_OFF = 1e-12
+#: the largest |entry| a given state may hold, by field (m, m/s, rad/s): far past any block's
+#: reach (vertices lie within 1e6 m of the origin, and a block falling out is taken out of the
+#: analysis after at most 1,000 of its heights), so that an absurd state is refused rather than
+#: cycled (found by a hunt: a block at x = 1e300 m ran 50,000 cycles with its corners merged into
+#: one point; a speed of 1e200 m/s overflowed and was blamed on the timestep)
+STATE_BOUNDS = {"position": 1e12, "velocity": 1e8, "angular_velocity": 1e8}
+STATE_UNITS = {"position": "m", "velocity": "m/s", "angular_velocity": "rad/s"}
 
 
 class State(NamedTuple):
@@ -69,6 +76,12 @@ def checked_state(state, n_blocks: int, where: str) -> State:
         raise ModelError(f"{where} state = {shown(state)}: must be a State (State.at_rest(positions) makes one)")
     arrays = [block_array(value, (n_blocks, 4 if field == "quaternion" else 3), f"{where} state.{field}")
               for field, value in zip(State._fields, state)]
+    for field, array in zip(State._fields, arrays):
+        bound = STATE_BOUNDS.get(field)
+        if bound is not None and array.size and np.abs(array).max() > bound:
+            row = int(np.argmax(np.abs(array).max(axis=1)))
+            raise ModelError(f"{where} state.{field}[{row}] = {array[row].tolist()}: its entries must be within +-{bound:g} "
+                             f"({STATE_UNITS[field]}), far past any block's reach")
     return State(arrays[0], _unit(arrays[1], f"{where} state.quaternion"), *arrays[2:])
 
 
