@@ -492,10 +492,11 @@ def test_a_limit_analysis_stops_at_once_when_interrupted_while_the_solver_runs(t
 
     def slow(model, settings, on_progress=None):
         on_progress("solving a problem that takes a minute")
+        # sent from here, once the command's handler is in place (SIGTERM's default would end pytest)
+        threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGTERM)).start()
         time.sleep(60.0)
 
     monkeypatch.setattr(limit_module, "limit_analysis", slow)
-    threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGTERM)).start()
     out = tmp_path / "run"
     start = time.perf_counter()
     result = run("limit", model_file(tmp_path), "--out", out)
