@@ -67,8 +67,9 @@ def _solve_interruptibly(solve: Callable[[Callable[[str], None]], LimitResult], 
     """``solve(progress)`` in a thread of its own, while this one redraws a bar under the line
     each stage prints (stderr), with the stage's time so far, every second (HiGHS and Clarabel
     let Python run while they solve, minutes on large models) and takes Ctrl-C and SIGTERM: a
-    solver in compiled code sees neither (found by a hunt: Ctrl-C was ignored, and the run
-    finished and exited 0 minutes later). Interrupted, the command ends at once (130 or 143):
+    solver in compiled code sees neither (found by a hunt: Ctrl-C waited until HiGHS had
+    finished, 37 s on a 60 x 60 wall, and SIGTERM ended the command without a word).
+    Interrupted, the command ends at once (130 or 143):
     a limit analysis has no partial result to keep, and the solver's thread, a daemon, ends
     with the process."""
     from tqdm import tqdm
