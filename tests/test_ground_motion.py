@@ -492,34 +492,70 @@ def test_a_baseline_correction_of_one_long_step_and_short_ones_is_refused():
 
 
 def test_a_record_sampled_finer_than_the_timestep_gets_a_note_on_aliasing():
-    """Found by a hunt: a record sampled finer than the timestep is read at the cycles' times,
-    and its content above half the cycle rate turns into slower motion, without a word."""
+    """Found by a hunt: a record sampled finer than the timestep cannot be followed above half
+    the cycle rate, and that went unsaid."""
     fine = motion(np.arange(101) * 1e-4, np.ones(101))
     note = fine.aliasing_note(2e-4)
-    assert note == ("test record is sampled every 0.0001 s at its finest, finer than the timestep, 0.0002 s: it is read at the "
-                    "cycles' times, so its content above 2500 Hz (half the cycle rate) is aliased into slower motion; filter the "
-                    "record below that frequency if it has any")
+    assert note == ("test record is sampled every 0.0001 s at its finest, finer than the timestep, 0.0002 s: its content above "
+                    "2500 Hz (half the cycle rate) is averaged over each cycle, and what is left of it is aliased into slower "
+                    "motion, weakened by the ratio of the frequencies; filter the record below that frequency if it has any")
     assert fine.aliasing_note(1e-4) is None and fine.aliasing_note(5e-5) is None
     sine = pulse("sine", amplitude_m_s2=1.0, frequency_hz=3.0, cycles=2, direction="x")  # analytic: no note
     assert sine.aliasing_note(1.0 / 3.0 / 20) is None
 
 
-def test_the_acceleration_per_cycle_is_exact_at_the_sample_times():
-    dt = 0.01
-    acceleration = np.random.default_rng(2).normal(0.0, 1.0, 30)
-    table = motion(np.arange(30) * dt, acceleration, -acceleration)
-    rows = table.per_cycle(dt, 30)
-    assert rows.shape == (30, 3)
-    np.testing.assert_array_equal(rows, table.acceleration_m_s2)  # t_k = k dt is sample k
+def test_a_vibration_faster_than_the_cycles_moves_the_table_by_its_own_small_velocity():
+    """Found by a hunt: read at the cycles' times, a 5.45 kHz vibration of 6 m/s2 (velocity
+    amplitude A / omega = 1.75e-4 m/s) became a slow motion of 6 m/s2. Averaged over each
+    cycle, the table's velocity in the engine, sum of the rows times dt, is the vibration's own:
+    v(t) = A (1 - cos omega t) / omega, at most 2 A / omega = 3.5e-4 m/s (read at the cycles'
+    times it reached 1.85 m/s)."""
+    frequency_hz, amplitude, dt = 5450.0, 6.0, 1.0 / 5449.0  # nearly a period per cycle: aliased to ~1 Hz
+    times = np.arange(0.0, 2.0, 1.0 / 54500.0)
+    vibration = motion(times, amplitude * np.sin(2.0 * np.pi * frequency_hz * times))
+    table_velocity = np.cumsum(vibration.per_cycle(dt, int(2.0 / dt))[:, 0]) * dt
+    assert np.abs(table_velocity).max() <= 2.0 * amplitude / (2.0 * np.pi * frequency_hz) * (1.0 + 1e-6)
 
 
-def test_the_acceleration_per_cycle_is_linear_between_samples_and_zero_after_the_end():
+def test_the_mean_acceleration_over_a_cycle_of_a_linear_record_is_its_value_at_the_cycle_time():
+    """The mean of a linear function over [t - dt/2, t + dt/2] is its value at t; the record
+    starts at rest before 0, so the first cycle's mean is the ramp's over [0, dt/2], halved."""
+    dt, slope = 0.01, 3.0
+    ramp = motion([0.0, 1.0], [0.0, slope])
+    rows = ramp.per_cycle(dt, 50)
+    np.testing.assert_allclose(rows[1:, 0], slope * np.arange(1, 50) * dt, rtol=0, atol=1e-12 * slope)
+    assert rows[0, 0] == pytest.approx(slope * (dt / 2) ** 2 / 2 / dt, rel=1e-12)  # integral of s t over [0, dt/2], over dt
+
+
+def test_the_mean_acceleration_per_cycle_spans_the_samples_and_is_zero_after_the_end():
     table = motion([0.0, 0.1, 0.2], [0.0, 1.0, -1.0])
     rows = table.per_cycle(0.025, 12)
-    # t = 0, 0.025, ..., 0.275: the line 0 -> 1 -> -1 over 0, 0.1, 0.2, then 0 after 0.2 s
-    expected = [0.0, 0.25, 0.5, 0.75, 1.0, 0.5, 0.0, -0.5, -1.0, 0.0, 0.0, 0.0]
-    np.testing.assert_allclose(rows[:, 0], expected, atol=1e-15)
+    # t = 0, 0.025, ..., 0.275; the mean of the line 0 -> 1 -> -1 over [t - 0.0125, t + 0.0125]:
+    # at 0, the ramp 10 t over [0, 0.0125] (7.8125e-4 m/s over 0.025 s); at 0.1, 10 t over
+    # [0.0875, 0.1] and 1 - 20 (t - 0.1) over [0.1, 0.1125] (0.01171875 + 0.0109375 m/s); at
+    # 0.2, the line from -0.75 to -1 over [0.1875, 0.2], then the table at rest; elsewhere the
+    # line's value at t
+    expected = [0.03125, 0.25, 0.5, 0.75, 0.90625, 0.5, 0.0, -0.5, -0.4375, 0.0, 0.0, 0.0]
+    np.testing.assert_allclose(rows[:, 0], expected, rtol=0, atol=1e-15)
     assert not rows[:, 1:].any()
+
+
+def test_the_table_velocity_in_the_engine_is_exact_at_every_half_step():
+    """The rows times the steps telescope: their sum up to cycle k is the table's velocity at
+    t_k + dt/2, the record's exact integral, for any record and timestep, also with a first
+    step (dt_old + dt) / 2 after a change of timestep (which starts the sum at t_0 - dt_old/2)."""
+    rng = np.random.default_rng(1)
+    times = np.concatenate([[0.0], np.cumsum(rng.uniform(1e-3, 2e-2, 200))])
+    record = motion(times, rng.normal(0.0, 3.0, times.size))
+    dt, dt_old, start = 3.7e-3, 5.1e-3, 0.4
+    first = 0.5 * (dt_old + dt)
+    rows = record.per_cycle(dt, 2000, start, first_step_s=first)
+    velocity = np.cumsum(rows[:, 0] * np.r_[first, np.full(1999, dt)])
+    half_steps = start + (np.arange(2000) + 0.5) * dt
+    exact = record._velocity_change(np.full(2000, start - dt_old / 2), half_steps)[:, 0]
+    scale = np.abs(exact).max()
+    np.testing.assert_allclose(velocity, exact, rtol=0, atol=1e-12 * scale)
+    assert record.acceleration_at(times[7])[0] == record.acceleration_m_s2[7, 0]  # the history's value: exact at a sample
 
 
 def test_consecutive_excerpts_per_cycle_match_one_long_call():
@@ -529,7 +565,7 @@ def test_consecutive_excerpts_per_cycle_match_one_long_call():
     parts = np.concatenate([sine.per_cycle(dt, 7), sine.per_cycle(dt, 393, start_s=7 * dt), sine.per_cycle(dt, 200, 400 * dt)])
     # t = 7 dt + k dt against (7 + k) dt: the same times to round-off, so the same rows to round-off
     np.testing.assert_allclose(parts, whole, rtol=0, atol=1e-12)
-    assert not whole[int(sine.duration_s / dt) + 1:].any()
+    assert not whole[int(sine.duration_s / dt) + 2:].any()  # every cycle whose step starts after the end
     assert sine.per_cycle(dt, 0).shape == (0, 3)
 
 
@@ -541,6 +577,7 @@ def test_consecutive_excerpts_per_cycle_match_one_long_call():
     ((1e-3, 10.0), "per_cycle cycles = 10.0: must be an integer"),
     ((1e-3, 10, True), "per_cycle start_s = True: must be a number"),
     ((1e-3, 10, -1.0), "per_cycle start_s = -1.0: must be a number in [0, inf) s"),
+    ((1e-3, 10, 0.0, 0.0), "per_cycle first_step_s = 0.0: must be a number in (0, inf) s"),
 ])
 def test_bad_per_cycle_arguments_are_refused(arguments, message):
     refused(lambda: motion([0.0, 1.0], [1.0, 2.0]).per_cycle(*arguments), message)

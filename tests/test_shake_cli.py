@@ -285,6 +285,28 @@ def test_a_record_sampled_finer_than_the_timestep_is_run_with_a_note(files, tmp_
     assert "note: " in result.output and "is sampled every 2.5e-06 s at its finest, finer than the timestep" in result.output
 
 
+def test_a_vibration_faster_than_the_cycles_barely_changes_the_response(files, tmp_path):
+    """Found by a hunt: a record read at the cycles' times turned a vibration near the cycle
+    rate into slow motion of its full acceleration. A 20 Hz sine of 1 m/s2 rocks the block
+    (timestep 6.87e-4 s), and a vibration of 6 m/s2 at 0.998 times the cycle rate (aliased to
+    2.9 Hz) is added: read at the cycles' times it took the block to 14 mm against 0.33 mm
+    (2026-11-27); each cycle now takes the record's mean over its step, and the vibration,
+    whose own velocity amplitude is 6 / (2 pi 1453 Hz) = 0.66 mm/s, changes the block's
+    largest displacement by 2 % (measured)."""
+    times = np.arange(50001) * 1e-5  # 0.5 s, 69 samples a timestep
+    responses = {}
+    for name, vibration in (("smooth", 0.0), ("vibrating", 6.0)):
+        record = tmp_path / f"{name}.csv"
+        record.write_text("time_s,acc_x_m_s2\n" + "".join(
+            f"{t:.17g},{math.sin(2 * math.pi * 20 * t) + vibration * math.sin(2 * math.pi * 0.998 / 6.868372680953528e-4 * t):.17g}\n"
+            for t in times))
+        result = shake(files["block"], "--motion", record, "--no-baseline", "--damping-ratio", "0.05", "--out", tmp_path / name)
+        assert result.exit_code == 0, result.output
+        responses[name] = json.loads((tmp_path / name / "summary.json").read_text())
+    assert responses["smooth"]["timestep_s"] == pytest.approx(6.868372680953528e-4, rel=1e-9)  # the vibration's frequency is set by it
+    assert responses["vibrating"]["max_displacement_m"] == pytest.approx(responses["smooth"]["max_displacement_m"], rel=0.05)
+
+
 def test_a_duration_of_fewer_than_twenty_timesteps_is_refused_at_the_run_start(files, tmp_path):
     """Found by a hunt: --duration 1e-300 ran no cycle and reported "no block fell" under a PGA
     the table never reached."""

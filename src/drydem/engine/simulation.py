@@ -317,6 +317,12 @@ class Simulation:
         self.state.velocity[:] = 0.0
         self.state.angular_velocity[:] = 0.0
 
+    @property
+    def velocity_step_s(self) -> float:
+        """s, the velocity step of the next cycle: (dt_old + dt) / 2 right after a stress-dependent
+        joint's timestep changed from dt_old (:meth:`_update_inertia`), else the timestep."""
+        return self._first_velocity_dt
+
     def cycle(self, n: int, *, gravity=(0.0, 0.0, -G), ground_acceleration: np.ndarray | None = None,
               stop: Callable[[], bool] | None = None) -> EquilibriumResult:
         """Run ``n`` cycles (re-detecting contacts as needed), no equilibrium test; ``stop()``

@@ -3,8 +3,8 @@
 A :class:`GroundMotion` is sampled at times ``time_s`` (s, strictly increasing from 0) with the
 table's acceleration ``acceleration_m_s2`` (m/s2, x, y, z components). It comes from a file
 (:func:`read_motion`: a CSV table, :func:`read_csv_motion`, or a PEER NGA ``.AT2`` record,
-:func:`read_at2`) or from an analytic pulse (:func:`pulse`), and gives the explicit engine one
-acceleration per cycle (:meth:`GroundMotion.per_cycle`).
+:func:`read_at2`) or from an analytic pulse (:func:`pulse`), and gives the explicit engine its
+mean acceleration over each cycle (:meth:`GroundMotion.per_cycle`).
 
 Every bad input is a :class:`~drydem.errors.ModelError` naming the file (and line) or the
 parameter, and the rule it breaks.
@@ -13,6 +13,7 @@ parameter, and the rule it breaks.
 from __future__ import annotations
 
 import csv
+import functools
 import math
 import re
 from dataclasses import dataclass, replace
@@ -252,12 +253,12 @@ class GroundMotion:
     def resolution_problem(self, dt_s: float) -> str | None:
         """What keeps an analysis of timestep ``dt_s`` (s) from following the motion, or None.
 
-        The table's acceleration is read at every cycle (:meth:`per_cycle`), so the shortest
-        time the motion must be followed over, a pulse's period (:attr:`period_s`) or, for a
-        record, its whole duration, must span at least :data:`STEPS_PER_PERIOD` timesteps; a
-        pulse shorter than that is passed over between two cycles, and the response to it
-        would be meaningless. (A record's content is not known: sampled finer than the
-        timestep, it is read at the cycles' times.)"""
+        The table's acceleration is taken once a cycle (its mean over the cycle,
+        :meth:`per_cycle`), so the shortest time the motion must be followed over, a pulse's
+        period (:attr:`period_s`) or, for a record, its whole duration, must span at least
+        :data:`STEPS_PER_PERIOD` timesteps; a pulse shorter than that is averaged over a
+        cycle or two, and the response to it would be meaningless. (A record's content is not
+        known: sampled finer than the timestep, its faster content is averaged out.)"""
         span, what = (self.period_s, "its period") if self.period_s is not None else (self.duration_s, "its duration")
         if span >= STEPS_PER_PERIOD * dt_s:
             return None
@@ -267,33 +268,87 @@ class GroundMotion:
                 f"of the shaking); the analysis follows a motion only over at least {STEPS_PER_PERIOD} timesteps: {advice}")
 
     def aliasing_note(self, dt_s: float) -> str | None:
-        """A note if a record is sampled finer than the timestep ``dt_s`` (s), else None: the
-        table's acceleration is read at the cycles' times (:meth:`per_cycle`), so the record's
-        content above half the cycle rate, 1 / (2 dt), is aliased into slower motion (found by
-        a hunt: a 5.4 kHz vibration of 6 m/s2, which moves a table by nanometres, read every
-        1.8e-4 s became a 1 Hz motion of 6 m/s2 and moved a block 21 mm). A pulse is
-        analytic and its period spans at least STEPS_PER_PERIOD timesteps
-        (:meth:`resolution_problem`): None."""
+        """A note if a record is sampled finer than the timestep ``dt_s`` (s), else None: its
+        content above half the cycle rate, 1 / (2 dt), cannot be followed. Each cycle takes the
+        record's mean over its step (:meth:`per_cycle`), which keeps the table's velocity exact
+        at the half steps; what is left of content at f > 1 / (2 dt) is aliased into slower
+        motion at f_a, its acceleration weakened about f_a / f (found by a hunt: read at the
+        cycles' times, a 5.45 kHz vibration of 6 m/s2 read every 1.8e-4 s became a 1 Hz motion
+        of 6 m/s2, and moved a block 21 mm). A pulse is analytic and its period spans at least
+        STEPS_PER_PERIOD timesteps (:meth:`resolution_problem`): None."""
         finest = float(np.diff(self.time_s).min())
         if self.period_s is not None or finest >= dt_s * (1.0 - 1e-6):  # a step of dt in times rounded off is not finer
             return None
-        return (f"{self.label} is sampled every {finest:.3g} s at its finest, finer than the timestep, {dt_s:.3g} s: it is read at "
-                f"the cycles' times, so its content above {0.5 / dt_s:.4g} Hz (half the cycle rate) is aliased into slower motion; "
-                "filter the record below that frequency if it has any")
+        return (f"{self.label} is sampled every {finest:.3g} s at its finest, finer than the timestep, {dt_s:.3g} s: its content "
+                f"above {0.5 / dt_s:.4g} Hz (half the cycle rate) is averaged over each cycle, and what is left of it is aliased into "
+                "slower motion, weakened by the ratio of the frequencies; filter the record below that frequency if it has any")
 
-    def per_cycle(self, dt_s: float, cycles: int, start_s: float = 0.0) -> np.ndarray:
-        """(cycles, 3) the table's acceleration at each explicit cycle, m/s2.
+    def acceleration_at(self, time_s: float) -> np.ndarray:
+        """(3,) the table's acceleration at ``time_s`` (s, at least 0), m/s2: linear between
+        samples (exact at the sample times), zero after the record's end."""
+        check_arguments("acceleration_at", {"time_s": START}, time_s=time_s)
+        return np.array([np.interp(time_s, self.time_s, component, right=0.0) for component in self.acceleration_m_s2.T])
 
-        Row k is the acceleration at t = start_s + k dt_s: the central-difference update of a
-        cycle takes the velocity from t - dt/2 to t + dt/2 with the forces at t (the cycle
-        starting at ``start_s`` s first). The record is interpolated linearly between samples
-        (exact at the sample times) and is zero after its end, where the table moves freely.
+    def per_cycle(self, dt_s: float, cycles: int, start_s: float = 0.0, first_step_s: float | None = None) -> np.ndarray:
+        """(cycles, 3) the table's mean acceleration over each explicit cycle's velocity step, m/s2.
+
+        Cycle k is at t_k = start_s + k dt_s; its central-difference update takes the velocity
+        from t_k + dt/2 - s_k to t_k + dt/2, with s_k = dt_s (the first, s_0, is
+        ``first_step_s`` where given: the step right after a change of timestep,
+        :attr:`drydem.engine.simulation.Simulation.velocity_step_s`). Row k is the table's
+        velocity change over that step divided by it,
+
+            (v_g(t_k + dt/2) - v_g(t_k + dt/2 - s_k)) / s_k,
+
+        with v_g the exact integral of the record (linear between samples, zero before 0 and
+        after its end: :meth:`_velocity_change`). The engine's velocity update then adds the
+        table's own velocity change exactly, so its relative velocities are exact at every half
+        step, whatever the sampling, and a record sampled finer than the timestep is averaged
+        over each step (a box filter) instead of read at the cycles' times: content faster than
+        the cycles, which moves the table by little, is not aliased into slow motion of the
+        same acceleration (found by a hunt: a 5.45 kHz vibration of 6 m/s2 read every 1.8e-4 s
+        became a 1 Hz motion of 6 m/s2 and moved a block 21 mm). For a record sampled at dt or
+        coarser the mean differs from the value at t_k only where a step spans a sample, by at
+        most |s_i - s_(i-1)| dt / 8, s the record's slopes on either side of the sample.
         """
         check_arguments("per_cycle", {"dt_s": TIMESTEP, "cycles": COUNT, "start_s": START},
                         dt_s=dt_s, cycles=cycles, start_s=start_s)
-        times = start_s + np.arange(cycles) * dt_s
-        return np.stack([np.interp(times, self.time_s, component, right=0.0)
-                         for component in self.acceleration_m_s2.T], axis=1)
+        if first_step_s is not None:
+            TIMESTEP.check(first_step_s, "per_cycle first_step_s")
+        ends = start_s + (np.arange(cycles) + 0.5) * dt_s
+        steps = np.full(cycles, dt_s)
+        steps[:1] = dt_s if first_step_s is None else first_step_s
+        return self._velocity_change(ends - steps, ends) / steps[:, None]
+
+    @functools.cached_property
+    def _velocity_at_samples(self) -> np.ndarray:
+        """(n + 1, 3) 0, then the table's velocity at each sample (:meth:`velocity_m_s`), m/s."""
+        return np.concatenate([np.zeros((1, 3)), self.velocity_m_s()])
+
+    def _velocity_change(self, start_s: np.ndarray, end_s: np.ndarray) -> np.ndarray:
+        """(n, 3) the table's velocity change from each ``start_s`` to each ``end_s`` (s), m/s.
+
+        v_g(t) = V_i + a_i tau + (a_(i+1) - a_i) tau^2 / (2 h_i), tau = t - t_i within sample
+        step i (t_i to t_(i+1), h_i long), V_i the trapezoidal integral up to t_i
+        (:meth:`velocity_m_s`, exact for a linear acceleration); 0 before t = 0 and V_(n-1)
+        after the end. The V_i and the parts within the steps are subtracted apart, so that a
+        change within one step, where the V_i cancel exactly, keeps its digits whatever the
+        velocity reached."""
+        (start_whole, start_part), (end_whole, end_part) = self._velocity_parts(start_s), self._velocity_parts(end_s)
+        return (end_whole - start_whole) + (end_part - start_part)
+
+    def _velocity_parts(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The table's velocity at times ``t`` (s) as two (n, 3) parts, m/s: the integral up to
+        the sample step each time falls in, and the integral within that step
+        (:meth:`_velocity_change`)."""
+        time, acceleration = self.time_s, self.acceleration_m_s2
+        step = np.searchsorted(time, t, side="right") - 1  # -1 before the record, n - 1 after its end
+        before = self._velocity_at_samples[step + 1]
+        inside = (step >= 0) & (step < time.size - 1)
+        i = np.clip(step, 0, time.size - 2)
+        tau = np.where(inside, t - time[i], 0.0)[:, None]
+        slope = (acceleration[i + 1] - acceleration[i]) / (time[i + 1] - time[i])[:, None]
+        return before, acceleration[i] * tau + 0.5 * slope * tau * tau
 
 
 def _final_state(acceleration: np.ndarray, time: np.ndarray) -> np.ndarray:

@@ -21,9 +21,10 @@ Rayleigh damping if asked (:mod:`drydem.engine.damping`). The table's accelerati
 enters as the inertial body force -m a_g of the table's frame at every cycle
 (:func:`drydem.engine.loop.cycle_loop`): for a rigid table, translating without turning,
 this is the same as moving the fixed blocks, and gives the response relative to the table
-directly. Mass scaling is off (it would change the dynamics). The motion is sampled at
-every cycle (:meth:`~drydem.analysis.shake.motion.GroundMotion.per_cycle`); a change of the
-timestep at a re-detection ends the chunk, so each cycle's time is exact.
+directly. Mass scaling is off (it would change the dynamics). Each cycle takes the motion's
+mean over its velocity step (:meth:`~drydem.analysis.shake.motion.GroundMotion.per_cycle`), so
+the table's velocity is exact at every half step; a change of the timestep at a re-detection
+ends the chunk, so each cycle's time is exact.
 
 Rows of the history are written every ``output_interval_s`` and at the end; falls are looked
 for at each row, so a fall's time is known to within one output interval.
@@ -224,7 +225,7 @@ class Shaking:
         while self.time_s < end - 0.5 * sim.timestep:
             dt = sim.timestep
             cycles = min(max(1, int(round((min(next_output, end) - self.time_s) / dt))), GROUND_CHUNK_CYCLES)
-            ground = settings.motion.per_cycle(dt, cycles, self.time_s)
+            ground = settings.motion.per_cycle(dt, cycles, self.time_s, first_step_s=sim.velocity_step_s)
             sim.cycle(cycles, ground_acceleration=ground, stop=lambda: sim.timestep != dt)
             if self.time_s < min(next_output, end) - 0.5 * dt:
                 continue
@@ -254,7 +255,7 @@ class Shaking:
         b = self.monitor
         moved = self.sim.state.position[b] - self.rest.position[b]
         turn = rotation_vectors(self.rest.quaternion[b:b + 1], self.sim.state.quaternion[b:b + 1])[0, 1]
-        ground = self.settings.motion.per_cycle(1.0, 1, self.time_s)[0]
+        ground = self.settings.motion.acceleration_at(self.time_s)
         self.rows.append((self.time_s, ground, moved, float(turn)))
 
     def _falls(self) -> bool:
