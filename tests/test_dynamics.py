@@ -345,3 +345,48 @@ def test_the_history_is_the_same_whatever_the_cycles_made_at_once(monkeypatch):
     slip_m = np.abs(whole.ux_m).max()
     assert slip_m > 1e-4  # it slides: 4 m/s2 > mu g
     np.testing.assert_allclose(chunked.ux_m, whole.ux_m, rtol=0, atol=1e-9 * slip_m)
+
+
+def free_block(size_m=(0.3, 0.2, 0.8), *, kn=1e8) -> dd.Model:
+    """A block not held in y (the 3D kernel), ``size_m`` along x, y and z, on a wide fixed base."""
+    bx, by, h = size_m
+    blocks = [
+        dd.Block(name="base", shape=dd.box([-1.0, -1.0, -0.1], [1.0, 1.0, 0.0]), fixed=True),
+        dd.Block(name="block", shape=dd.box([-bx / 2, -by / 2, 0.0], [bx / 2, by / 2, h])),
+    ]
+    return dd.build_model(blocks, density=2000.0, joint=dd.JointMaterial(kn=kn, ks=kn, friction=0.8),
+                          contacts=dd.ContactSettings(points_per_length=2))
+
+
+def test_housner_s_restitution_of_a_block_shaken_along_y_is_across_its_width_along_y():
+    """Found by a hunt: Housner's target took the block's width along x whatever the motion.
+    Shaken along y, the 0.3 x 0.2 x 0.8 m block rocks about x with alpha = atan(0.1 / 0.4):
+    r = 1 - 1.5 sin^2(alpha) = 0.912 (Housner 1963), where its width along x gave 0.815."""
+    from drydem.analysis.shake.run import housner_target
+
+    model = free_block()
+    assert RockingBlock.of(model, 1, 1).alpha_rad == pytest.approx(math.atan(0.1 / 0.4), rel=1e-12)
+    assert RockingBlock.of(model, 1).alpha_rad == pytest.approx(math.atan(0.15 / 0.4), rel=1e-12)
+    assert housner_target(model, 1, 1) == pytest.approx(housner_restitution(math.atan(0.25)), rel=1e-12)
+    assert housner_target(model, 1, 1) == pytest.approx(0.9118, abs=1e-4)
+
+
+def test_a_block_rocking_along_y_answers_as_the_same_block_turned_a_quarter_rocking_along_x():
+    """Found by a hunt: the rotation reported was about y whatever the motion (1e-17 rad for a
+    block rocking about x until it overturned). The block 0.3 x 0.2 m in plan shaken along y and
+    the same block turned a quarter about z (0.2 x 0.3 m) shaken along x are one problem turned:
+    the same rotation across the motion (about -x and about y), the same displacement along it.
+    The pulse, 4 m/s2 at 2 Hz, is above g tan(alpha) = 2.45 m/s2: the block rocks."""
+    responses = {}
+    for size, direction in (((0.3, 0.2, 0.8), "y"), ((0.2, 0.3, 0.8), "x")):
+        motion = pulse("one-sine", amplitude_m_s2=4.0, frequency_hz=2.0, direction=direction)
+        responses[direction] = shake_analysis(free_block(size), ShakeSettings(motion=motion, contact_damping_ratio=0.5,
+                                                                              duration_s=0.8, output_interval_s=0.01))
+    along_y, along_x = responses["y"].history, responses["x"].history
+    assert (along_y.rotation_about, along_x.rotation_about) == ("-x", "y")
+    turn = np.abs(along_x.rotation_rad).max()
+    assert turn > 0.05  # it rocks
+    np.testing.assert_allclose(along_y.rotation_rad, along_x.rotation_rad, rtol=0, atol=1e-6 * turn)
+    np.testing.assert_allclose(along_y.uy_m, along_x.ux_m, rtol=0, atol=1e-6 * np.abs(along_x.ux_m).max())
+    for result in responses.values():  # the largest angle turned, about any axis: here all across the motion
+        assert result.max_rotation_rad == pytest.approx(turn, rel=1e-6)

@@ -115,7 +115,7 @@ def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequenc
         held_notes = check_held_axes(model, ground, _component_option(motion, direction))
         monitored = monitor_index(model, monitor)
         if settings.restitution == HOUSNER:
-            housner_target(model, monitored)  # refused before the run: a squat block does not rock
+            housner_target(model, monitored, ground.main_direction)  # refused before the run: a squat block does not rock
         folder = results_folder(out, found.name, resume=None, overwrite=overwrite)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None

@@ -140,7 +140,7 @@ def history_figure(history: History, path: Path, *, title: str = "", monitored: 
     """The time history of a shaking-table analysis in three panels on one time axis: the
     table's acceleration (m/s2; each component that is not zero throughout), the monitored
     block's displacement relative to the table (ux, uz and a uy that is not zero, mm) and its
-    rotation about y (rad). The first fall among ``fallen`` (block, time in s, rule) is marked
+    rotation across the motion (rad, about ``history.rotation_about``). The first fall among ``fallen`` (block, time in s, rule) is marked
     on every panel."""
     fig = new_figure(figsize=(7.2, 6.4), layout="constrained")
     ground_ax, moved_ax, turn_ax = fig.subplots(3, 1, sharex=True)
@@ -156,7 +156,7 @@ def history_figure(history: History, path: Path, *, title: str = "", monitored: 
     moved_ax.plot(t, history.uz_m * 1e3, color="tab:orange", label="uz")
     who = f" of {monitored}" if monitored else ""
     moved_ax.set(ylabel=f"displacement{who}\nrelative to the table (mm)")
-    turn_ax.plot(t, history.rotation_rad, color="tab:purple", label="rotation about y")
+    turn_ax.plot(t, history.rotation_rad, color="tab:purple", label=f"rotation about {history.rotation_about}")
     turn_ax.set(xlabel="time (s)", ylabel=f"rotation{who} (rad)")
     span = max(t[-1] - t[0], 1e-9)
     right = t[0] + span

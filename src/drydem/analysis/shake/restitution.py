@@ -56,11 +56,12 @@ def housner_restitution(alpha_rad: float) -> float:
     return 1.0 - 1.5 * math.sin(alpha_rad) ** 2
 
 
-def slenderness(shape: ConvexPolyhedron) -> tuple[float, float]:
-    """(b, h), m: the half width along x and half height of a block's bounding box as drawn;
-    alpha = atan(b / h)."""
+def slenderness(shape: ConvexPolyhedron, direction: int = 0) -> tuple[float, float]:
+    """(b, h), m: the half width along ``direction`` (0: x, 1: y) and half height of a block's
+    bounding box as drawn; alpha = atan(b / h). A block shaken along y rocks about x, across its
+    width along y (found by a hunt: its width along x was taken whatever the motion)."""
     extent = np.ptp(shape.vertices, axis=0)
-    return float(extent[0] / 2.0), float(extent[2] / 2.0)
+    return float(extent[direction] / 2.0), float(extent[2] / 2.0)
 
 
 @dataclass(frozen=True)
@@ -77,11 +78,14 @@ class RockingBlock:
         return math.atan2(self.half_width_m, self.half_height_m)
 
     @classmethod
-    def of(cls, model: Model, block: int) -> RockingBlock:
-        """The block ``block`` of ``model``, set on the ground, with the model's joints and density."""
+    def of(cls, model: Model, block: int, direction: int = 0) -> RockingBlock:
+        """The block ``block`` of ``model``, set on the ground, with the model's joints and
+        density, rocking along ``direction`` (0: x, the default; 1: y, about x: the block is
+        turned a quarter about z so that its width along y lies along x, where it rocks here)."""
         shape = model.block_shape[block]
         lowest = shape.vertices.min(axis=0)
-        standing = shape.transformed(np.eye(3), -np.array([shape.centroid[0], shape.centroid[1], lowest[2]]))
+        turn = np.eye(3) if direction == 0 else np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+        standing = shape.transformed(turn, -turn @ np.array([shape.centroid[0], shape.centroid[1], lowest[2]]))
         b, h = slenderness(standing)
         depth = np.ptp(standing.vertices[:, 1])
         base = box([-4.0 * b, -depth, -0.5 * h], [4.0 * b, depth, 0.0], name="base")
@@ -133,8 +137,9 @@ class RockingBlock:
         return math.sqrt(max(energy_ratio, 0.0))
 
 
-def calibrated_damping_ratio(model: Model, block: int, restitution: float) -> float:
-    """zeta for which the block ``block`` of ``model``, rocking alone on its joints, has the
+def calibrated_damping_ratio(model: Model, block: int, restitution: float, direction: int = 0) -> float:
+    """zeta for which the block ``block`` of ``model``, rocking alone on its joints along
+    ``direction`` (0: x, 1: y; :meth:`RockingBlock.of`), has the
     coefficient of restitution ``restitution`` (module docstring): the first interval of
     RATIO_GRID over which r(zeta) crosses it, refined by Brent's method. r(zeta) is not
     monotonic (heavily damped corners stick and lose less), nor is it at the undamped end
@@ -142,7 +147,7 @@ def calibrated_damping_ratio(model: Model, block: int, restitution: float) -> fl
     restitution: the dashpots cannot make an impact lose more than a rigid block's impact
     does (about Housner's r).
     """
-    rocking = RockingBlock.of(model, block)
+    rocking = RockingBlock.of(model, block, direction)
     ratios = np.array(RATIO_GRID)
     excess = np.array([rocking.restitution(ratio) for ratio in ratios]) - restitution
     crossing = _falls_through(excess)
@@ -150,7 +155,7 @@ def calibrated_damping_ratio(model: Model, block: int, restitution: float) -> fl
         raise DrydemError(f"{model.source}: block {model.block_name[block]!r} rocking alone on its joints has a restitution "
                           f"{_between(excess + restitution)} for contact damping ratios {RATIO_GRID[0]:g} to {RATIO_GRID[-1]:g} "
                           f"with {model.contacts.points_per_length} points per length: {restitution:.3f} cannot be reached. "
-                          f"{_with_corner_points(model, block, restitution)}Or give the contact damping ratio directly "
+                          f"{_with_corner_points(model, block, restitution, direction)}Or give the contact damping ratio directly "
                           "(drydem shake --damping-ratio, ShakeSettings.contact_damping_ratio)")
     low, high = ratios[crossing[0]], ratios[crossing[0] + 1]
     return float(brentq(lambda ratio: rocking.restitution(ratio) - restitution, low, high, xtol=RATIO_TOLERANCE))
@@ -165,14 +170,14 @@ def _between(restitutions: np.ndarray) -> str:
     return f"between {restitutions.min():.3f} and {restitutions.max():.3f}"
 
 
-def _with_corner_points(model: Model, block: int, restitution: float) -> str:
+def _with_corner_points(model: Model, block: int, restitution: float, direction: int) -> str:
     """What 2 points per length (sub-contacts at the corners, as Housner's rigid block pivots
     and lands) would reach, for a model with more: sub-contacts spread over the bed take the
     impact gradually and lose less of it (the 0.2 x 0.8 m block, Housner's r 0.912: 0.909 to
     0.963 with 2 points, 0.947 to 0.982 with 4). Empty for a model with 2."""
     if model.contacts.points_per_length == 2:
         return ""
-    corners = RockingBlock.of(model.overridden(points=2), block)
+    corners = RockingBlock.of(model.overridden(points=2), block, direction)
     reached = np.array([corners.restitution(ratio) for ratio in RATIO_GRID])
     verdict = "which reaches it" if _falls_through(reached - restitution).size else "which does not reach it either"
     return (f"Sub-contacts spread over the bed lose less at impact: with 2 points per length (--points 2: at the corners, "

@@ -181,14 +181,17 @@ def damping_ratio(model: Model, monitor: int, settings: ShakeSettings) -> tuple[
     """The contacts' damping ratio zeta and the restitution it was calibrated to (None when zeta is set)."""
     if settings.damping_ratio is not None:
         return float(settings.damping_ratio) + 0.0, None  # + 0.0: a given -0.0 is reported as 0
-    target = housner_target(model, monitor) if settings.restitution == HOUSNER else settings.restitution
-    return calibrated_damping_ratio(model, monitor, target), target
+    direction = settings.motion.main_direction
+    target = housner_target(model, monitor, direction) if settings.restitution == HOUSNER else settings.restitution
+    return calibrated_damping_ratio(model, monitor, target, direction), target
 
 
-def housner_target(model: Model, monitor: int) -> float:
-    """Housner's restitution of the monitored block; DrydemError if the block is too squat to
-    rock (r = 1 - 1.5 sin^2(alpha) <= 0: alpha >= 54.7 deg), with what to give instead."""
-    alpha = RockingBlock.of(model, monitor).alpha_rad
+def housner_target(model: Model, monitor: int, direction: int) -> float:
+    """Housner's restitution of the monitored block rocking along ``direction`` (0: x, 1: y:
+    the motion's :attr:`~drydem.analysis.shake.motion.GroundMotion.main_direction`); DrydemError
+    if the block is too squat to rock (r = 1 - 1.5 sin^2(alpha) <= 0: alpha >= 54.7 deg), with
+    what to give instead."""
+    alpha = RockingBlock.of(model, monitor, direction).alpha_rad
     target = housner_restitution(alpha)
     if target <= 0.0:
         raise DrydemError(
@@ -244,19 +247,22 @@ class Shaking:
     def _report(self, on_progress, on_frame) -> None:
         """Hand the last row to ``on_progress`` and ``on_frame``."""
         sim = self.sim
+        time_s, ground, moved, across, _ = self.rows[-1]
         if on_progress is not None:
-            on_progress(self.time_s, sim.cycles - self.start_cycles, self.rows[-1][3])
+            on_progress(self.time_s, sim.cycles - self.start_cycles, across)
         if on_frame is not None:
-            on_frame(ShakeFrame(*self.rows[-1], sim.state.copy(), sim.contacts.copy(), sim.active.copy()))
+            on_frame(ShakeFrame(time_s, ground, moved, across, sim.state.copy(), sim.contacts.copy(), sim.active.copy()))
 
     def _record(self) -> None:
         """A row of the history: time, the table's acceleration then, the monitored block's
-        displacement and rotation about y."""
+        displacement, its rotation across the motion (:class:`History` ``rotation_rad``) and the
+        whole angle it turned from rest, about any axis."""
         b = self.monitor
         moved = self.sim.state.position[b] - self.rest.position[b]
-        turn = rotation_vectors(self.rest.quaternion[b:b + 1], self.sim.state.quaternion[b:b + 1])[0, 1]
+        turned = rotation_vectors(self.rest.quaternion[b:b + 1], self.sim.state.quaternion[b:b + 1])[0]
+        across = turned[1] if self.settings.motion.main_direction == 0 else -turned[0]
         ground = self.settings.motion.acceleration_at(self.time_s)
-        self.rows.append((self.time_s, ground, moved, float(turn)))
+        self.rows.append((self.time_s, ground, moved, float(across), float(np.linalg.norm(turned))))
 
     def _falls(self) -> bool:
         """Note the blocks that fell since the last look, take out those that dropped out of the
@@ -278,12 +284,12 @@ class Shaking:
 
     def result(self, ratio: float, restitution: float | None, runtime_s: float) -> ShakeResult:
         """The :class:`ShakeResult` of the history run."""
-        times, ground, moved, turn = (np.array(column) for column in zip(*self.rows))
-        history = History(times, ground, moved[:, 0], moved[:, 1], moved[:, 2], turn)
+        times, ground, moved, turn, angle = (np.array(column) for column in zip(*self.rows))
+        history = History(times, ground, moved[:, 0], moved[:, 1], moved[:, 2], turn, ("y", "-x")[self.settings.motion.main_direction])
         horizontal = np.hypot(history.ux_m, history.uy_m)
         return ShakeResult(
             settings=self.settings, monitored_block=self.sim.model.block_name[self.monitor], overturned=bool(self.fallen),
-            fallen_blocks=list(self.fallen), max_rotation_rad=float(np.abs(turn).max()), max_displacement_m=float(horizontal.max()),
+            fallen_blocks=list(self.fallen), max_rotation_rad=float(angle.max()), max_displacement_m=float(horizontal.max()),
             residual_displacement_m=float(horizontal[-1]), duration_s=float(self.time_s), cycles=self.sim.cycles - self.start_cycles,
             runtime_s=runtime_s, contact_damping_ratio=ratio, restitution=restitution, timestep_s=self.timestep,
             ended_by=self.ended_by, history=history, final_state=self.sim.state.copy(),

@@ -100,8 +100,12 @@ class ShakeSettings:
 class History:
     """The response, one row per output interval: time (s), the table's acceleration (m/s2,
     (n, 3)), the monitored block's displacement relative to the table from where it rested
-    before the shaking (ux, uy, uz, m) and its rotation about y (rad, positive when its top
-    moves toward +x: the right-hand rule about +y)."""
+    before the shaking (ux, uy, uz, m) and its rotation across the motion's main direction
+    (:attr:`~drydem.analysis.shake.motion.GroundMotion.main_direction`), rad: about y for a
+    motion mainly along x (positive when its top moves toward +x: the right-hand rule about
+    +y), about x for one mainly along y (positive when its top moves toward +y: about -x).
+    Found by a hunt: it was about y whatever the motion, 1e-17 rad for a block rocking about x
+    until it overturned. ``rotation_about``: "y", or "-x" for a motion mainly along y."""
 
     time_s: np.ndarray
     ground_acceleration_m_s2: np.ndarray
@@ -109,13 +113,14 @@ class History:
     uy_m: np.ndarray
     uz_m: np.ndarray
     rotation_rad: np.ndarray
+    rotation_about: str = "y"
 
 
 @dataclass(frozen=True)
 class ShakeFrame:
     """A state to show, and the history's row of it: model time (s), the table's acceleration
-    ((3,) m/s2), the monitored block's displacement ((3,) m) and rotation about y (rad) as in
-    :class:`History`, the blocks' State, their sub-contacts and the blocks still in the analysis."""
+    ((3,) m/s2), the monitored block's displacement ((3,) m) and rotation across the motion
+    (rad) as in :class:`History`, the blocks' State, their sub-contacts and the blocks still in the analysis."""
 
     time_s: float
     ground_acceleration_m_s2: np.ndarray
@@ -136,8 +141,11 @@ class ShakeResult:
 
     overturned : a block fell: the monitored one, or any other, by either rule of
     :class:`ShakeSettings` (``fallen_blocks`` names each, with the time and the rule).
-    max_rotation_rad, max_displacement_m : the monitored block's largest |rotation| and
-    horizontal displacement relative to the table over the history; residual_displacement_m :
+    max_rotation_rad : the largest angle the monitored block turned from rest over the history,
+    about any axis (at least the largest |rotation_rad| of :class:`History`, which is the part
+    across the motion; it reaches the fall rule's angle when the block overturned).
+    max_displacement_m : its largest horizontal displacement relative to the table over the
+    history; residual_displacement_m :
     its horizontal displacement at the end. contact_damping_ratio : zeta used (given or
     calibrated to ``restitution``, the target, None when zeta was given). timestep_s : of the
     dynamic stage at its start. ended_by : DURATION or MONITOR_FELL (the analysis stops there).
