@@ -303,3 +303,35 @@ def test_a_broken_run_folder_is_named_and_left_out_and_an_empty_folder_has_nothi
     assert f"corrupt record left out: {tmp_path / 'cut' / 'summary.json'}: not a JSON summary" in reported.output
     text = (tmp_path / "report" / "report.md").read_text()
     assert "1 runs recorded (0 failed)." in text and str(tmp_path / "cut" / "summary.json") in text
+
+
+def test_a_paper_wall_tilted_otherwise_than_the_papers_test_is_yours_with_the_change_named(tmp_path):
+    """Found by a hunt: a WD3 run stopped at 2 mm of displacement ("collapse" at 10.0 deg) was
+    preferred, being adaptive, over the 20.0 deg run of the paper's test, and compared with the
+    paper's 20 deg in Table 3 (-49.5 %). A run whose recorded settings change the test (stop
+    displacement, maximum angle, loading, tilt axis, monitor, lost-block rule) is the user's,
+    with the change named; the paper's test fills Table 3."""
+    paper, early = tilt_record("WD3", 3e7, protocol="fixed"), tilt_record("WD3", 3e7)
+    paper["summary"] |= {"collapse_angle_deg": 20.0, "analysis": {"stop_displacement_m": 0.1, "max_angle_deg": 80.0}}
+    early["summary"] |= {"collapse_angle_deg": 10.0, "analysis": {"stop_displacement_m": 0.002, "adaptive": True}}
+    for record in (paper, early):
+        write_record(tmp_path, record)
+    text = build_report(tmp_path).markdown.read_text()
+    assert "| WD3 | 19.8 | 20.1 | 20.0 |" in section(text, "Table 3")
+    yours = section(text, "Your targets: tilting runs")
+    assert "| WD3 |" in yours and "| stop_displacement_m 0.002 |" in yours and "| 10.0 |" in yours
+
+
+def test_a_stiffness_figure_of_runs_without_a_verdict_is_drawn_empty_not_crashed_on(tmp_path):
+    """Found by a hunt: `drydem report` of a WD3 run ended without a verdict (no collapse angle)
+    raised matplotlib's "Data cannot be log-scaled" drawing Fig. 6 (a traceback, and half the
+    figures written). A run with no angle draws nothing, and the figure says it has no runs."""
+    for points in (None, 2):
+        record = tilt_record("WD3", 3e7, points=points)
+        record["summary"] |= {"collapse_angle_deg": None, "last_equilibrium_deg": 11.9, "ended_by": "no equilibrium within max_cycles",
+                              "drift_limit_angles_deg": {"0.005": None, "0.0075": None, "0.01": None}}
+        write_record(tmp_path, record)
+    text = build_report(tmp_path).markdown.read_text()
+    assert "| WD3 | 19.8 | 20.1 | - |" in section(text, "Table 3")
+    for name in ("fig03_contact_points", "fig06_stiffness"):
+        assert f"(no runs for this figure in the study)\n\n![{name}]" in text

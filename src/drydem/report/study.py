@@ -67,8 +67,9 @@ YOURS = "Your targets"
 YOURS_TITLE = f"{YOURS}: runs without published values"
 YOURS_NOTE = (
     "Runs of targets the paper did not analyse (wall, model and geometry files, named by file; drydem's other built-in "
-    "targets) and of its walls at a friction other than its {friction:g}: drydem's results alone, with no published values to "
-    "compare them with. kn, ks, friction, points: the run's overrides, else its model's as recorded ('-': not recorded). "
+    "targets), and of its walls at a friction other than its {friction:g} or tilted otherwise than its test (another stop "
+    "displacement, maximum angle, loading, tilt axis, monitored block or lost-block rule): drydem's results alone, with no "
+    "published values to compare them with. kn, ks, friction, points: the run's overrides, else its model's as recorded ('-': not recorded). "
     "Collapse angle: the last tilt in equilibrium; '>= X': no equilibrium within max_cycles after X deg, and no collapse "
     "either (a lower bound); 'none up to X': no collapse up to the run's maximum angle, X deg (a lower bound); 'cannot "
     "stand': the model falls under its own weight. DLS: the tilt at which the monitored "
@@ -81,12 +82,47 @@ NOTE = ("drydem's WD1-WD7 are reconstructions that obey the competition brief, n
 def paper_wall(record: dict) -> str | None:
     """The paper's wall (WD1-WD7) a run analyses as the paper did, so that its published values
     compare: its target is the built-in wall's name (case aside, as
-    :func:`drydem.masonry.designs.find` reads it; a file is the user's, whatever its name) and its
-    friction the paper's (None: the wall's own, which is the paper's). None for every other run."""
+    :func:`drydem.masonry.designs.find` reads it; a file is the user's, whatever its name), its
+    friction the paper's (None: the wall's own, which is the paper's) and its test the paper's
+    (:func:`is_paper_test`). None for every other run."""
     spec = record["spec"]
     design = next((d for d in DESIGNS if d.lower() == str(spec["target"]).lower()), None)
     friction = spec.get("friction")
-    return design if friction is None or _close(friction, savalle2022()["wall"]["friction"]) else None
+    paper_friction = friction is None or _close(friction, savalle2022()["wall"]["friction"])
+    return design if paper_friction and is_paper_test(record) else None
+
+
+#: the tilting settings (:class:`~drydem.analysis.tilt.TiltSettings`) that make the paper's test
+#: when they are their defaults: the table tilted about y to the collapse, the top block's
+#: displacement monitored up to the 0.10 m stop. The increment and protocol only change how
+#: closely the collapse is found (:func:`_preferred` picks among runs)
+PAPER_TEST = ("stop_displacement_m", "loading", "tilt_axis", "monitor", "max_angle_deg", "lost_drop_heights")
+
+
+def is_paper_test(record: dict) -> bool:
+    """Whether a run is of the paper's test: no setting of :data:`PAPER_TEST` changed
+    (:func:`changed_test_settings`). Found by a hunt: a WD3 run stopped at 2 mm of displacement,
+    "collapsed" at 10.0 deg, was compared with the paper's 20 deg."""
+    return not changed_test_settings(record)
+
+
+def changed_test_settings(record: dict) -> dict:
+    """The settings of :data:`PAPER_TEST` in which a tilting run's, as its summary records them
+    (``analysis``), are not the defaults: {setting: value}; {} for another analysis, and for a
+    run that records none (a sweep's runs have no others)."""
+    from drydem.analysis.tilt import TiltSettings
+
+    settings = (record.get("summary") or {}).get("analysis")
+    if record["spec"]["analysis"] != "tilt" or not isinstance(settings, dict):
+        return {}
+    default = TiltSettings()
+    return {key: settings[key] for key in PAPER_TEST if key in settings and not _same(settings[key], getattr(default, key))}
+
+
+def _same(value, default) -> bool:
+    """A recorded setting equals its default: numbers to round-off, anything else exactly."""
+    numbers = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (value, default))
+    return _close(value, default) if numbers else value == default
 
 
 def angle_text(summary: dict) -> str:
@@ -386,7 +422,14 @@ def _settings(record: dict) -> dict[str, str]:
     spec = record["spec"]
     friction, points = _setting(record, "friction"), _setting(record, "points")
     return {"joints": _joints(record), "friction": _cell(friction, "{:g}"), "points": _cell(points, "{:g}"), "protocol": spec["protocol"],
-            "increment (deg)": _cell(spec["increment_deg"], "{:g}")}
+            "increment (deg)": _cell(spec["increment_deg"], "{:g}"), "test": _test_words(record)}
+
+
+def _test_words(record: dict) -> str:
+    """The settings in which a tilting run is not the paper's test (:func:`changed_test_settings`), in
+    words ("stop_displacement_m 0.002"), "-" for none."""
+    return ", ".join(f"{key} {value:g}" if isinstance(value, float) else f"{key} {value}"
+                     for key, value in changed_test_settings(record).items()) or "-"
 
 
 def _target_labels(records: list[dict]) -> dict[str, str]:
@@ -643,6 +686,7 @@ def _figure(folder: Path, name: str, caption: str, draw, *, panels: int = 1) -> 
 
 def _contact_points(ax, runs: Runs) -> bool:
     points = sorted({r["spec"]["points"] for r in runs.tilts("WD3") if r["spec"]["points"] is not None and _close(r["spec"]["kn"], 3e7)})
+    points = [p for p in points if runs.angle("WD3", 3e7, points=p) is not None]  # a run without a verdict has no angle to draw
     angles = [runs.angle("WD3", 3e7, points=p) for p in points]
     ax.plot(points, angles, "o-")
     ax.set(xlabel="contact points per block length", ylabel="collapse angle (deg)")
@@ -659,9 +703,9 @@ def _stiffness(ax, runs: Runs, paper: dict) -> bool:
     drew = False
     for d in DESIGNS:
         kns = runs.stiffnesses(d)
-        if kns:
+        capacity = [runs.capacity(d, kn) for kn in kns]  # None: no verdict, a gap in the line
+        if any(c is not None for c in capacity):  # found by a hunt: only runs without a verdict failed on the log scale
             drew = True
-            capacity = [runs.capacity(d, kn) for kn in kns]  # None: no verdict, a gap in the line
             ax.plot(kns, [np.nan if c is None else c / experiment[d] for c in capacity], "o-", label=d, markersize=3)
     ax.axhline(1.0, color="k", linewidth=0.8)
     ax.set(xscale="log" if drew else "linear", xlabel="kn = ks (Pa/m)", ylabel="collapse angle / experiment")
