@@ -164,6 +164,9 @@ def test_an_interrupted_tilt_keeps_its_checkpoint_and_resumes_from_it(tmp_path, 
     assert (out / "checkpoint.npz").is_file() and len(csv.read_text().splitlines()) >= 3
     changed = CliRunner().invoke(main, ["tilt", "perforated_wall", "--out", str(out), "--resume", "--increment", "0.2"])
     assert changed.exit_code == 1 and "tilt setting increment_deg: 0.1 in the checkpoint, 0.2 now" in changed.output
+    # found by a hunt: a series begun at the checkpoint would miss the run's first equilibria
+    late = CliRunner().invoke(main, ["tilt", "perforated_wall", "--out", str(out), "--resume", "--vtk"])
+    assert late.exit_code == 1 and "the run being resumed has no VTK series, and one begun now would miss its" in late.output
     result = CliRunner().invoke(main, ["tilt", "perforated_wall", "--out", str(out), "--resume"])
     assert result.exit_code == 0 and "resuming from" in result.output and "checkpoint.npz: last equilibrium at" in result.output
     # the run is finished: resuming again keeps its results and runs nothing

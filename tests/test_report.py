@@ -319,7 +319,7 @@ def test_a_paper_wall_tilted_otherwise_than_the_papers_test_is_yours_with_the_ch
     text = build_report(tmp_path).markdown.read_text()
     assert "| WD3 | 19.8 | 20.1 | 20.0 |" in section(text, "Table 3")
     yours = section(text, "Your targets: tilting runs")
-    assert "| WD3 |" in yours and "| stop_displacement_m 0.002 |" in yours and "| 10.0 |" in yours
+    assert "| WD3 |" in yours and "| adaptive (stop_displacement_m 0.002) |" in yours and "| 10.0 |" in yours
 
 
 def test_a_stiffness_figure_of_runs_without_a_verdict_is_drawn_empty_not_crashed_on(tmp_path):

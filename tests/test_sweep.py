@@ -225,3 +225,34 @@ def test_a_study_tilting_a_wall_too_tall_for_the_stop_displacement_is_refused_be
                                          r"height") as caught:
         load_study(study_file)
     assert str(caught.value).startswith(str(study_file))
+
+
+def test_a_run_recorded_on_a_target_file_that_changed_since_is_neither_taken_as_done_nor_replaced_unasked(study_file, tmp_path):
+    """Found by a hunt: a sweep run again after its target file was edited (or on another file
+    of the same path) said "1 skipped" and kept the old file's result. A record keeps the
+    SHA-256 of each file its run read; a run recorded on other content is left as it is, and the
+    sweep exits 1 naming the file and --retry-changed, which runs it again on the file as it is."""
+    from click.testing import CliRunner
+
+    from drydem.cli import main
+
+    study_file.write_text(STUDY[:STUDY.index("[[grid]]")] + STUDY[STUDY.index('[[grid]]\nname = "limit"'):])
+    out = tmp_path / "results"
+    first = CliRunner().invoke(main, ["sweep", str(study_file), "--out", str(out), "--workers", "1"])
+    assert first.exit_code == 0, first.output
+    pier = study_file.parent / "pier.toml"
+    before = {r["spec"]["target"]: r for r in load_records(out).valid}
+    assert set(before[str(pier)]["inputs"]) == {str(pier)}
+    pier.write_text(WALL_FILE.format(courses="B\n" * 5))  # half as tall: it rocks later
+    again = CliRunner().invoke(main, ["sweep", str(study_file), "--out", str(out), "--workers", "1"])
+    assert again.exit_code == 1, again.output
+    assert "0 runs done (0 failed), 2 skipped" in again.output
+    assert f"1 runs are recorded on files whose content has changed since, or that are gone ({pier})" in again.output
+    assert "--retry-changed" in again.output
+    assert {r["spec"]["target"]: r for r in load_records(out).valid} == before  # nothing replaced unasked
+    retried = CliRunner().invoke(main, ["sweep", str(study_file), "--out", str(out), "--workers", "1", "--retry-changed"])
+    assert retried.exit_code == 0, retried.output
+    assert "1 runs done (0 failed), 1 skipped" in retried.output
+    after = {r["spec"]["target"]: r for r in load_records(out).valid}
+    assert after[str(pier)]["summary"]["collapse_angle_deg"] != before[str(pier)]["summary"]["collapse_angle_deg"]
+    assert after[str(pier)]["inputs"] != before[str(pier)]["inputs"]

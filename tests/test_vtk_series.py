@@ -13,6 +13,7 @@ from drydem.cli import main
 from drydem.files import WRITING, lock_exclusively, partial_name, unlock
 from drydem.io.model_file import save_model
 from drydem.io.results import RUN_MARK
+from drydem.engine.checkpoint import load_checkpoint
 from drydem.io.vtk import VtkSeries
 from conftest import layout_blocks
 
@@ -378,7 +379,8 @@ def test_a_resumed_run_keeps_the_frames_already_written_and_goes_on_after_them(w
     with pytest.raises(KeyboardInterrupt):
         tilt_analysis(wall, SETTINGS, on_frame=series, on_record=interrupt, checkpoint=checkpoint)
     assert [row["tilt_deg"] for row in frames(folder)] == ["0.000000", "5.000000"]
-    tilt_analysis(wall, SETTINGS, on_frame=VtkSeries(folder, wall, resume=True), checkpoint=checkpoint, resume=True)
+    kept = len(load_checkpoint(checkpoint)[1]["records"])
+    tilt_analysis(wall, SETTINGS, on_frame=VtkSeries(folder, wall, resume_after=kept), checkpoint=checkpoint, resume=True)
     resumed, uninterrupted = frames(folder), frames(run[1])
     assert [(r["frame"], r["kind"], r["tilt_deg"]) for r in resumed] == [(r["frame"], r["kind"], r["tilt_deg"]) for r in uninterrupted]
 
@@ -401,3 +403,40 @@ def test_a_shake_frame_before_the_table_started_or_before_the_frame_before_is_re
     rows = [{"frame": "0", "time_s": "0.0"}, {"frame": "1", "time_s": "0.2"}, {"frame": "2", "time_s": "0.1"}]
     with pytest.raises(DrydemError, match=r"frames.csv: line 4: time_s 0.1 is before the frame before's, 0.2 \(line 3\)"):
         _check_increasing(tmp_path / "frames.csv", rows)
+
+
+@pytest.mark.parametrize("interrupted_at_deg", [10.0, 15.0])
+def test_a_resumed_tilt_keeps_its_thinned_vtk_series_whole_and_refuses_to_leave_it_partial(wall, tmp_path, monkeypatch,
+                                                                                         interrupted_at_deg):
+    """Found by a hunt: a run begun with --vtk --save-every 3, interrupted and resumed, kept
+    frames at other tilts than the uninterrupted run (counting on from the frames written, not
+    from the checkpoint's equilibria); a run resumed without --vtk left its series stopped at
+    the interruption, which `drydem animate` then rendered as the collapse; one resumed with
+    --vtk where none was begun started its series at the checkpoint. The last two are refused,
+    as is another --save-every; the first gives the uninterrupted run's frames."""
+    from drydem.io.results import PushoverWriter
+
+    model_file = tmp_path / "wall.toml"
+    save_model(wall, model_file)
+    tilt = ["tilt", str(model_file), "--increment", "5", "--fixed", "--save-every", "2"]
+    whole = CliRunner().invoke(main, [*tilt, "--vtk", "--out", str(tmp_path / "whole")])
+    assert whole.exit_code == 0, whole.output
+    write_row = PushoverWriter.__call__
+
+    def interrupting(writer, record):
+        write_row(writer, record)
+        if record.tilt_deg >= interrupted_at_deg:
+            raise KeyboardInterrupt
+
+    out = tmp_path / "run"
+    monkeypatch.setattr(PushoverWriter, "__call__", interrupting)
+    assert CliRunner().invoke(main, [*tilt, "--vtk", "--out", str(out)]).exit_code == 130
+    monkeypatch.undo()
+    without = CliRunner().invoke(main, [*tilt[:-2], "--out", str(out), "--resume"])
+    assert without.exit_code == 1 and "holds the VTK series of the run being resumed; resume with --vtk" in without.output
+    other = CliRunner().invoke(main, [*tilt[:-1], "3", "--vtk", "--out", str(out), "--resume"])
+    assert other.exit_code == 1 and "the VTK series was begun with --save-every 2" in other.output
+    resumed = CliRunner().invoke(main, [*tilt, "--vtk", "--out", str(out), "--resume"])
+    assert resumed.exit_code == 0, resumed.output
+    assert [(r["frame"], r["kind"], r["tilt_deg"]) for r in frames(out / "vtk")] == \
+        [(r["frame"], r["kind"], r["tilt_deg"]) for r in frames(tmp_path / "whole" / "vtk")]

@@ -16,7 +16,10 @@ from drydem.cli.common import PLAIN_FLOAT, joint_law_options, main, out_path, sc
 @workers_option
 @scheduler_option
 @click.option("--retry-failed", is_flag=True, help="Run again the runs recorded as failed.")
-def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str | None, retry_failed: bool) -> None:
+@click.option("--retry-changed", is_flag=True, help="Run again the runs recorded on a target or motion file whose content has "
+              "changed since (their records are replaced).")
+def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str | None, retry_failed: bool,
+          retry_changed: bool) -> None:
     """Run a parametric study (STUDY_FILE, TOML, or a shipped study: savalle2022): every run a
     tilting, limit or shaking-table analysis, each recorded in OUT/runs as it finishes; run again to go on
     where it stopped (corrupt records are run again). The whole study is checked before the
@@ -43,7 +46,7 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
         raise click.ClickException(str(exc)) from None
     try:
         out = records_folder(out or Path("results") / study.name)
-        plan = pending(study.runs, out, retry_failed=retry_failed)
+        plan = pending(study.runs, out, retry_failed=retry_failed, retry_changed=retry_changed)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     for note in study.notes:
@@ -64,7 +67,8 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
                     bar.set_postfix(failed=len(failures))
 
             try:
-                outcome = run_sweep(study.runs, out, pool.executor, retry_failed=retry_failed, in_flight=pool.slots, on_done=done,
+                outcome = run_sweep(study.runs, out, pool.executor, retry_failed=retry_failed, retry_changed=retry_changed,
+                                    in_flight=pool.slots, on_done=done,
                                     on_other=lambda spec: bar.update(1))
             except KeyboardInterrupt:
                 click.echo(f"\ninterrupted ({received.name}); the finished runs are recorded in {out}; the same command goes on", err=True)
@@ -77,10 +81,25 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
     if outcome.elsewhere:
         click.echo(f"{outcome.elsewhere} runs left to another sweep working on {out} (it holds their claims, runs/*.lock); "
                    "run this command again once it has finished to check that every run is recorded")
+    problems = _incomplete(outcome, out)
+    if problems:
+        raise click.ClickException("the study is not complete: " + "; ".join(problems))
+
+
+def _incomplete(outcome, out: Path) -> list[str]:
+    """What keeps a sweep's study from being complete, in words: runs failed, now or before, and
+    runs recorded on input files that changed since (not retried)."""
+    problems = []
     if outcome.failed or outcome.failed_before:
         before = f" and {outcome.failed_before} recorded as failed before" if outcome.failed_before else ""
-        raise click.ClickException(f"the study is not complete: {outcome.failed} runs failed now{before} (each record in "
-                                   f"{out / 'runs'} holds its error); fix the cause and run again with --retry-failed")
+        problems.append(f"{outcome.failed} runs failed now{before} (each record in {out / 'runs'} holds its error); fix the cause "
+                        "and run again with --retry-failed")
+    if outcome.changed_before:
+        files = sorted({path for paths in outcome.changed_before.values() for path in paths})
+        problems.append(f"{len(outcome.changed_before)} runs are recorded on files whose content has changed since, or that are "
+                        f"gone ({', '.join(files)}): their results are of the files as they were; run again with --retry-changed "
+                        "to replace them, or give the changed study another --out")
+    return problems
 
 
 @main.command()

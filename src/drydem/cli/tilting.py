@@ -141,7 +141,7 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
         return
     _announce_tilt(found, model, settings, folder, saved)
     go_on = "the same command plus --resume" if out is not None else f"the same command plus --out {folder} --resume"
-    result, series = _run_tilt(found, model, settings, folder, resume=resume, series=vtk or video, save_every=save_every, go_on=go_on)
+    result, series = _run_tilt(found, model, settings, folder, saved=saved, series=vtk or video, save_every=save_every, go_on=go_on)
     if video:
         _render(series.folder, folder / "collapse.mp4", fps=8.0)
     if result.ended_by in (NO_EQUILIBRIUM_UNDER_GRAVITY, NO_EQUILIBRIUM):
@@ -171,7 +171,24 @@ def _tilt_plan(found: Target, tilt: TiltOptions, out: Path | None, resume: bool,
     if resume:
         _, saved = load_checkpoint(folder / CHECKPOINT)
         check_fingerprint(folder / CHECKPOINT, saved, fingerprint(model, settings))
+        if not (folder / "summary.json").is_file():  # a finished run resumes nothing (the command says so)
+            _check_resumed_series(folder, saved, series)
     return model, settings, folder, saved
+
+
+def _check_resumed_series(folder: Path, saved: dict, series: bool) -> None:
+    """DrydemError unless a resumed run's VTK series would be whole: one begun (OUT/vtk) goes on
+    only with --vtk or --video, and one asked for where none was begun would miss the
+    equilibria before the checkpoint (found by a hunt: either way the series was partial, and
+    rendered as the collapse without a word)."""
+    begun = (folder / "vtk" / "frames.csv").is_file()
+    if begun and not series:
+        raise DrydemError(f"{folder / 'vtk'}: holds the VTK series of the run being resumed; resume with --vtk (or --video) and "
+                          "the same --save-every so that it goes on, or move that folder away to go on without it")
+    if series and not begun:
+        raise DrydemError(f"{folder}: the run being resumed has no VTK series, and one begun now would miss its "
+                          f"{len(saved['records'])} equilibrium states up to {float(saved['theta_deg']):g} deg; resume without "
+                          "--vtk and --video, or run it again from the start with --overwrite")
 
 
 def _announce_tilt(found: Target, model: Model, settings, folder: Path, saved: dict | None) -> None:
@@ -188,11 +205,12 @@ def _announce_tilt(found: Target, model: Model, settings, folder: Path, saved: d
                    "reach equilibrium", err=True)
 
 
-def _run_tilt(found: Target, model: Model, settings, folder: Path, *, resume: bool, series: bool, save_every: int, go_on: str):
+def _run_tilt(found: Target, model: Model, settings, folder: Path, *, saved: dict | None, series: bool, save_every: int, go_on: str):
     """Tilt with a progress bar, writing pushover rows, checkpoints (and VTK frames if
-    ``series``) as it goes, then its results (:func:`_tilt_outputs`); the result and the VTK
-    series (None without one). An interruption or a failure to write ends the command, saying
-    what was kept and ``go_on``."""
+    ``series``) as it goes, then its results (:func:`_tilt_outputs`), going on from the
+    checkpoint's ``saved`` content when resuming; the result and the VTK series (None without
+    one). An interruption or a failure to write ends the command, saying what was kept and
+    ``go_on``."""
     from tqdm import tqdm
 
     from drydem.analysis.tilt import CHECKPOINT_EVERY_S, tilt_analysis
@@ -209,9 +227,10 @@ def _run_tilt(found: Target, model: Model, settings, folder: Path, *, resume: bo
             # before the first cycle count: minutes on 10^4-10^5 blocks (found by a hunt: a bar that looked hung)
             bar.set_postfix_str("finding the contacts, then settling under gravity")
             frames = writer = None
+            resume = saved is not None
             try:
-                frames = (VtkSeries(folder / "vtk", model, every=save_every, resume=resume, load_direction=settings.load_direction)
-                          if series else None)
+                frames = (VtkSeries(folder / "vtk", model, every=save_every, resume_after=len(saved["records"]) if resume else None,
+                                    load_direction=settings.load_direction) if series else None)
                 writer = PushoverWriter(folder)
                 result = tilt_analysis(model, settings, on_record=writer, on_progress=progress, on_frame=frames,
                                        checkpoint=folder / CHECKPOINT, resume=resume)

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import os
 from itertools import groupby
 from pathlib import Path
@@ -117,29 +118,39 @@ SAVE_EVERY = Range(1, None, integer=True)
 class VtkSeries:
     """Frames of a tilting analysis (drydem.analysis.tilt.Frame) as two VTK time series in
     ``folder``: ``blocks_NNNN.vtu`` and ``contacts_NNNN.vtu``, indexed by ``blocks.pvd`` and
-    ``contacts.pvd`` (time = frame number), and ``frames.csv`` (frame, kind, tilt, monitored
+    ``contacts.pvd`` (time = frame number), ``frames.csv`` (frame, kind, tilt, monitored
     displacement along the load, the load's direction ``load_direction``: 0, "x", or 1, "y",
-    which a video is seen from). Each frame is written as it comes, and the indexes rewritten
-    atomically, so a crash keeps what was written. Equilibrium frames are kept every
-    ``every``-th; the states past collapse all. Use an instance as
-    ``tilt_analysis(..., on_frame=series)``. With ``resume``, the equilibrium frames already in
-    ``folder`` (its ``frames.csv``) are kept and the series goes on after them, as the analysis
-    goes on from its checkpoint (an equilibrium given again replaces the frames from its tilt
-    on)."""
+    which a video is seen from) and ``series.json`` (``{"every": N}``). Each frame is written as
+    it comes, and the indexes rewritten atomically, so a crash keeps what was written.
+    Equilibrium frames are kept every ``every``-th; the states past collapse all. Use an
+    instance as ``tilt_analysis(..., on_frame=series)``.
 
-    def __init__(self, folder: Path, model: Model, *, every: int = 1, resume: bool = False, load_direction: int = 0):
+    ``resume_after``: None for a new series; n for the series of a run resumed from a
+    checkpoint that holds n equilibrium states (``len(saved["records"])`` of
+    :func:`~drydem.engine.checkpoint.load_checkpoint`): the frames of those are kept, the
+    frames after them (written before the interruption, given again by the resumed analysis)
+    dropped, and the count of equilibria goes on from n, so that the frames kept are those of
+    an uninterrupted run (found by a hunt: counting on from the frames written shifted every
+    later frame of a --save-every 3 series). The series must have been begun with the same
+    ``every`` (its series.json): DrydemError otherwise."""
+
+    def __init__(self, folder: Path, model: Model, *, every: int = 1, resume_after: int | None = None, load_direction: int = 0):
         SAVE_EVERY.check(every, "VtkSeries every")
         LOAD_DIRECTION.check(load_direction, "VtkSeries load_direction")
+        if resume_after is not None:
+            RESUMED_EQUILIBRIA.check(resume_after, "VtkSeries resume_after")
         self.folder, self.model, self.every, self.load_axis = Path(folder), model, every, LOAD_AXES[load_direction]
         self.folder.mkdir(parents=True, exist_ok=True)
-        self.rows: list[tuple[int, str, float, float]] = _equilibrium_rows(self.folder / "frames.csv") if resume else []
-        self.equilibria = (len(self.rows) - 1) * every + 1 if self.rows else 0
+        self.rows: list[tuple[int, str, float, float]] = []
+        self.equilibria = 0
+        if resume_after is not None:
+            _check_series_every(self.folder, every)
+            self.rows = _equilibrium_rows(self.folder / "frames.csv")[:-(-resume_after // every)]
+            self.equilibria = resume_after
+        _write_series_settings(self.folder, every)
 
     def __call__(self, frame) -> None:
         if frame.kind == "equilibrium":
-            # a step redone after --resume replaces the frames it had already given
-            while self.rows and self.rows[-1][2] >= frame.tilt_deg - 1e-9:
-                self.rows.pop()
             self.equilibria += 1
             if (self.equilibria - 1) % self.every:
                 return
@@ -148,6 +159,35 @@ class VtkSeries:
         self.rows.append((k, frame.kind, frame.tilt_deg, frame.ux_m))
         _write_indexes(self.folder, len(self.rows), ("frame", "kind", "tilt_deg", "ux_m", "load_direction"),
                        [(i, kind, f"{tilt:.6f}", f"{ux:.8g}", self.load_axis) for i, kind, tilt, ux in self.rows])
+
+
+#: the equilibrium states a resumed tilting series goes on after
+RESUMED_EQUILIBRIA = Range(0, None, integer=True)
+#: a tilting series' settings file in its folder: ``{"every": N}``
+SERIES_SETTINGS = "series.json"
+
+
+def _write_series_settings(folder: Path, every: int) -> None:
+    """``folder``/series.json: the series' ``every`` (:class:`VtkSeries`)."""
+    with replaced_atomically(folder / SERIES_SETTINGS) as partial:
+        partial.write_text(json.dumps({"every": every}) + "\n")
+
+
+def _check_series_every(folder: Path, every: int) -> None:
+    """DrydemError naming ``folder``'s series.json if the series there was begun keeping every
+    other number of equilibrium frames than ``every`` (resumed with another --save-every, its
+    frames would be unevenly spaced). A series without the file (none begun, or one of a drydem
+    before it) is taken as it is."""
+    path = folder / SERIES_SETTINGS
+    if not os.path.lexists(path):
+        return
+    try:
+        begun = json.loads(read_text(path, "series.json of drydem tilt --vtk is JSON text"))["every"]
+    except (ValueError, TypeError, KeyError) as exc:
+        raise DrydemError(f"{path}: not the settings of a drydem tilt --vtk series ({exc!r})") from None
+    if begun != every:
+        raise DrydemError(f"{path}: the VTK series was begun with --save-every {begun}; resumed with --save-every {every} its "
+                          f"frames would be unevenly spaced: resume with --save-every {begun}")
 
 
 class ShakeSeries:

@@ -141,6 +141,9 @@ def _record_problem(record, run_id: str) -> str | None:
         return f"a {status!r} record without {missing}"
     if record["id"] != run_id:
         return f"its id {record['id']!r} is not its file's name"
+    inputs = record.get("inputs", {})
+    if not (isinstance(inputs, dict) and all(isinstance(k, str) and isinstance(v, str) for k, v in inputs.items())):
+        return "inputs must be a table of the files the run read, each with the SHA-256 of its content (a text)"
     try:
         spec = RunSpec(**record["spec"])
         spec_id = spec.id

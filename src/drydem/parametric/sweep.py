@@ -12,12 +12,13 @@ written (see :func:`claim`); the other sweep leaves it and says so.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import time
 import traceback
 from collections.abc import Callable, Iterable
 from concurrent.futures import FIRST_COMPLETED, Executor, Future, wait
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from drydem.errors import DrydemError
@@ -31,9 +32,10 @@ class SweepError(DrydemError):
 
 
 def run_one(spec: RunSpec) -> dict:
-    """Run ``spec`` and return its record; a failure is recorded, never raised."""
+    """Run ``spec`` and return its record, with the digests of the files it reads
+    (:func:`input_digests`, ``inputs``); a failure is recorded, never raised."""
     start = time.perf_counter()
-    record = {"id": spec.id, "spec": asdict(spec)}
+    record = {"id": spec.id, "spec": asdict(spec), "inputs": input_digests(spec)}
     try:
         record |= {"status": "ok", "error": None} | _analyse(spec)
     except Exception as exc:  # a failing run must not stop the sweep: its error is the record
@@ -65,6 +67,30 @@ def _analyse(spec: RunSpec) -> dict:
     return {"summary": tilt_summary(result, model), "pushover": curve}
 
 
+def input_digests(spec: RunSpec, known: dict[str, str | None] | None = None) -> dict[str, str]:
+    """{path: SHA-256 of its content} of the files a run reads: its target unless a built-in
+    wall, its motion unless a pulse; a file that cannot be read is left out (the run fails on
+    it). ``known``: digests already taken, by path, to reuse and add to."""
+    known = {} if known is None else known
+    for path in (spec.target, spec.motion):
+        if path is not None and path not in known and not path.startswith(PULSE_PREFIX):
+            try:
+                known[path] = hashlib.sha256(Path(path).read_bytes()).hexdigest() if Path(path).is_file() else None
+            except OSError:
+                known[path] = None
+    return {path: known[path] for path in (spec.target, spec.motion) if known.get(path) is not None}
+
+
+def changed_inputs(record: dict, spec: RunSpec, known: dict[str, str | None]) -> list[str]:
+    """The files among those a record was run on (its ``inputs``) whose content is not what it
+    was then, or that are gone: its result is not of the files as they are. None known for a
+    record of a drydem before the digests (no ``inputs``): [] (found by a hunt: a sweep run
+    again after its target file was edited, or on another file of the same path, took the old
+    record as done)."""
+    now = input_digests(spec, known)
+    return [path for path, digest in (record.get("inputs") or {}).items() if now.get(path) != digest]
+
+
 def shake_summary(result, spec: RunSpec, motion, model) -> dict:
     """The summary of a shake run's record: ``drydem shake``'s
     (:func:`drydem.io.results.shake_summary`), with the motion as the study gives it
@@ -83,22 +109,24 @@ def shake_summary(result, spec: RunSpec, motion, model) -> dict:
     }
 
 
-@dataclass(frozen=True)
+@dataclass
 class Pending:
-    """What a sweep has to run: ``todo`` (no record, a corrupt one, or a failed one when retried),
-    how many runs are ``recorded`` (``failed`` of them recorded as failed and not retried), the
-    ``corrupt`` records' errors, and for each run to do the identity of its record file when
-    looked at (:func:`_identity`), to tell after claiming it whether another sweep recorded it
-    meanwhile."""
+    """What a sweep has to run: ``todo`` (no record, a corrupt one, or a failed one or one run on
+    input files that changed since when retried), how many runs are ``recorded`` (``failed`` of
+    them recorded as failed and not retried; ``changed``: {id: the files changed since} of those
+    run on files that changed, not retried: :func:`changed_inputs`), the ``corrupt`` records'
+    errors, and for each run to do the identity of its record file when looked at
+    (:func:`_identity`), to tell after claiming it whether another sweep recorded it meanwhile."""
 
-    todo: list[RunSpec]
-    recorded: int
-    failed: int
-    corrupt: list[RecordError]
-    seen: dict[str, tuple[int, int] | None]
+    todo: list[RunSpec] = field(default_factory=list)
+    recorded: int = 0
+    failed: int = 0
+    corrupt: list[RecordError] = field(default_factory=list)
+    seen: dict[str, tuple[int, int] | None] = field(default_factory=dict)
+    changed: dict[str, list[str]] = field(default_factory=dict)
 
 
-def pending(runs: Iterable[RunSpec], results: Path, *, retry_failed: bool = False) -> Pending:
+def pending(runs: Iterable[RunSpec], results: Path, *, retry_failed: bool = False, retry_changed: bool = False) -> Pending:
     """The runs to do (see :class:`Pending`). SweepError naming the path, before any run, if
     RESULTS/runs is there but no folder, or a run's record path is taken by something else than
     a file (a folder: a record could not be put in its place once the run is done)."""
@@ -106,26 +134,34 @@ def pending(runs: Iterable[RunSpec], results: Path, *, retry_failed: bool = Fals
     folder = Path(results) / "runs"
     if folder.exists() and not folder.is_dir():
         raise SweepError(f"{folder}: exists and is not a folder, where a sweep writes its records; move it away or give another --out")
-    todo, corrupt, seen, failed = [], [], {}, 0
+    plan, known = Pending(), {}
     for spec in runs:
         path = record_path(results, spec.id)
         identity = _identity(path)
         if identity is not None and not path.is_file():
             raise SweepError(f"{path}: is not a file but where the record of run {spec.id} goes; move it away")
-        needed = identity is None
-        if not needed:
-            try:
-                was_failed = read_record(path)["status"] == "failed"
-            except RecordError as exc:
-                corrupt.append(exc)
-                needed = True
-            else:
-                needed = was_failed and retry_failed
-                failed += was_failed and not retry_failed
-        if needed:
-            todo.append(spec)
-            seen[spec.id] = identity
-    return Pending(todo, len(runs) - len(todo), failed, corrupt, seen)
+        if identity is None or _to_run_again(plan, spec, path, known, retry_failed, retry_changed):
+            plan.todo.append(spec)
+            plan.seen[spec.id] = identity
+    plan.recorded = len(runs) - len(plan.todo)
+    return plan
+
+
+def _to_run_again(plan: Pending, spec: RunSpec, path: Path, known: dict, retry_failed: bool, retry_changed: bool) -> bool:
+    """Whether the run recorded in ``path`` is to be run again: its record is corrupt (noted in
+    ``plan``), failed and ``retry_failed``, or run on files changed since and ``retry_changed``;
+    a failed or changed one not retried is counted in ``plan``."""
+    try:
+        record = read_record(path)
+    except RecordError as exc:
+        plan.corrupt.append(exc)
+        return True
+    was_failed, changed = record["status"] == "failed", changed_inputs(record, spec, known)
+    again = (was_failed and retry_failed) or (bool(changed) and retry_changed)
+    plan.failed += was_failed and not again
+    if changed and not again:
+        plan.changed[spec.id] = changed
+    return again
 
 
 def _identity(path: Path) -> tuple[int, int] | None:
@@ -159,7 +195,8 @@ def release(results: Path, run_id: str, fd: int) -> None:
 class SweepOutcome:
     """How a sweep went: runs ``finished`` now (``failed`` of them failed), ``skipped`` (validly
     recorded, before the sweep or by another sweep since; ``failed_before`` of them recorded as
-    failed before the sweep and not retried), ``elsewhere`` (being computed by
+    failed before the sweep and not retried; ``changed_before``: {id: files} of them run on
+    input files that changed since, not retried), ``elsewhere`` (being computed by
     another sweep on the same folder, left to it), ``corrupt`` (the errors of the records found
     corrupt, each naming its file: run again, unless left to another sweep)."""
 
@@ -169,9 +206,11 @@ class SweepOutcome:
     failed_before: int = 0
     elsewhere: int = 0
     corrupt: tuple[str, ...] = ()
+    changed_before: dict[str, list[str]] = field(default_factory=dict)
 
 
-def sweep(runs: Iterable[RunSpec], results: Path, executor: Executor, *, retry_failed: bool = False, in_flight: int | None = None,
+def sweep(runs: Iterable[RunSpec], results: Path, executor: Executor, *, retry_failed: bool = False, retry_changed: bool = False,
+          in_flight: int | None = None,
           on_done: Callable[[dict], None] | None = None, on_other: Callable[[RunSpec], None] | None = None) -> SweepOutcome:
     """Run on ``executor`` what is not validly recorded yet (:func:`pending`), claiming each run
     (:func:`claim`) just before submitting it and writing its record as it comes in.
@@ -184,7 +223,7 @@ def sweep(runs: Iterable[RunSpec], results: Path, executor: Executor, *, retry_f
     SweepError if the executor loses a run (a worker killed): the runs finished are recorded."""
     results = Path(results)
     runs = list(runs)
-    plan = pending(runs, results, retry_failed=retry_failed)
+    plan = pending(runs, results, retry_failed=retry_failed, retry_changed=retry_changed)
     (results / "runs").mkdir(parents=True, exist_ok=True)
     queue = iter(plan.todo)
     window = in_flight or max(len(plan.todo), 1)
@@ -222,7 +261,7 @@ def sweep(runs: Iterable[RunSpec], results: Path, executor: Executor, *, retry_f
         for spec, fd in claims.values():
             release(results, spec.id, fd)
     return SweepOutcome(finished=finished, skipped=plan.recorded + skipped, failed=failed, failed_before=plan.failed,
-                        elsewhere=elsewhere, corrupt=tuple(str(exc) for exc in plan.corrupt))
+                        elsewhere=elsewhere, corrupt=tuple(str(exc) for exc in plan.corrupt), changed_before=plan.changed)
 
 
 def records_dataframe(results: Path):

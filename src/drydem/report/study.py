@@ -421,15 +421,16 @@ def _settings(record: dict) -> dict[str, str]:
     """The settings of one of the user's tilting runs, in words, by column of its table."""
     spec = record["spec"]
     friction, points = _setting(record, "friction"), _setting(record, "points")
-    return {"joints": _joints(record), "friction": _cell(friction, "{:g}"), "points": _cell(points, "{:g}"), "protocol": spec["protocol"],
-            "increment (deg)": _cell(spec["increment_deg"], "{:g}"), "test": _test_words(record)}
+    return {"joints": _joints(record), "friction": _cell(friction, "{:g}"), "points": _cell(points, "{:g}"),
+            "protocol": spec["protocol"] + _test_words(record), "increment (deg)": _cell(spec["increment_deg"], "{:g}")}
 
 
 def _test_words(record: dict) -> str:
     """The settings in which a tilting run is not the paper's test (:func:`changed_test_settings`), in
-    words ("stop_displacement_m 0.002"), "-" for none."""
-    return ", ".join(f"{key} {value:g}" if isinstance(value, float) else f"{key} {value}"
-                     for key, value in changed_test_settings(record).items()) or "-"
+    words after its protocol (" (stop_displacement_m 0.002)"), "" for none."""
+    changed = ", ".join(f"{key} {value:g}" if isinstance(value, float) else f"{key} {value}"
+                        for key, value in changed_test_settings(record).items())
+    return f" ({changed})" if changed else ""
 
 
 def _target_labels(records: list[dict]) -> dict[str, str]:
