@@ -81,8 +81,11 @@ def test_a_csv_record_starting_after_zero_is_shifted_to_start_at_zero_with_a_not
     np.testing.assert_array_equal(read.time_s, [0.0, 0.5, 1.0])  # 2.0, 2.5, 3.0 less 2.0: exact
     assert read.duration_s == 1.0
     assert read.notes == (f"{path}: the record starts at t = 2 s; it was shifted by 2 s to start at 0",)
-    # the note goes with the motion through the correction and the scaling; a record from 0 has none
-    assert read.baseline_corrected().scaled(2.0).notes == read.notes
+    # the note goes with the motion through the correction and the scaling, the correction's
+    # own after it (this record, 1 to 3 m/s2 one way, ends far from where it started); a record
+    # from 0 has none
+    kept, corrected = read.baseline_corrected().scaled(2.0).notes
+    assert kept == read.notes[0] and "the baseline correction shifts the x acceleration" in corrected
     assert read_csv_motion(written(tmp_path, "zero.csv", "time_s,acc_x_m_s2\n0,1\n0.5,2\n")).notes == ()
 
 
@@ -464,6 +467,25 @@ def test_a_record_already_at_rest_is_left_practically_unchanged():
     corrected = ricker.baseline_corrected()
     np.testing.assert_allclose(corrected.acceleration_m_s2, ricker.acceleration_m_s2, rtol=0, atol=1e-8 * 3.0)
     assert corrected.pga_m_s2 == pytest.approx(ricker.pga_m_s2, rel=1e-8)
+
+
+def test_a_baseline_that_changes_the_motion_not_only_its_drift_gets_a_note():
+    """Found by a hunt: a one-sine pulse of 5 m/s2 at 2 Hz given as a record leaves the table
+    displaced by A / (2 pi f) x 1/(2 f) = 0.199 m (its velocity's integral); bringing it back
+    took a baseline of 0.53 m/s2 (10.6 % of the PGA, which rose to 5.27 m/s2) and made the
+    residual slip of a block 34 times the pulse's, without a word. Above 1 % of the peak a note
+    gives the baseline and the displacement; the offset record above (0.1 of 3.1 m/s2, a drift
+    the correction is for) gets one too, and a record at rest none."""
+    one_sine = pulse("one-sine", amplitude_m_s2=5.0, frequency_hz=2.0, direction="x")
+    tail = one_sine.time_s[-1] + np.arange(1, 101) * 0.01  # then a second at rest
+    record = GroundMotion(np.concatenate([one_sine.time_s, tail]), np.concatenate([one_sine.acceleration_m_s2, np.zeros((100, 3))]),
+                          "onesine.csv")
+    [note] = record.baseline_corrected().notes
+    assert note == ("onesine.csv: the baseline correction shifts the x acceleration by up to 0.53 m/s2, 10.6% of the record's peak, "
+                    "to bring the table to rest where it started (the record moves it 0.199 m along x); if that displacement is "
+                    "genuine (a pulse, a fling step), give --no-baseline")
+    ricker = pulse("ricker", amplitude_m_s2=3.0, frequency_hz=2.0)
+    assert ricker.baseline_corrected().notes == ()
 
 
 def test_a_baseline_correction_of_two_samples_is_refused():

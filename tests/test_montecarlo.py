@@ -224,6 +224,10 @@ def test_a_summary_whose_settings_are_not_a_table_is_no_run_to_resume(tall_brick
     with pytest.raises(MonteCarloError, match="summary.json: not the summary of a drydem montecarlo run"):
         check_resumable(tmp_path, settings(2), wall)
     (tmp_path / "samples" / "0000").mkdir(parents=True)
+    # found by a hunt: the message left only --overwrite, which deletes the samples, without a word on them
+    with pytest.raises(MonteCarloError, match=re.escape(f"its 1 sample folders ({tmp_path / 'samples'}) are kept, each a run of "
+                                                        "its own: restore summary.json from a copy")):
+        check_resumable(tmp_path, settings(2), wall)
     (tmp_path / "samples" / "0000" / "summary.json").write_text("[" * 100_000)
     with pytest.raises(MonteCarloError, match="summary.json: not a sample's record: JSON nested deeper than"):
         read_sample(tmp_path, settings(2), 0)

@@ -335,3 +335,20 @@ def test_a_stiffness_figure_of_runs_without_a_verdict_is_drawn_empty_not_crashed
     assert "| WD3 | 19.8 | 20.1 | - |" in section(text, "Table 3")
     for name in ("fig03_contact_points", "fig06_stiffness"):
         assert f"(no runs for this figure in the study)\n\n![{name}]" in text
+
+
+def test_a_report_of_a_folder_a_run_is_writing_in_says_so(tmp_path):
+    """Found by a hunt: `drydem report` on the folder of a run still going said only "no folder
+    of a run"."""
+    from drydem.files import lock_exclusively, unlock
+    from drydem.io.results import FOLDER_LOCK
+
+    (tmp_path / "going").mkdir()
+    lock = tmp_path / "going" / FOLDER_LOCK
+    held = lock_exclusively(lock)  # another run (a lock is per open file)
+    try:
+        result = CliRunner().invoke(main, ["report", str(tmp_path)])
+    finally:
+        unlock(lock, held)
+    assert result.exit_code == 1 and "nothing to report" in result.output
+    assert f"a drydem run is writing in {tmp_path / 'going'}: report it once it has finished" in result.output

@@ -160,6 +160,17 @@ def test_a_pushover_csv_empty_or_with_a_nan_or_an_absurd_tilt_is_named_corrupt(t
     assert "1 runs recorded (0 failed)" in text and GOOD_TILT_ROW in text
 
 
+def test_a_pushover_csv_cut_short_of_the_summary_s_equilibria_is_named_corrupt(tmp_path):
+    """Found by a hunt: a pushover.csv cut to 49 of its 201 rows was drawn up to 4.8 deg beside
+    tables saying 20.0 deg. The summary records one row per equilibrium state (25 here)."""
+    run_folder(tmp_path, "good", tilt_summary() | {"equilibrium_states": 25})
+    bad = run_folder(tmp_path, "cut", tilt_summary() | {"equilibrium_states": 201})
+    stderr, text = report(tmp_path)
+    assert (f"corrupt record left out: {bad.parent / 'pushover.csv'}: 25 rows, where summary.json records 201 equilibrium states "
+            "(one row each): cut short or edited by hand?") in stderr
+    assert "1 runs recorded (0 failed)" in text and GOOD_TILT_ROW in text
+
+
 def test_a_run_made_with_a_step_below_today_s_least_is_still_a_result():
     # the least tilt step became 0.001 deg; a run recorded before with 1e-4 deg is no corrupt record
     from drydem.parametric.records import collapse_problem

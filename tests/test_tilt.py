@@ -8,6 +8,7 @@ moves theta_c by less than 0.01 deg (stated discretisation error: 0).
 """
 
 import math
+import time
 
 import numpy as np
 import pytest
@@ -270,6 +271,25 @@ def test_an_interrupted_run_resumes_to_the_same_result(tmp_path):
     assert resumed.collapse_angle_deg == whole.collapse_angle_deg
     assert resumed.cycles == whole.cycles  # the shear history came back too: the same path
     np.testing.assert_array_equal([r.ux_m for r in resumed.records], [r.ux_m for r in whole.records])
+
+
+def test_a_resumed_run_s_runtime_counts_the_time_up_to_its_checkpoint(tmp_path):
+    """Found by a hunt: interrupted after 19 s and resumed, a run reported 11.7 s, its resumed
+    part alone. Each equilibrium before the interruption takes 50 ms more here (a slow
+    callback): the runtime of the resumed run holds the time of those in its checkpoint."""
+    model, settings = slender([0.01] * 4, kn=1e8), TiltSettings(increment_deg=STEP)
+    checkpoint, pause_s, kept = tmp_path / "checkpoint.npz", 0.05, []
+
+    def slow_then_killed_at_8_deg(record):
+        if record.tilt_deg >= 8.0:
+            raise Killed
+        time.sleep(pause_s)
+        kept.append(record)
+
+    with pytest.raises(Killed):
+        tilt_analysis(model, settings, checkpoint=checkpoint, checkpoint_every_s=0.0, on_record=slow_then_killed_at_8_deg)
+    resumed = tilt_analysis(model, settings, checkpoint=checkpoint, resume=True)
+    assert resumed.runtime_s >= pause_s * len(kept)
 
 
 def test_an_adaptive_run_whose_first_step_passes_90_deg_resumes_from_its_checkpoint(tmp_path):

@@ -256,7 +256,12 @@ def check_resumable(folder: Path, settings: MonteCarloSettings, wall: Wall) -> N
     except (RecordError, TypeError, KeyError):
         recorded = None
     if not isinstance(recorded, dict):  # "settings": "x" was an AttributeError
-        raise MonteCarloError(f"{path}: not the summary of a drydem montecarlo run; --resume needs the --out of one")
+        samples = len(sample_indices(folder))
+        kept = (f"; its {samples} sample folders ({Path(folder) / SAMPLES_FOLDER}) are kept, each a run of its own: restore "
+                "summary.json from a copy to go on with them, or give another --out (--overwrite deletes them)") if samples else ""
+        # found by a hunt: a damaged summary left only --overwrite, which deletes the samples, without a word on them
+        raise MonteCarloError(f"{path}: not the summary of a drydem montecarlo run (damaged or edited?), so the settings of the "
+                              f"run there cannot be checked; --resume needs the --out of one{kept}")
     differ = differences(recorded, settings.identity(wall))
     if differ:
         raise MonteCarloError(f"{folder}: the recorded run had other settings ({', '.join(key for key, _, _ in differ)}: "

@@ -39,6 +39,7 @@ from drydem.parametric.records import (ANGLE, SUMMARY_FILE, RecordError, Records
                                        table_problems)
 from drydem.parametric.study import ID_PART_CHARACTERS
 from drydem.files import replaceable, replaced_atomically, writable_folder
+from drydem.io.results import being_written
 from drydem.report.joints import joint_law, law_words, relative_error_percent
 from drydem.report.plots import new_figure
 
@@ -255,10 +256,13 @@ def build_report(results: Path, out: Path | None = None, *, overwrite: bool = Fa
     swept, folders, summaries = load_records(results), load_run_folders(results), montecarlo_summaries(results)
     if not ((results / "runs").is_dir() or folders.valid or folders.corrupt or summaries):
         other = next((folder / SUMMARY_FILE for folder in run_folders(results) if (folder / SUMMARY_FILE).is_file()), None)
+        running = [folder for folder in run_folders(results) if being_written(folder)]  # found by a hunt: not said
         raise ReportError(f"{results}: nothing to report: no runs/ folder (`drydem sweep STUDY --out {results}` writes one) and no "
-                          f"folder of a `drydem tilt`, `drydem limit` or `drydem montecarlo` run (its {SUMMARY_FILE})"
+                          f"folder of a finished `drydem tilt`, `drydem limit` or `drydem montecarlo` run (its {SUMMARY_FILE})"
                           + ("" if other is None else f"; {other} is of another analysis (a `drydem shake` run's folder is its "
-                                                      "own report: summary.json, history.csv, history.png; a sweep's shake runs are reported)"))
+                                                      "own report: summary.json, history.csv, history.png; a sweep's shake runs are reported)")
+                          + ("" if not running else f"; a drydem run is writing in {', '.join(map(str, running))}: report it once it "
+                                                    "has finished"))
     records = Records(swept.valid + folders.valid, swept.corrupt + folders.corrupt)
     runs, (monte_carlo, unreadable) = Runs(records.valid), montecarlo_runs(summaries)
     out = writable_folder(out or results / "report")

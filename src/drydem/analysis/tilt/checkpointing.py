@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import ast
 import json
+import math
 import os
 from dataclasses import asdict
 from pathlib import Path
@@ -72,16 +73,18 @@ def progress(records: list[Record], run: TiltRun, theta: float, step: float) -> 
     }
 
 
-def save(checkpoint: Path, run: TiltRun, records: list[Record], theta: float, step: float, fingerprint: dict[str, str]) -> None:
+def save(checkpoint: Path, run: TiltRun, records: list[Record], theta: float, step: float, fingerprint: dict[str, str],
+         runtime_s: float) -> None:
     """Save ``run`` at its equilibrium at ``theta`` (deg), with ``records``, the ``step`` (deg)
-    to take next and the run's ``fingerprint``, to ``checkpoint``."""
-    saved = progress(records, run, theta, step) | {"fingerprint": json.dumps(fingerprint)}
+    to take next, the run's ``fingerprint`` and its ``runtime_s`` so far, to ``checkpoint``."""
+    saved = progress(records, run, theta, step) | {"fingerprint": json.dumps(fingerprint), "runtime_s": runtime_s}
     save_checkpoint(checkpoint, run.sim.snapshot(), saved)
 
 
-def resume(run: TiltRun, checkpoint: Path, fingerprint: dict[str, str], records: list[Record]) -> tuple[float, float]:
+def resume(run: TiltRun, checkpoint: Path, fingerprint: dict[str, str], records: list[Record]) -> tuple[float, float, float]:
     """Restore ``run`` and ``records`` from ``checkpoint``; returns the tilt (deg) of its last
-    equilibrium and the step (deg) to take next. ModelError if it is of another model or
+    equilibrium, the step (deg) to take next and the runtime (s) the run had reached (0 for a
+    checkpoint of a drydem before it kept it). ModelError if it is of another model or
     protocol; DrydemError naming the file if what it holds does not fit the model (a file
     edited or spoiled: its contacts are checked before the compiled kernels index by them)."""
     snapshot, saved = load_checkpoint(checkpoint)
@@ -92,9 +95,12 @@ def resume(run: TiltRun, checkpoint: Path, fingerprint: dict[str, str], records:
         raise unreadable(checkpoint, exc) from None
 
 
-def _restored(run: TiltRun, snapshot, saved: dict, records: list[Record]) -> tuple[float, float]:
+def _restored(run: TiltRun, snapshot, saved: dict, records: list[Record]) -> tuple[float, float, float]:
     """:func:`resume` once the file is read and its fingerprint matches."""
     theta, step, settings = float(saved["theta_deg"]), float(saved["step_deg"]), run.settings
+    runtime_s = float(saved["runtime_s"]) if "runtime_s" in saved else 0.0
+    if not (math.isfinite(runtime_s) and runtime_s >= 0.0):
+        raise ModelError(f"its runtime {runtime_s!r} s: must be a finite number >= 0")
     if not 0.0 <= theta <= settings.max_angle_deg + 1e-9:  # the protocol's own slack at the maximum angle
         raise ModelError(f"its last equilibrium at {theta!r} deg: must be in [0, {settings.max_angle_deg:g}] deg (max_angle_deg)")
     if not 0.0 < step <= settings.first_step() * (1 + 1e-9):  # an adaptive run's first step may pass 90 deg
@@ -110,4 +116,4 @@ def _restored(run: TiltRun, snapshot, saved: dict, records: list[Record]) -> tup
     for th, x, q in zip(saved["previous_theta_deg"], saved["previous_position"], saved["previous_quaternion"]):
         run.remember(float(th), run.sim.fit_state(State(x, q, rest.copy(), rest.copy()), "previous equilibrium"))
     run.remember(theta)
-    return theta, step
+    return theta, step, runtime_s

@@ -47,7 +47,9 @@ class TiltProtocol:
     ``on_frame`` as it is found, saved to ``checkpoint`` (with ``fingerprint``,
     :mod:`~drydem.analysis.tilt.checkpointing`) when the last save is ``checkpoint_every_s``
     old (time.monotonic() of the last: ``saved_at``) and, where it may be gone back to
-    (adaptive steps, or frames to replay), kept as ``last_good`` (:meth:`TiltRun.save`)."""
+    (adaptive steps, or frames to replay), kept as ``last_good`` (:meth:`TiltRun.save`).
+    ``started_at``: time.perf_counter() when the analysis started; ``runtime_before_s``: the
+    runtime a resumed checkpoint had reached (:meth:`runtime_s`)."""
 
     run: TiltRun
     step: float
@@ -57,6 +59,8 @@ class TiltProtocol:
     checkpoint: Path | None = None
     checkpoint_every_s: float = CHECKPOINT_EVERY_S
     saved_at: float = -math.inf
+    started_at: float = field(default_factory=time.perf_counter)
+    runtime_before_s: float = 0.0
     theta: float = 0.0
     records: list[Record] = field(default_factory=list)
     last_good: Saved | None = None
@@ -73,9 +77,15 @@ class TiltProtocol:
         if self.on_frame is not None:
             self.on_frame(self.run.frame("equilibrium", theta))
         if self.checkpoint is not None and time.monotonic() - self.saved_at >= self.checkpoint_every_s:
-            checkpointing.save(self.checkpoint, self.run, self.records, theta, self.step, self.fingerprint)
+            checkpointing.save(self.checkpoint, self.run, self.records, theta, self.step, self.fingerprint, self.runtime_s())
             self.saved_at = time.monotonic()
         self.keep()
+
+    def runtime_s(self) -> float:
+        """s of analysis: this call's so far, plus what a resumed checkpoint had reached (found by a
+        hunt: a resumed run reported only its own part; the time between that checkpoint and the
+        interruption is redone, and counted once)."""
+        return self.runtime_before_s + time.perf_counter() - self.started_at
 
     def keep(self) -> None:
         """Keep the run's state as ``last_good`` if it may be gone back to."""
@@ -93,7 +103,7 @@ class TiltProtocol:
     def resume(self) -> None:
         """Go on from ``checkpoint`` (:func:`~drydem.analysis.tilt.checkpointing.resume`),
         handing ``on_record`` the equilibria it holds."""
-        self.theta, self.step = checkpointing.resume(self.run, self.checkpoint, self.fingerprint, self.records)
+        self.theta, self.step, self.runtime_before_s = checkpointing.resume(self.run, self.checkpoint, self.fingerprint, self.records)
         if self.on_record is not None:
             for record in self.records:
                 self.on_record(record)
@@ -204,7 +214,7 @@ def tilt_analysis(
     start = time.perf_counter()
     run = TiltRun(model, settings, on_progress)
     fingerprint = checkpointing.fingerprint(model, settings)
-    protocol = TiltProtocol(run, settings.first_step(), fingerprint, on_record, on_frame, checkpoint, checkpoint_every_s)
+    protocol = TiltProtocol(run, settings.first_step(), fingerprint, on_record, on_frame, checkpoint, checkpoint_every_s, started_at=start)
     if resume:
         protocol.resume()
         stable = True
@@ -214,7 +224,7 @@ def tilt_analysis(
         ended_by = step_up(protocol)
     else:
         ended_by = UNSTABLE_UNDER_GRAVITY if stable is False else NO_EQUILIBRIUM_UNDER_GRAVITY
-    result = tilt_result(protocol, stable, ended_by, time.perf_counter() - start)
+    result = tilt_result(protocol, stable, ended_by, protocol.runtime_s())
     if on_frame is not None and ended_by not in (MAXIMUM_ANGLE, NO_EQUILIBRIUM_UNDER_GRAVITY):
         theta = protocol.theta + protocol.step if stable else 0.0
         for frame in replay_collapse(run, protocol.last_good, theta, vertical=not stable):
