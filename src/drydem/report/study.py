@@ -691,9 +691,9 @@ def _figure(folder: Path, name: str, caption: str, draw, *, panels: int = 1) -> 
 
 def _contact_points(ax, runs: Runs) -> bool:
     points = sorted({r["spec"]["points"] for r in runs.tilts("WD3") if r["spec"]["points"] is not None and _close(r["spec"]["kn"], 3e7)})
-    points = [p for p in points if runs.angle("WD3", 3e7, points=p) is not None]  # a run without a verdict has no angle to draw
-    angles = [runs.angle("WD3", 3e7, points=p) for p in points]
-    ax.plot(points, angles, "o-")
+    found = {p: runs.angle("WD3", 3e7, points=p) for p in points}
+    points = [p for p, angle in found.items() if angle is not None]  # a run without a verdict has no angle to draw
+    ax.plot(points, [found[p] for p in points], "o-")
     ax.set(xlabel="contact points per block length", ylabel="collapse angle (deg)")
     if points:
         ax.set(xscale="log", xticks=points, xticklabels=[str(p) for p in points])
