@@ -303,3 +303,33 @@ def test_the_exact_cone_finds_the_closed_form_of_a_block_sliding_across_a_slope(
     pyramid = limit_analysis(model).load_multiplier
     assert pyramid == pytest.approx(polygon, rel=1e-9)
     assert pyramid < exact * 0.99
+
+
+def running_bond_2x6(mu: float) -> dd.Model:
+    """2 bricks of 0.2 x 0.1 m a course, 6 courses, the odd ones ended by half bricks, on a fixed base."""
+    blocks = [dd.Block(name="base", shape=dd.box([-0.5, -0.05, -0.1], [0.9, 0.05, 0.0]), fixed=True)]
+    for course in range(6):
+        edges = [0.0, 0.1, 0.3, 0.4] if course % 2 else [0.0, 0.2, 0.4]
+        blocks += [dd.Block(name=f"c{course}b{k}", shape=dd.box([x0, -0.05, 0.1 * course], [x1, 0.05, 0.1 * (course + 1)]))
+                   for k, (x0, x1) in enumerate(zip(edges[:-1], edges[1:]))]
+    return dd.build_model(blocks, density=2000.0, joint=dd.JointMaterial(kn=1e10, ks=1e10, friction=mu),
+                          supports=dd.Supports(fix_y=True))
+
+
+def test_non_associative_iterates_above_the_associative_multiplier_are_passed_to_the_rigid_mechanism():
+    """Found by a hunt: with mu = 1.0 two LA-NA iterates gave lambda 0.6667, above LA-A's
+    0.6522 (impossible: friction without dilatancy carries no more than with it), and the scheme
+    stopped there. It goes on to the rigid mechanism's multiplier: the upper courses but the
+    left end turn about the top right corner P = (0.4, 0.1) of the first course's right brick,
+    their head joints sliding at no normal force (free without dilatancy), whatever mu; by
+    virtual work lambda = sum W (x_P - x) / sum W (z - z_P) over the turning bricks = 0.5349
+    (the DEM with kn = 1e10 collapses at 28.1 deg = atan 0.534, measured by the hunt)."""
+    model = running_bond_2x6(1.0)
+    index = [model.block_name.index(name) for name in ("c1b2", "c2b1", "c3b1", "c3b2", "c4b0", "c4b1", "c5b0", "c5b1", "c5b2")]
+    weight, centroid = model.block_mass[index], model.block_centroid[index]
+    mechanism = float(np.sum(weight * (0.4 - centroid[:, 0])) / np.sum(weight * (centroid[:, 2] - 0.1)))
+    assert mechanism == pytest.approx(0.023 / 0.043, rel=1e-12)
+    associative, non_associative = limit_analysis(model), limit_analysis(model, NA)
+    assert max(non_associative.history) > associative.load_multiplier  # the iterates the scheme stopped on
+    # the scheme stops once lambda changes by less than 1e-4 (relative): it approaches by halves (the relaxation 0.5)
+    assert non_associative.converged and non_associative.load_multiplier == pytest.approx(mechanism, rel=2 * NA.tolerance)

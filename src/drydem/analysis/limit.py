@@ -25,10 +25,18 @@ Casapulla & Ahmed (2006, Computers & Structures 84, 873-887): solve LA-A; then, 
 replace each point's friction limit by a fixed shear capacity max(c A_k + mu N_k, 0) taken from the previous
 solution (a "pseudo-cohesion", whose flow rule has no normal dilatancy; in 3D a disc |T_k| <=
 c A_k + mu N_k^prev, a second-order cone with a constant first entry, by Clarabel) and solve again,
-relaxing the normal forces between iterations, until lambda settles. Its limits, as the
-authors state: the non-associative problem has no unique solution and this scheme is not
-guaranteed to find the lowest multiplier (nor to converge; then the last iterate is
-reported with ``converged = False``).
+relaxing the normal forces between iterations, until lambda settles at or below LA-A's. Its
+limits, as the authors state: the non-associative problem has no unique solution and this
+scheme is not guaranteed to find the lowest multiplier (nor to converge; then the last iterate
+is reported with ``converged = False``). A lambda above LA-A's is no solution (friction without
+dilatancy carries no more than with it: Radenkovic's theorem; its shear forces exceed Coulomb's
+limit at their own normal forces), so the iteration goes on past it (found by a hunt: on a
+2 x 6 running-bond wall with mu = 1.0 two iterates gave 0.6667 against LA-A's 0.6522 and the
+scheme stopped, where it goes on down to 0.5349, the rigid mechanism's and the DEM's, 28.1
+deg). The same wall with mu = 1.5 shows the other limit: LA-A's own forces (0.6667, the whole
+wall toppling) are a fixed point of the scheme, a solution, but not the lowest: the wall
+collapses at 0.5349 (its head joints slide at no normal force, for free without dilatancy).
+LA-NA is an upper estimate there, 25 % above; the DEM tilt finds the lower mechanism.
 
 The LP handed to HiGHS writes each point's admissible forces by the generators of the pyramid
 (its edges) rather than its facets: the same feasible set, so the same lambda, with only the
@@ -232,7 +240,7 @@ def limit_analysis(model: Model, settings: LimitSettings = LimitSettings(), *,
     forces = normal
     history, converged, iterations = [lam], True, 1
     if settings.non_associative:
-        converged = False
+        associative, converged = lam, False
         for iterations in range(2, settings.max_iterations + 2):
             progress(f"non-associative iteration {iterations - 1} of at most {settings.max_iterations}: "
                      f"solving the {program} with {solver} (lambda {lam:.4f} so far)")
@@ -243,7 +251,7 @@ def limit_analysis(model: Model, settings: LimitSettings = LimitSettings(), *,
             normal = (1 - settings.relaxation) * normal + settings.relaxation * forces_new
             change = abs(lam_new - lam) / max(abs(lam), 1e-12)
             lam, forces, duals = lam_new, forces_new, duals_new
-            if change < settings.tolerance:
+            if change < settings.tolerance and lam <= associative * (1 + settings.tolerance):
                 converged = True
                 break
     velocity, angular = _mechanism(model, problem, duals)
