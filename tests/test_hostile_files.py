@@ -415,3 +415,39 @@ def test_an_output_name_of_250_characters_is_written(tmp_path, monkeypatch):
     result = invoke("export", "WD1", name)
     assert result.exit_code == 0, result.output
     assert (tmp_path / name).is_file() and [p.name for p in tmp_path.iterdir()] == [name]
+
+
+def test_a_model_file_whose_name_is_a_formula_is_tilted_drawn_and_exported(wall, tmp_path):
+    """Found by a hunt: matplotlib read "a$^$" in a figure's title as a formula (a
+    ParseSyntaxException traceback in tilt, show, shake, montecarlo and report)."""
+    model = saved(wall, tmp_path / "a$^$.toml")
+    tilted = invoke("tilt", model, "--increment", "10", "--fixed", "--out", tmp_path / "run")
+    assert tilted.exit_code == 0, tilted.output
+    assert (tmp_path / "run" / "pushover.png").is_file() and (tmp_path / "run" / "mechanism.png").is_file()
+    assert invoke("show", model, "-o", tmp_path / "wall.png").exit_code == 0
+
+
+def test_a_model_file_whose_name_is_not_utf_8_is_drawn_exported_and_named(wall, tmp_path):
+    """Found by a hunt: a file name whose bytes are not UTF-8 (a surrogate escape in Python) in a
+    figure's title made FreeType raise a TypeError, in an OBJ or 3DEC file's comment a
+    UnicodeEncodeError, and on a terminal whose error handler is strict any message naming it.
+    It is drawn and written as "?", and given back to the terminal as it was."""
+    import subprocess
+    import sys
+
+    from drydem.io.itasca import write_3dec
+    from drydem.io.mesh import write_mesh
+    from drydem.io.target import load_target
+    from drydem.report.plots import layout_figure
+
+    path = saved(wall, tmp_path / os.fsdecode(b"\xfe.toml"))
+    model = load_target(str(path)).model
+    layout_figure(model, tmp_path / "wall.png", title=f"{path.name}: as built")
+    for write, name in ((write_mesh, "out.obj"), (write_3dec, "out.dat")):
+        write(model, tmp_path / name)
+        assert "?.toml" in (tmp_path / name).read_text(encoding="utf-8")  # UTF-8 throughout
+    strict = dict(os.environ, PYTHONIOENCODING="utf-8:strict")
+    checked = subprocess.run([sys.executable, "-c", "from drydem.cli import console; console()", "check", os.fsencode(path)],
+                             capture_output=True, env=strict, timeout=300)
+    assert checked.returncode == 0, checked.stderr[-800:]
+    assert os.fsencode(path) in checked.stdout

@@ -145,7 +145,12 @@ GRID = "[[grid]] #0 ('ida')"
     (('"pulse:one-sine:2"', '"records/y.csv"'),
      "y.csv, baseline-corrected: its y component shakes the model along y (peak 0.5 m/s2), but its blocks are held in y"),
     (('"pulse:one-sine:2"', '"pulse:square:2"'), "motions: 'pulse:square:2.0': pulse kind = 'square': must be one of"),
-    (('"pulse:one-sine:2"', '"pulse:one-sine:fast"'), "the frequency 'fast' is not a number"),
+    (('"pulse:one-sine:2"', '"pulse:one-sine:fast"'), "the frequency 'fast' is not a plain decimal number"),
+    # found by a hunt: float() took 1_0 (10 Hz) and a full-width 4; int() raised on a superscript 2 and on 5,000 digits
+    (('"pulse:one-sine:2"', '"pulse:one-sine:1_0"'), "the frequency '1_0' is not a plain decimal number"),
+    (('"pulse:one-sine:2"', '"pulse:one-sine:\uff14"'), "the frequency '\uff14' is not a plain decimal number"),
+    (('"pulse:one-sine:2"', '"pulse:sine:4:\u00b2"'), "the cycles '\u00b2' are not a whole number of at most 6 digits (0-9)"),
+    (('"pulse:one-sine:2"', '"pulse:sine:4:' + "9" * 5000 + '"'), "are not a whole number of at most 6 digits (0-9)"),
     (('"pulse:one-sine:2"', '"pulse:one-sine:0"'), "motions: 'pulse:one-sine:0.0': pulse frequency_hz = 0.0: must be a number in (0, inf) Hz"),
     (('"pulse:one-sine:2"', '"pulse:one-sine"'), "motions: 'pulse:one-sine': a pulse is pulse:KIND:FREQUENCY_HZ"),
     (('"pulse:one-sine:2"', '"pulse:one-sine:2:3"'), "pulse cycles = 3: a one-sine pulse has no cycles to repeat"),

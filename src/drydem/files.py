@@ -111,10 +111,12 @@ def _missing_link(path: Path) -> str | None:
 def write_text(path: str | Path, text: str) -> Path:
     """``text`` written to ``path`` in UTF-8 (as drydem's readers read it, whatever the locale),
     once :func:`writable` says it can be, and whole or not at all (:func:`replaced_atomically`:
-    a DrydemError naming ``path`` and the reason if the system refuses)."""
+    a DrydemError naming ``path`` and the reason if the system refuses). A file name's bytes
+    that are not UTF-8 (Python's surrogate escapes, in a comment naming the model's source) are
+    written as "?" (found by a hunt: a UnicodeEncodeError traceback)."""
     path = writable(path)
     with replaced_atomically(path) as partial:
-        partial.write_text(text, encoding="utf-8")
+        partial.write_text(text, encoding="utf-8", errors="replace")
     return path
 
 

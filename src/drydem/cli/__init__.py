@@ -32,8 +32,15 @@ def console() -> None:
     A Ctrl-C that no command has taken over yet (while Python imports, or a model is read)
     exits 130 as one a command takes does, not click's "Aborted!" and 1; so does one that
     reached a compiled kernel being loaded, which numba turns into a SystemError (found by a
-    hunt: a traceback)."""
+    hunt: a traceback).
+
+    A file name's bytes that are not UTF-8 (Python's surrogate escapes) are written to the
+    terminal as they were, whatever the locale's error handler (found by a hunt: strict, it
+    made the first message naming such a file a UnicodeEncodeError traceback)."""
     atexit.register(gc.freeze)
+    for stream in (sys.stdout, sys.stderr):
+        if hasattr(stream, "reconfigure"):  # a TextIOWrapper (not one a caller put there)
+            stream.reconfigure(errors="surrogateescape")
     try:
         main(standalone_mode=False)
     except click.ClickException as exc:  # what click's standalone mode does with them

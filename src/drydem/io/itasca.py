@@ -62,6 +62,7 @@ import numpy as np
 
 from drydem import __version__
 from drydem.errors import ModelError
+from drydem.files import write_text
 from drydem.model.assembly import Model
 from drydem.model.parameters import G, SolverSettings
 
@@ -76,7 +77,7 @@ NOT_IN_NAMES = ("'", "=", "\n", "\r")
 
 def write_3dec(model: Model, path: str | Path) -> None:
     """Write ``model`` to ``path`` as a 3DEC command file (see the module docstring)."""
-    Path(path).write_text(threedec_commands(model), encoding="utf-8")
+    write_text(path, threedec_commands(model))
 
 
 def threedec_commands(model: Model) -> str:

@@ -57,11 +57,12 @@ import hashlib
 import itertools
 import json
 import math
+import re
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 from drydem.errors import DrydemError, ModelError
-from drydem.files import plain_name_problem, read_toml
+from drydem.files import PLAIN_NUMBER, plain_name_problem, read_toml
 from drydem.model.assembly import Model
 from drydem.model.parameters import JOINT_RULES, POINTS, is_number
 from drydem.model.tables import no_unknown
@@ -203,14 +204,14 @@ def _pulse_parts(motion: str) -> tuple[str, float, int]:
     form = f"{motion!r}: a pulse is {PULSE_PREFIX}KIND:FREQUENCY_HZ or {PULSE_PREFIX}sine:FREQUENCY_HZ:CYCLES"
     if len(parts) not in (2, 3):
         raise ModelError(form)
-    kind, frequency, cycles = parts[0], parts[1], parts[2] if len(parts) == 3 else "1"
-    try:
-        frequency_hz = float(frequency)
-    except ValueError:
-        raise ModelError(f"{form}; the frequency {frequency!r} is not a number") from None
-    if not cycles.strip().isdigit():
-        raise ModelError(f"{form}; the cycles {cycles!r} are not a whole number")
-    return kind, frequency_hz, int(cycles)
+    kind, frequency, cycles = parts[0], parts[1].strip(), parts[2].strip() if len(parts) == 3 else "1"
+    # plain decimals only, as every number drydem reads (found by a hunt: float() took 1_0 and a
+    # full-width 4, int() raised on a superscript 2 and on 5,000 digits)
+    if not PLAIN_NUMBER.fullmatch(frequency):
+        raise ModelError(f"{form}; the frequency {frequency!r} is not a plain decimal number")
+    if not (re.fullmatch("[0-9]{1,6}", cycles)):
+        raise ModelError(f"{form}; the cycles {cycles!r} are not a whole number of at most 6 digits (0-9)")
+    return kind, float(frequency), int(cycles)
 
 
 def motion_label(motion: str, *, compact: bool = False) -> str:

@@ -36,7 +36,7 @@ from drydem.files import regular_file, replaceable, replaced_atomically
 from drydem.io.vtk import FRAME_KINDS, LOAD_AXES, frame_number, frames_csv_rows
 from drydem.model.geometry import MAX_COORDINATE_M
 from drydem.model.parameters import shown
-from drydem.report.plots import draw_displacements, draw_faces_3d, frame_3d, new_figure, one_deep, xz_outline
+from drydem.report.plots import draw_displacements, draw_faces_3d, frame_3d, new_figure, one_deep, plain_text, xz_outline
 
 #: frame size: 1280 x 720 pixels (a multiple of 16, as H.264 wants)
 FIGURE_IN, DPI = (8.0, 4.5), 160
@@ -329,5 +329,6 @@ def _image(frame: VideoFrame, norm, low: np.ndarray, high: np.ndarray, *, flat: 
         draw_faces_3d(fig, ax, [face for block in frame.blocks for face in block], owner, values, title=frame.caption, norm=norm,
                       load_direction=frame.load_direction)
         frame_3d(ax, low, high, title=frame.caption, load_direction=frame.load_direction)
+    plain_text(fig)
     fig.canvas.draw()
     return np.asarray(fig.canvas.buffer_rgba())[:, :, :3].copy()

@@ -61,10 +61,28 @@ def figure_path(path: str | Path) -> Path:
 
 
 def saved(fig, path: Path) -> Path:
-    """Write ``fig`` to ``path`` at 150 dpi, whole or not at all (:func:`~drydem.files.replaced_atomically`)."""
+    """Write ``fig`` to ``path`` at 150 dpi, whole or not at all (:func:`~drydem.files.replaced_atomically`),
+    its texts as written (:func:`plain_text`)."""
+    plain_text(fig)
     with replaced_atomically(path) as partial:
         fig.savefig(partial, dpi=150, bbox_inches="tight", pad_inches=0.1)
     return path
+
+
+def plain_text(fig) -> None:
+    """Every text of ``fig`` drawn as it is written, before the figure is first drawn: no
+    mathtext (a $ in a file or block name is no formula: found by a hunt, a model file named
+    ``a$^$.toml`` made every figure raise matplotlib's ParseSyntaxException), and a file name's
+    bytes that are not UTF-8 (Python's surrogate escapes, which FreeType refuses: a TypeError)
+    shown as "?"."""
+    from matplotlib.text import Text
+
+    for text in fig.findobj(Text):
+        text.set_parse_math(False)
+        written = text.get_text()
+        shown_text = written.encode("utf-8", "replace").decode("utf-8")
+        if shown_text != written:
+            text.set_text(shown_text)
 
 
 def pushover_figure(result: TiltResult, path: Path, *, title: str = "") -> Path:

@@ -41,7 +41,7 @@ from drydem.parametric.study import ID_PART_CHARACTERS
 from drydem.files import replaceable, replaced_atomically, writable_folder
 from drydem.io.results import being_written
 from drydem.report.joints import joint_law, law_words, relative_error_percent
-from drydem.report.plots import new_figure
+from drydem.report.plots import new_figure, plain_text
 
 DESIGNS = [f"WD{k}" for k in range(1, 8)]
 #: the paper's grouping of the pushover figures
@@ -683,6 +683,7 @@ def _figure(folder: Path, name: str, caption: str, draw, *, panels: int = 1) -> 
     axes = fig.subplots(1, panels, squeeze=False)
     drew = draw(axes[0][0] if panels == 1 else axes[0])
     path = folder / f"{name}.png"
+    plain_text(fig)
     with replaced_atomically(path) as partial:
         fig.savefig(partial, dpi=120)
     missing = "" if drew else " (no runs for this figure in the study)"
