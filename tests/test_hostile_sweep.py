@@ -116,8 +116,24 @@ def test_a_study_with_bad_values_names_every_one_and_runs_nothing(folder):
             f"{study}: [[grid]] #1 ('limit'): analysis = ['limit']: must be one of ['tilt', 'limit', 'shake']",
             f"{study}: [[grid]] #2 ('empty'): kn = []: needs at least one value",
             f"{study}: [[grid]] #3 ('numbers'): targets [1]: each must be a built-in wall's name or a file")
+    assert f"{study}: [defaults] increment_deg = 95.0: must be a number in [0.001, 90) deg" in result.output
     assert result.output.count("kn = True") == 1  # its ks (ks = kn) is not named again
     assert "[joint]" not in result.output  # the grid's keys, as the study writes them
+    assert not (folder / "results").exists()
+
+
+def test_defaults_no_grid_takes_are_checked_too(folder):
+    """Found by a hunt: [defaults] values no grid took (shake settings in a study of tilting
+    grids) were accepted without a word, whatever they were."""
+    study = folder / "defaults.toml"
+    study.write_text(BAD_STUDY.split("[[grid]]")[0].replace("increment_deg = 95.0", 'restitution = "nonsense"\nduration_s = -5\n'
+                                                                                   "contact_damping_ratio = true\npoints = [4, 0]")
+                     + '[[grid]]\nname = "limit"\nanalysis = "limit"\ntargets = ["pier.toml"]\n')
+    refused(invoke("sweep", study, "--out", folder / "results"), "problems, nothing run",
+            f"{study}: [defaults] restitution = 'nonsense': must be a number in (0, 1]",
+            f"{study}: [defaults] duration_s = -5: must be a number in (0, 1e+06] s",
+            f"{study}: [defaults] contact_damping_ratio = True: must be a number",
+            f"{study}: [defaults] points = 0: must be an integer in [1, 32]")
     assert not (folder / "results").exists()
 
 

@@ -317,6 +317,14 @@ def test_a_duration_of_fewer_than_twenty_timesteps_is_refused_at_the_run_start(f
     assert "duration_s = 1e-300 s (--duration) spans fewer than 20 timesteps" in result.output, result.output
 
 
+def test_save_every_without_a_vtk_series_is_refused_as_by_tilt(files, tmp_path):
+    # found by a hunt: drydem shake took it and ignored it, where drydem tilt refuses it
+    out = tmp_path / "run"
+    result = shake(files["block"], *PULSE, "--damping-ratio", "0.3", "--save-every", "3", "--out", out)
+    assert result.exit_code == 1 and "--save-every 3 thins the VTK series: it needs --vtk or --video" in result.output
+    assert not out.exists()
+
+
 def test_a_pulse_the_timestep_cannot_follow_is_refused_at_the_run_start(files, tmp_path):
     """The finding: --frequency 1e12 ran and reported. The timestep is the model's (known once
     it has settled and its damping is set): the period must span 20 of them."""

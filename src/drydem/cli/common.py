@@ -196,6 +196,13 @@ def given(option: str) -> bool:
     return click.get_current_context().get_parameter_source(option) == ParameterSource.COMMANDLINE
 
 
+def check_save_every(save_every: int, series: bool) -> None:
+    """DrydemError if --save-every was given without a VTK series to thin (``series``: --vtk or
+    --video): it would be ignored (found by a hunt: drydem shake took it silently)."""
+    if given("save_every") and not series:
+        raise DrydemError(f"--save-every {save_every} thins the VTK series: it needs --vtk or --video")
+
+
 def resolve_target(target: str, unit: str = "m") -> Target:
     """Load TARGET or exit with its error; print to stderr what an imported file could not say."""
     from drydem.io.target import MESH_SUFFIXES, load_target

@@ -53,7 +53,7 @@ def montecarlo(target, samples, seed, height_sd, height_distribution, flatness_s
     from tqdm import tqdm
 
     from drydem.parametric.montecarlo import SAMPLES_FOLDER, MonteCarloSettings, check_resumable, experiment, monte_carlo, sample_model
-    from drydem.analysis.tilt import check_stop_displacement, monitor_index
+    from drydem.analysis.tilt import check_loading, check_stop_displacement, monitor_index
     from drydem.parametric.workers import open_workers
 
     imperfections = imperfections_from_options(height_sd, height_distribution, flatness_sd, misalignment_sd)
@@ -69,7 +69,8 @@ def montecarlo(target, samples, seed, height_sd, height_distribution, flatness_s
         settings = MonteCarloSettings(samples=samples, seed=seed, imperfections=imperfections, tilt=tilt.settings(),
                                       model_overrides=tilt.model_overrides())
         first = sample_model(found.wall, settings, 0)  # the options checked on one sample, before any run
-        monitor_index(first, tilt.monitor)
+        check_loading(first, settings.tilt)  # found by a hunt: each sample failed on it, after the run had started
+        monitor_index(first, tilt.monitor, settings.tilt.tilt_axis)
         check_stop_displacement(first, settings.tilt)
         if resume and overwrite:
             raise DrydemError("--resume goes on with the run in --out and --overwrite deletes it: give one of them")

@@ -10,7 +10,7 @@ import click
 
 from drydem.errors import DrydemError
 from drydem.cli.common import (
-    PLAIN_FLOAT, PLAIN_INT, PlainIntRange, discard_unstarted, failure_message, joint_law_options, main, model_options, out_path,
+    PLAIN_FLOAT, PLAIN_INT, PlainIntRange, check_save_every, discard_unstarted, failure_message, joint_law_options, main, model_options, out_path,
     resolve_target, results_folder, signals_interrupt, threads_option, unit_option, writing_results,
 )
 from drydem.cli.tilting import _render
@@ -102,6 +102,7 @@ def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequenc
 
     try:
         _shake_motion_options(motion, pulse, amplitude, frequency, cycles, baseline)
+        check_save_every(save_every, vtk or video)
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     found = resolve_target(target, unit)

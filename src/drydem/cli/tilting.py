@@ -13,7 +13,7 @@ import click
 from drydem.errors import DrydemError
 from drydem.model.parameters import CRITERIA
 from drydem.cli.common import (
-    CHECKPOINT, MODEL_OPTIONS, PLAIN_FLOAT, PlainIntRange, discard_unstarted, given, joint_law_options, main, out_path, resolve_target,
+    CHECKPOINT, MODEL_OPTIONS, PLAIN_FLOAT, PlainIntRange, check_save_every, discard_unstarted, joint_law_options, main, out_path, resolve_target,
     failure_message, results_folder, ruled, signals_interrupt, threads_option, unit_option, writing_results,
 )
 
@@ -162,8 +162,7 @@ def _tilt_plan(found: Target, tilt: TiltOptions, out: Path | None, resume: bool,
     monitor_index(model, tilt.monitor, settings.tilt_axis)
     if resume and overwrite:
         raise DrydemError("--resume goes on from the run in --out and --overwrite deletes it: give one of them")
-    if given("save_every") and not series:
-        raise DrydemError(f"--save-every {save_every} thins the VTK series: it needs --vtk or --video")
+    check_save_every(save_every, series)
     if resume and (out is None or not (out / CHECKPOINT).is_file()):
         raise DrydemError(f"--resume needs --out DIR holding a {CHECKPOINT} from an earlier run" + (f" ({out} has none)" if out else ""))
     folder = results_folder(out, found.name, resume=resume, overwrite=overwrite)

@@ -258,7 +258,7 @@ def load_study(path: str | Path) -> Study:
     if not isinstance(grids, list) or not grids:
         raise ModelError(f"{source}: no [[grid]] entries")
     name, description = meta.get("name", path.stem), meta.get("description", "")
-    problems = _texts_problems(name, description, source)
+    problems = _texts_problems(name, description, source) + _defaults_problems(defaults, source)
     runs, notes = _runs(grids, defaults, path, problems)
     if problems:
         unique = list(dict.fromkeys(problems))
@@ -273,6 +273,23 @@ def _texts_problems(name, description, source: str) -> list[str]:
     problems = [] if isinstance(description, str) else [f"{source}: [study] description = {description!r}: must be a string"]
     problem = plain_name_problem(name)
     return problems + ([] if problem is None else [f"{source}: [study] name = {name!r}: {problem}"])
+
+
+def _defaults_problems(defaults: dict, source: str) -> list[str]:
+    """Why ``[defaults]``' values cannot be used, each by the rule the runs taking it check,
+    whether or not a grid takes it (found by a hunt: ``restitution = "nonsense"`` or
+    ``duration_s = -5``, which no grid took, were accepted without a word). A list is checked
+    value by value, as a grid's."""
+    from drydem.analysis.shake.settings import HOUSNER, RESTITUTION
+    from drydem.analysis.shake.settings import SETTING_RULES as SHAKE_RULES
+    from drydem.analysis.tilt.settings import SETTING_RANGES as TILT_RULES
+
+    rules = {"friction": JOINT_RULES["friction"], "points": POINTS, "increment_deg": TILT_RULES["increment_deg"],
+             "duration_s": SHAKE_RULES["duration_s"], "contact_damping_ratio": SHAKE_RULES["contact_damping_ratio"],
+             "restitution": RESTITUTION}
+    found = [rules[key].problem(value, f"{source}: [defaults] {key}") for key, values in defaults.items() if key in rules
+             for value in _list(values) if not (key == "restitution" and value == HOUSNER)]
+    return [problem for problem in found if problem is not None]
 
 
 def _runs(grids: list, defaults: dict, path: Path, problems: list[str]) -> tuple[list[RunSpec], tuple[str, ...]]:
