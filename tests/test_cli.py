@@ -285,6 +285,25 @@ def test_limit_writes_its_summary_and_mechanism(tmp_path):
     assert (out / "mechanism.png").stat().st_size > 10_000
 
 
+def test_limit_exits_1_when_the_non_associative_iteration_does_not_converge(tmp_path):
+    """Found by a hunt: a "NOT converged" LA-NA printed its last iterate as the collapse angle
+    and exited 0. A block sliding at mu = 1e-6 in 3D: Clarabel's duality gap (1e-9) is 1e-3 of
+    lambda there, which never settles to 1e-4. The results are written (summary.json: converged
+    false) and the command exits 1, as a tilt without equilibrium does."""
+    import json
+
+    model = tmp_path / "block.toml"
+    model.write_text('[joint]\nkn = 1e8\nks = 1e8\nfriction = 0.6\n[contacts]\npoints_per_length = 2\n'
+                     '[[block]]\nname = "base"\nfixed = true\nbox = { min = [-0.5, -0.5, -0.1], max = [0.5, 0.5, 0.0] }\n'
+                     '[[block]]\nname = "b"\nbox = { min = [-0.1, -0.1, 0.0], max = [0.1, 0.1, 0.8] }\n')
+    out = tmp_path / "la"
+    result = CliRunner().invoke(main, ["limit", str(model), "--non-associative", "--friction", "1e-6", "--out", str(out)])
+    assert result.exit_code == 1, result.output
+    assert "(NOT converged (last iterate reported))" in result.output
+    assert "the non-associative iteration did not converge within 100 iterations" in result.output
+    assert json.loads((out / "summary.json").read_text())["converged"] is False
+
+
 def _raise(exc):
     def raising(*args, **kwargs):
         raise exc

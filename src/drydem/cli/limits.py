@@ -35,7 +35,8 @@ def limit(target, non_associative, friction, tilt_axis, out, overwrite, unit) ->
     that rigid blocks can carry, with its collapse mechanism. Each stage is printed to stderr
     as it starts, with the time so far: finding the contacts, assembling the problem (its
     size), solving it (in-plane models: a linear program, HiGHS; 3D: a second-order cone
-    program, Clarabel), and each non-associative iteration with its lambda so far."""
+    program, Clarabel), and each non-associative iteration with its lambda so far. Exits 1
+    when the non-associative iteration does not converge (no verdict; the results are written)."""
     from drydem.analysis.limit import LimitSettings, limit_analysis
     from drydem.model.parameters import LOAD_DIRECTION
     from drydem.io.results import limit_summary, write_summary
@@ -61,6 +62,10 @@ def limit(target, non_associative, friction, tilt_axis, out, overwrite, unit) ->
         state = "converged" if result.converged else "NOT converged (last iterate reported)"
         click.echo(f"iterations      {result.iterations} ({state}): lambda {result.history[0]:.4f} (LA-A) -> {result.history[-1]:.4f}")
     click.echo(f"solver          {result.status}; {runtime:.1f} s; results in {out}")
+    if not result.converged:  # no verdict, as a tilt without equilibrium (found by a hunt: exit 0)
+        raise click.ClickException(f"the non-associative iteration did not converge within {settings.max_iterations} iterations: "
+                                   f"its last multiplier, {result.load_multiplier:.4g}, is no result (summary.json has converged "
+                                   "false); compare with LA-A and the DEM tilt")
 
 
 def _solve_interruptibly(solve: Callable[[Callable[[str], None]], LimitResult], start: float) -> LimitResult:
