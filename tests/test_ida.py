@@ -267,7 +267,12 @@ def test_a_shake_record_without_its_response_is_corrupt(swept):
     good = json.loads(record_path(results, runs[0].id).read_text())
     for summary, message in (({k: v for k, v in good["summary"].items() if k != "overturned"}, "summary must hold"),
                              (good["summary"] | {"overturned": "no"}, "summary overturned = 'no': must be true or false"),
-                             (good["summary"] | {"max_rotation_rad": None}, "max_rotation_rad = None: must be numbers")):
+                             (good["summary"] | {"max_rotation_rad": None}, "max_rotation_rad = None: must be a number"),
+                             # found by a hunt: out of range, they were drawn and tabled
+                             (good["summary"] | {"pga_m_s2": math.inf}, r"pga_m_s2 = inf: must be a number in \[0, inf\) m/s2"),
+                             (good["summary"] | {"max_rotation_rad": -1.0}, "max_rotation_rad = -1.0: must be a number in"),
+                             (good["summary"] | {"max_rotation_rad": 1e308}, "max_rotation_rad = 1e\\+308: must be a number in"),
+                             (good["summary"] | {"cycles": -3}, "cycles = -3: must be a whole number >= 0")):
         path = write_record(results.parent / "corrupt", good | {"summary": summary})
         with pytest.raises(RecordError, match=message):
             read_record(path)

@@ -14,7 +14,7 @@ from drydem.files import WRITING, lock_exclusively, partial_name, unlock
 from drydem.io.model_file import save_model
 from drydem.io.results import RUN_MARK
 from drydem.engine.checkpoint import load_checkpoint
-from drydem.io.vtk import VtkSeries
+from drydem.io.vtk import VtkSeries, write_vtu
 from conftest import layout_blocks
 
 #: a 2-brick x 6-course running-bond wall that slides at atan(0.5) = 26.6 deg; 5-degree steps
@@ -440,3 +440,22 @@ def test_a_resumed_tilt_keeps_its_thinned_vtk_series_whole_and_refuses_to_leave_
     assert resumed.exit_code == 0, resumed.output
     assert [(r["frame"], r["kind"], r["tilt_deg"]) for r in frames(out / "vtk")] == \
         [(r["frame"], r["kind"], r["tilt_deg"]) for r in frames(tmp_path / "whole" / "vtk")]
+
+
+def test_a_frames_csv_number_not_as_drydem_writes_it_or_a_changing_direction_is_refused(wall, tmp_path):
+    """Found by a hunt: float() read time_s 0_5 as 5 s; ux_m 1e300 was captioned; a series whose
+    load direction changed from x to y was drawn from both sides."""
+    from drydem.errors import DrydemError
+    from drydem.report.animation import _caption, series_frames
+
+    with pytest.raises(ValueError, match=r"time_s '0_5': not a plain decimal number, as drydem writes it"):
+        _caption({"time_s": "0_5", "ux_m": "0"}, 0)
+    with pytest.raises(ValueError, match=r"ux_m '1e300': must be a finite number in \[-2e\+06, 2e\+06\]"):
+        _caption({"kind": "equilibrium", "tilt_deg": "1.0", "ux_m": "1e300"}, 0)
+    folder = tmp_path / "vtk"
+    VtkSeries(folder, wall)  # an empty series' folder
+    for k in range(2):
+        write_vtu(wall, folder / f"blocks_{k:04d}.vtu")
+    (folder / "frames.csv").write_text("frame,kind,tilt_deg,ux_m,load_direction\n0,equilibrium,0.0,0,x\n1,equilibrium,1.0,0,y\n")
+    with pytest.raises(DrydemError, match="frames.csv: line 3: load_direction y, where line 2 has x: drydem writes one load"):
+        series_frames(folder)

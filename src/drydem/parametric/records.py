@@ -57,8 +57,15 @@ RECORD_KEYS = {"ok": {"id", "spec", "status", "summary", "pushover"}, "failed": 
 SUMMARY_KEYS = {"tilt": {"collapse_angle_deg", "drift_limit_angles_deg", "wall_height_m"}, "limit": {"collapse_angle_deg", "method"},
                 "shake": {"overturned", "max_rotation_rad", "max_displacement_m", "residual_displacement_m", "pga_m_s2", "scale",
                           "motion", "cycles", "runtime_s"}}
-#: the numbers of a shake run's summary (m, rad, m/s2, s; NaN and infinities allowed, as recorded)
-SHAKE_NUMBERS = ("max_rotation_rad", "max_displacement_m", "residual_displacement_m", "pga_m_s2", "scale", "runtime_s")
+#: the numbers of a shake run's summary (m, rad, m/s2, s), and the motion's PGA before its scale
+#: (optional), as a run records them:
+#: finite, a rotation an angle turned (at most pi), the scale > 0, the rest >= 0 (found by a
+#: hunt: a PGA of Infinity made the IDA table say "none up to inf", a rotation of 1e308
+#: overflowed in the figure, NaN and -1 were drawn)
+SHAKE_RULES = {"max_rotation_rad": Range(0.0, math.pi, unit="rad"), "max_displacement_m": Range(0.0, None, unit="m"),
+               "residual_displacement_m": Range(0.0, None, unit="m"), "pga_m_s2": Range(0.0, None, unit="m/s2"),
+               "scale": Range(0.0, None, low_open=True), "runtime_s": Range(0.0, None, unit="s"),
+               "motion_pga_m_s2": Range(0.0, None, unit="m/s2")}
 #: the columns of a pushover curve: tilt (deg), ux, uz (m), drift, cycles
 CURVE_COLUMNS = 5
 #: a tilting run's angles and a limit analysis' (atan of its multiplier), deg: a tilting table
@@ -203,11 +210,11 @@ def _shake_problem(spec: RunSpec, summary: dict) -> str | None:
         return f"spec motion = {spec.motion!r}, scale = {spec.scale!r}: a shake run has a motion (a string) and a scale (> 0)"
     if not isinstance(summary["overturned"], bool):
         return f"summary overturned = {summary['overturned']!r}: must be true or false"
-    bad = [key for key in SHAKE_NUMBERS if not _numeric(summary[key])]
-    if bad:
-        return f"summary {', '.join(f'{key} = {summary[key]!r}' for key in bad)}: must be numbers"
-    if not (isinstance(summary["cycles"], int) and not isinstance(summary["cycles"], bool)):
-        return f"summary cycles = {summary['cycles']!r}: must be a whole number"
+    problems = table_problems(summary, SHAKE_RULES, "summary", optional=("motion_pga_m_s2",))
+    if problems:
+        return "; ".join(problems)
+    if not (isinstance(summary["cycles"], int) and not isinstance(summary["cycles"], bool) and summary["cycles"] >= 0):
+        return f"summary cycles = {summary['cycles']!r}: must be a whole number >= 0"
     if not isinstance(summary["motion"], str):
         return f"summary motion = {summary['motion']!r}: must be the run's motion (a string)"
     return None

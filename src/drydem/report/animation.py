@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from drydem.errors import DrydemError, OutputTakenError
-from drydem.files import regular_file, replaceable, replaced_atomically
+from drydem.files import PLAIN_NUMBER, regular_file, replaceable, replaced_atomically
 from drydem.io.vtk import FRAME_KINDS, LOAD_AXES, frame_number, frames_csv_rows
 from drydem.model.geometry import MAX_COORDINATE_M
 from drydem.model.parameters import shown
@@ -92,6 +92,7 @@ def series_frames(folder: Path, *, note: Callable[[str], None] | None = None) ->
     _check_columns(index, [name for name in rows[0] if name is not None])
     listed = [_listed_frame(index, line, row) for line, row in enumerate(rows, start=2)]
     _check_increasing(index, rows)
+    _check_one_direction(index, listed)
     unlisted = _unlisted(folder, listed)
     if unlisted and note is not None:
         note(f"{folder}: {len(unlisted)} frames on disk are not listed in frames.csv ({', '.join(unlisted[:3])}"
@@ -127,9 +128,19 @@ def _check_increasing(index: Path, rows: list[dict]) -> None:
         if int(row["frame"]) <= int(before["frame"]):
             raise DrydemError(f"{index}: line {line}: frame {row['frame']} is not after frame {before['frame']} (line {line - 1}): "
                               "frame numbers must increase strictly, as drydem numbers a series' frames (0, 1, 2, ...)")
-        if row.get("time_s") is not None and float(row["time_s"]) < float(before["time_s"]):
+        if row.get("time_s") is not None and _finite(row, "time_s", 0.0) < _finite(before, "time_s", 0.0):
             raise DrydemError(f"{index}: line {line}: time_s {row['time_s']} is before the frame before's, {before['time_s']} "
                               f"(line {line - 1}): a shaking table's frames follow its model time")
+
+
+def _check_one_direction(index: Path, listed: list[tuple[Path, str, int]]) -> None:
+    """A DrydemError naming ``frames.csv`` if its rows' load direction changes: drydem writes one
+    per series (found by a hunt: x, then y, was drawn seen from both sides)."""
+    directions = [load_direction for _, _, load_direction in listed]
+    other = next((k for k, direction in enumerate(directions) if direction != directions[0]), None)
+    if other is not None:
+        raise DrydemError(f"{index}: line {other + 2}: load_direction {LOAD_AXES[directions[other]]}, where line 2 has "
+                          f"{LOAD_AXES[directions[0]]}: drydem writes one load direction per series")
 
 
 def _listed_frame(index: Path, line: int, row: dict) -> tuple[Path, str, int]:
@@ -236,10 +247,10 @@ def _caption(row: dict, load_direction: int) -> str:
     monitored displacement along the load (``ux_m``: along y when tilting about x); a
     ValueError for a kind not of :data:`drydem.io.vtk.FRAME_KINDS`."""
     if row.get("time_s") is not None:
-        return f"t = {_finite(row, 'time_s', 0.0):.3f} s, monitored ux {_millimetres(_finite(row, 'ux_m'))} mm"
+        return f"t = {_finite(row, 'time_s', 0.0):.3f} s, monitored ux {_millimetres(_displacement(row))} mm"
     if row["kind"] not in FRAME_KINDS:
         raise ValueError(f"kind {row['kind']!r}: must be one of {', '.join(map(repr, FRAME_KINDS))}")
-    along = f"monitored u{LOAD_AXES[load_direction]} {_millimetres(_finite(row, 'ux_m'))} mm"
+    along = f"monitored u{LOAD_AXES[load_direction]} {_millimetres(_displacement(row))} mm"
     return f"{row['kind']}: tilt {_finite(row, 'tilt_deg', 0.0, 90.0):.2f} deg, {along}"
 
 
@@ -248,10 +259,20 @@ def _millimetres(metres: float) -> str:
     return f"{round(metres * 1e3, 2) + 0.0:.2f}"
 
 
+def _displacement(row: dict) -> float:
+    """The monitored displacement (``ux_m``) of a row of ``frames.csv``, m: within the reach of a
+    model's coordinates (:data:`~drydem.model.geometry.MAX_COORDINATE_M`; found by a hunt: 1e300
+    was drawn)."""
+    return _finite(row, "ux_m", -2.0 * MAX_COORDINATE_M, 2.0 * MAX_COORDINATE_M)
+
+
 def _finite(row: dict, column: str, low: float = -math.inf, high: float = math.inf) -> float:
     """The number in ``column`` of a row of ``frames.csv``; a ValueError naming the column if it
-    is not a finite number (NaN, inf) in [``low``, ``high``] (a tilt in [0, 90] deg, a model time
-    none or more: a tilt of 1e300 deg was drawn as a caption)."""
+    is not a plain decimal (as drydem writes it: float() also takes 0_5, read as 5, found by a
+    hunt) or not a finite number (NaN, inf) in [``low``, ``high``] (a tilt in [0, 90] deg, a
+    model time none or more: a tilt of 1e300 deg was drawn as a caption)."""
+    if not PLAIN_NUMBER.fullmatch(row[column].strip()):
+        raise ValueError(f"{column} {row[column]!r}: not a plain decimal number, as drydem writes it")
     value = float(row[column])
     if not (math.isfinite(value) and low <= value <= high):
         bounds = "" if (low, high) == (-math.inf, math.inf) else f" in [{low:g}, {high:g}]" if high < math.inf else f" >= {low:g}"
