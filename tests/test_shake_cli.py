@@ -198,6 +198,9 @@ def test_an_overturning_pulse_names_the_block_and_overwrite_replaces_only_the_ea
     (["--motion", "{record}", "--scale", "nan"], "--scale = nan: must be a finite number other than 0"),
     (["--motion", "{record}", "--scale", "0"], "--scale = 0.0: must be a finite number other than 0 (0 is a table at rest, no motion"),
     (["--pulse", "one-sine", "--amplitude", "0", "--frequency", "5"], "--amplitude = 0.0: must be a finite number other than 0"),
+    # found by a hunt: a subnormal amplitude or scale ran, "PGA 4.941e-324 m/s2 (0 g)"
+    (["--pulse", "one-sine", "--amplitude", "5e-324", "--frequency", "5"], "its peak acceleration, 4.94e-324 m/s2, is below 1e-09 m/s2"),
+    (["--motion", "{record}", "--scale", "1e-300"], "record.csv, baseline-corrected x 1e-300: its peak acceleration"),
     (["--motion", "{tiny}"], "tiny.csv: line 3: time_s = 1e-300 is 1e-300 s after 0 (line 2): a record's samples must be at least 1e-06 s apart"),
     # the block is in-plane (fix_y): a motion along y would move nothing
     ([*PULSE, "--direction", "y"], "--direction y shakes the model along y (peak 8 m/s2), but its blocks are held in y ([supports] fix_y = true)"),
@@ -223,11 +226,12 @@ def test_bad_input_is_refused_with_its_option_or_file_and_no_traceback(files, tm
 @pytest.mark.parametrize("name, text, message", [
     # as --scale 0 and --amplitude 0 are refused (the finding: it ran, and reported a PGA of 0)
     ("zeros.csv", "time_s,acc_x_m_s2\n0,0\n0.01,0\n0.02,0\n", "every acceleration of the record is 0: a table at rest, no motion"),
+    ("subnormal.csv", "time_s,acc_x_m_s2\n0,0\n0.01,1e-320\n0.02,0\n", "every acceleration of the record is below 1e-09 m/s2: a table at rest"),
     # float() reads 1_0 as 10
     ("underscore.csv", "time_s,acc_x_m_s2\n0,0\n0.01,1_0\n0.02,0\n", "line 3: acc_x_m_s2: '1_0' is not a number"),
     # its message named bigdur.csv alone
     ("bigdur.csv", "time_s,acc_x_m_s2\n0,0\n0.01,1\n999999.0,0\n", "a baseline correction needs samples spread over the record"),
-], ids=["all-zero", "underscore", "baseline"])
+], ids=["all-zero", "subnormal", "underscore", "baseline"])
 def test_a_record_that_is_no_motion_is_refused_naming_the_file_as_given(files, tmp_path, monkeypatch, name, text, message):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "mo").mkdir()

@@ -189,7 +189,7 @@ def _shake_motion(motion, direction, scale, baseline, pulse, amplitude, frequenc
     naming the file or the option at fault."""
     from types import SimpleNamespace
 
-    from drydem.analysis.shake.motion import NONZERO, PULSE_RULES, pulse as make_pulse, read_motion
+    from drydem.analysis.shake.motion import MIN_PEAK_M_S2, NONZERO, PULSE_RULES, pulse as make_pulse, read_motion
     from drydem.model.parameters import field_problems, refuse
 
     refuse([problem for problem in [NONZERO.problem(scale, "--scale")] if problem])
@@ -206,7 +206,12 @@ def _shake_motion(motion, direction, scale, baseline, pulse, amplitude, frequenc
         corrected = baseline is not False
         if corrected:
             ground = ground.baseline_corrected()
-    return (ground if scale == 1.0 else ground.scaled(scale)), corrected
+    ground = ground if scale == 1.0 else ground.scaled(scale)
+    peak = max(ground.peaks_m_s2)
+    if peak < MIN_PEAK_M_S2:  # found by a hunt: --amplitude 5e-324 ran, "PGA 4.941e-324 m/s2"
+        raise DrydemError(f"{ground.label}: its peak acceleration, {peak:.3g} m/s2, is below {MIN_PEAK_M_S2:g} m/s2 (1e-10 g, "
+                          "far below any accelerometer's resolution): a table at rest, no motion; check --amplitude and --scale")
+    return ground, corrected
 
 
 def _component_option(motion, direction):

@@ -60,6 +60,9 @@ BASELINE_POSEDNESS = 1e-6
 #: a baseline larger than this fraction of a record's peak acceleration gets a note
 #: (:meth:`GroundMotion._baseline_note`): below it, it only removes a drift
 BASELINE_NOTE_FRACTION = 0.01
+#: m/s2: the least peak acceleration of a motion read or asked for on the command line, 1e-10 g,
+#: far below any accelerometer's resolution (~1e-6 g); below it the table is at rest
+MIN_PEAK_M_S2 = 1e-9
 #: s: the explicit timestep, or a pulse's period
 TIMESTEP = Range(0.0, None, low_open=True, unit="s")
 #: a number of cycles whose accelerations are made at once: at most 1e7 (an array of 240 MB;
@@ -430,10 +433,13 @@ def _number(text: str, where: str) -> float:
 
 def _moving(path: Path, acceleration: np.ndarray) -> np.ndarray:
     """``acceleration`` (n, 3), m/s2, read from the record ``path``; a ModelError naming the file
-    if every value is 0: a table at rest, no motion (as ``drydem shake --scale 0`` is refused)."""
-    if not acceleration.any():
-        raise ModelError(f"{path}: every acceleration of the record is 0: a table at rest, no motion; "
-                         "a record must move the table")
+    if every value is below :data:`MIN_PEAK_M_S2` in magnitude: a table at rest, no motion (as
+    ``drydem shake --scale 0`` is refused; found by a hunt: a record whose only value other than
+    0 was 1e-320 ran)."""
+    peak = float(np.abs(acceleration).max(initial=0.0))
+    if peak < MIN_PEAK_M_S2:
+        raise ModelError(f"{path}: every acceleration of the record is " + ("0" if peak == 0.0 else f"below {MIN_PEAK_M_S2:g} m/s2")
+                         + ": a table at rest, no motion; a record must move the table")
     return acceleration
 
 
