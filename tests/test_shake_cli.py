@@ -211,7 +211,8 @@ def test_an_overturning_pulse_names_the_block_and_overwrite_replaces_only_the_ea
     (["--pulse", "sine", "--amplitude", "nan", "--frequency", "-2"], "--amplitude = nan: must be a finite number other than 0 (0 is a "
                                                                      "table at rest, no motion; a negative one flips the motion); --frequency"),
     (["--pulse", "ricker", "--amplitude", "3", "--frequency", "2", "--cycles", "2"], "--cycles 2: a ricker pulse is one period"),
-    ([*PULSE, "--baseline"], "--baseline corrects a --motion record; a pulse is analytic"),
+    ([*PULSE, "--baseline"], "--baseline says whether a --motion record is baseline-corrected; a pulse is analytic"),
+    ([*PULSE, "--no-baseline"], "--no-baseline says whether a --motion record is baseline-corrected; a pulse is analytic"),
     ([*PULSE, "--kn", "-1"], "Invalid value for '--kn': -1.0: must be a number in [1e+04, 1e+15] Pa/m ([joint] kn)"),
     ([*PULSE, "--density", "true"], "Invalid value for '--density': 'true' is not a valid float"),
     ([*PULSE, "--monitor", "nosuch"], "no block named 'nosuch'"),

@@ -280,3 +280,15 @@ def test_dashpots_on_a_stress_dependent_joint_are_refused():
     with pytest.raises(ModelError, match="contact dashpots .* stress-dependent joint .* not supported"):
         dd.Simulation(model, damping=Damping(0.0, contact_ratio=0.5))
     dd.Simulation(model, damping=Damping(0.0, mass_proportional=1.0))  # Rayleigh's mass term needs no kn
+
+
+def test_a_shake_of_a_stress_dependent_joint_with_the_default_dashpots_says_how_to_run_it():
+    """Found by a hunt: shake's default damping ratio (0.5) on such a joint failed after the
+    settling with the engine's message, naming neither the default nor the options."""
+    from drydem.analysis.shake import ShakeSettings, pulse, shake_analysis
+
+    motion = pulse("one-sine", amplitude_m_s2=1.0, frequency_hz=2.0, direction="x")
+    with pytest.raises(ModelError, match=r"the contacts' damping ratio is 0.5 \(the default\); give --damping-ratio 0"):
+        shake_analysis(stack(LAWS["affine"]), ShakeSettings(motion=motion))
+    with pytest.raises(ModelError, match=r"calibrated to the restitution \(--restitution\)"):
+        shake_analysis(stack(LAWS["affine"]), ShakeSettings(motion=motion, restitution="housner"))

@@ -95,7 +95,7 @@ def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequenc
     fell, peak and residual response, PGA, damping). Exits 130 or 143 when interrupted (the
     history so far is kept)."""
     from drydem.analysis.shake import HOUSNER, ShakeSettings
-    from drydem.analysis.shake.run import check_held_axes, housner_target
+    from drydem.analysis.shake.run import check_dashpots, check_held_axes, housner_target
     from drydem.analysis.tilt import monitor_index
     from drydem.io.results import HistoryWriter
     from drydem.io.vtk import ShakeSeries
@@ -114,6 +114,7 @@ def shake(target, motion, direction, scale, baseline, pulse, amplitude, frequenc
         _check_shake_options(values)
         settings = ShakeSettings(motion=ground, **values)
         held_notes = check_held_axes(model, ground, _component_option(motion, direction))
+        check_dashpots(model, settings)
         monitored = monitor_index(model, monitor)
         if settings.restitution == HOUSNER:
             housner_target(model, monitored, ground.main_direction)  # refused before the run: a squat block does not rock
@@ -180,8 +181,9 @@ def _shake_motion_options(motion, pulse, amplitude, frequency, cycles, baseline)
     missing = [name for name, value in (("--amplitude A (m/s2)", amplitude), ("--frequency F (Hz)", frequency)) if value is None]
     if missing:
         raise DrydemError(f"--pulse {pulse} needs {' and '.join(missing)}")
-    if baseline:
-        raise DrydemError("--baseline corrects a --motion record; a pulse is analytic and is not corrected")
+    if baseline is not None:  # found by a hunt: --no-baseline with a pulse was taken and ignored
+        raise DrydemError(f"--{'' if baseline else 'no-'}baseline says whether a --motion record is baseline-corrected; a pulse "
+                          "is analytic and never corrected")
 
 
 def _shake_motion(motion, direction, scale, baseline, pulse, amplitude, frequency, cycles):

@@ -154,7 +154,7 @@ def calibrated_damping_ratio(model: Model, block: int, restitution: float, direc
     if crossing.size == 0:
         raise DrydemError(f"{model.source}: block {model.block_name[block]!r} rocking alone on its joints has a restitution "
                           f"{_between(excess + restitution)} for contact damping ratios {RATIO_GRID[0]:g} to {RATIO_GRID[-1]:g} "
-                          f"with {model.contacts.points_per_length} points per length: {restitution:.3f} cannot be reached. "
+                          f"with {model.contacts.points_per_length} points per length: {restitution:.3g} cannot be reached. "
                           f"{_with_corner_points(model, block, restitution, direction)}Or give the contact damping ratio directly "
                           "(drydem shake --damping-ratio, ShakeSettings.contact_damping_ratio)")
     low, high = ratios[crossing[0]], ratios[crossing[0] + 1]

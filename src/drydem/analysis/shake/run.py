@@ -81,6 +81,7 @@ def shake_analysis(
         model = model.replace(solver=replace(model.solver, mass_scaling=False))
     monitor = monitor_index(model, settings.monitor)
     check_held_axes(model, settings.motion)
+    check_dashpots(model, settings)
     sim = Simulation(model)
     settle(sim, settings.lost_drop_heights)
     ratio, restitution = damping_ratio(model, monitor, settings)
@@ -175,6 +176,26 @@ def settle(sim: Simulation, lost_drop_heights: float) -> None:
     if not settled.converged:
         raise DrydemError(f"{model.source}: no equilibrium under gravity within {settled.cycles} cycles: the shaking starts "
                           "from rest, so it was not run (raise [solver] max_cycles)")
+
+
+def check_dashpots(model: Model, settings: ShakeSettings) -> None:
+    """ModelError if ``settings`` give contact dashpots (a damping ratio other than 0, the
+    default's 0.5 included, or one calibrated to a restitution; Rayleigh's stiffness term) to a
+    model whose joints are stress-dependent, which takes none yet (the engine refuses them:
+    :class:`~drydem.engine.simulation.Simulation`), saying how to run it (found by a hunt:
+    the engine's message, after the settling, named neither the default nor the options)."""
+    if not model.joint.stress_dependent:
+        return
+    ratio = settings.damping_ratio
+    if ratio == 0 and settings.rayleigh_stiffness_s == 0:
+        return
+    given = ("calibrated to the restitution (--restitution)" if ratio is None else
+             f"{ratio:g}" + (" (the default)" if settings.contact_damping_ratio is None else " (--damping-ratio)"))
+    raise ModelError(f"{model.source}: its joints follow the {model.joint.model} law, whose stiffness follows the stress, and "
+                     f"contact dashpots are sized for a constant kn: the contacts' damping ratio is {given}"
+                     + (f" and Rayleigh's stiffness term {settings.rayleigh_stiffness_s:g} s" if settings.rayleigh_stiffness_s else "")
+                     + "; give --damping-ratio 0 (contact_damping_ratio = 0) and no --rayleigh-stiffness (Rayleigh's mass term, "
+                     "--rayleigh-mass, may damp the motion)")
 
 
 def damping_ratio(model: Model, monitor: int, settings: ShakeSettings) -> tuple[float, float | None]:
