@@ -227,7 +227,8 @@ def test_bad_input_is_refused_with_its_option_or_file_and_no_traceback(files, tm
 @pytest.mark.parametrize("name, text, message", [
     # as --scale 0 and --amplitude 0 are refused (the finding: it ran, and reported a PGA of 0)
     ("zeros.csv", "time_s,acc_x_m_s2\n0,0\n0.01,0\n0.02,0\n", "every acceleration of the record is 0: a table at rest, no motion"),
-    ("subnormal.csv", "time_s,acc_x_m_s2\n0,0\n0.01,1e-320\n0.02,0\n", "every acceleration of the record is below 1e-09 m/s2: a table at rest"),
+    ("subnormal.csv", "time_s,acc_x_m_s2\n0,0\n0.01,1e-320\n0.02,0\n",
+     "every acceleration of the record is below 1e-09 m/s2: a table at rest"),
     # float() reads 1_0 as 10
     ("underscore.csv", "time_s,acc_x_m_s2\n0,0\n0.01,1_0\n0.02,0\n", "line 3: acc_x_m_s2: '1_0' is not a number"),
     # its message named bigdur.csv alone

@@ -10,8 +10,8 @@ import click
 
 from drydem.errors import DrydemError
 from drydem.cli.common import (
-    PLAIN_FLOAT, PLAIN_INT, PlainIntRange, check_save_every, discard_unstarted, failure_message, joint_law_options, main, model_options, out_path,
-    resolve_target, results_folder, signals_interrupt, threads_option, unit_option, writing_results,
+    PLAIN_FLOAT, PLAIN_INT, PlainIntRange, check_save_every, discard_unstarted, failure_message, joint_law_options, main,
+    model_options, out_path, resolve_target, results_folder, signals_interrupt, threads_option, unit_option, writing_results,
 )
 from drydem.cli.tilting import _render
 

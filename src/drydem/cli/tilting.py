@@ -13,8 +13,8 @@ import click
 from drydem.errors import DrydemError
 from drydem.model.parameters import CRITERIA
 from drydem.cli.common import (
-    CHECKPOINT, MODEL_OPTIONS, PLAIN_FLOAT, PlainIntRange, check_save_every, discard_unstarted, joint_law_options, main, out_path, resolve_target,
-    failure_message, results_folder, ruled, signals_interrupt, threads_option, unit_option, writing_results,
+    CHECKPOINT, MODEL_OPTIONS, PLAIN_FLOAT, PlainIntRange, check_save_every, discard_unstarted, joint_law_options, main, out_path,
+    resolve_target, failure_message, results_folder, ruled, signals_interrupt, threads_option, unit_option, writing_results,
 )
 
 if TYPE_CHECKING:
