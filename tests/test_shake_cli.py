@@ -199,7 +199,8 @@ def test_an_overturning_pulse_names_the_block_and_overwrite_replaces_only_the_ea
     (["--motion", "{record}", "--scale", "0"], "--scale = 0.0: must be a finite number other than 0 (0 is a table at rest, no motion"),
     (["--pulse", "one-sine", "--amplitude", "0", "--frequency", "5"], "--amplitude = 0.0: must be a finite number other than 0"),
     # found by a hunt: a subnormal amplitude or scale ran, "PGA 4.941e-324 m/s2 (0 g)"
-    (["--pulse", "one-sine", "--amplitude", "5e-324", "--frequency", "5"], "its peak acceleration, 4.94e-324 m/s2, is below 1e-09 m/s2"),
+    (["--pulse", "one-sine", "--amplitude", "5e-324", "--frequency", "5"],
+     "its peak acceleration, 4.94e-324 m/s2, is below 1e-09 m/s2"),
     (["--motion", "{record}", "--scale", "1e-300"], "record.csv, baseline-corrected x 1e-300: its peak acceleration"),
     (["--motion", "{tiny}"], "tiny.csv: line 3: time_s = 1e-300 is 1e-300 s after 0 (line 2): a record's samples must be at least 1e-06 s apart"),
     # the block is in-plane (fix_y): a motion along y would move nothing

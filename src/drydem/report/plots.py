@@ -158,8 +158,8 @@ def history_figure(history: History, path: Path, *, title: str = "", monitored: 
     """The time history of a shaking-table analysis in three panels on one time axis: the
     table's acceleration (m/s2; each component that is not zero throughout), the monitored
     block's displacement relative to the table (ux, uz and a uy that is not zero, mm) and its
-    rotation across the motion (rad, about ``history.rotation_about``). The first fall among ``fallen`` (block, time in s, rule) is marked
-    on every panel."""
+    rotation across the motion (rad, about ``history.rotation_about``). The first fall among
+    ``fallen`` (block, time in s, rule) is marked on every panel."""
     fig = new_figure(figsize=(7.2, 6.4), layout="constrained")
     ground_ax, moved_ax, turn_ax = fig.subplots(3, 1, sharex=True)
     t = history.time_s

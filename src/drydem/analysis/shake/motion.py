@@ -271,7 +271,8 @@ class GroundMotion:
         moved = float(self.displacement_m()[-1, k])
         return (f"{self.label}: the baseline correction shifts the {DIRECTIONS[k]} acceleration by up to {baseline[k]:.3g} m/s2, "
                 f"{baseline[k] / peak:.1%} of the record's peak, to bring the table to rest where it started (the record moves "
-                f"it {moved:.3g} m along {DIRECTIONS[k]}); if that displacement is genuine (a pulse, a fling step), give --no-baseline",)
+                f"it {moved:.3g} m along {DIRECTIONS[k]}); if that displacement is genuine (a pulse, a fling step), "
+                "give --no-baseline",)
 
     def resolution_problem(self, dt_s: float) -> str | None:
         """What keeps an analysis of timestep ``dt_s`` (s) from following the motion, or None.

@@ -214,7 +214,8 @@ def tilt_analysis(
     start = time.perf_counter()
     run = TiltRun(model, settings, on_progress)
     fingerprint = checkpointing.fingerprint(model, settings)
-    protocol = TiltProtocol(run, settings.first_step(), fingerprint, on_record, on_frame, checkpoint, checkpoint_every_s, started_at=start)
+    protocol = TiltProtocol(run, settings.first_step(), fingerprint, on_record, on_frame, checkpoint, checkpoint_every_s,
+                            started_at=start)
     if resume:
         protocol.resume()
         stable = True
