@@ -225,7 +225,8 @@ def housner_target(model: Model, monitor: int, direction: int) -> float:
 
 class Shaking:
     """Stage 2 as it runs: the Simulation at rest under gravity, the monitored block, the rest
-    state the response is measured from, the history's rows and the blocks fallen so far."""
+    state the response is measured from, the motion's main direction (the rotation across it is
+    recorded), the history's rows and the blocks fallen so far."""
 
     def __init__(self, sim: Simulation, monitor: int, settings: ShakeSettings):
         self.sim, self.monitor, self.settings = sim, monitor, settings
@@ -237,7 +238,8 @@ class Shaking:
         self.fallen: list[tuple[str, float, str]] = []
         self.ended_by = DURATION
         self.start_s = sim.time_s
-        self.rows: list[tuple[float, np.ndarray, np.ndarray, float]] = []
+        self.direction = settings.motion.main_direction  # once: it takes the record's peaks
+        self.rows: list[tuple[float, np.ndarray, np.ndarray, float, float]] = []
         self._record()
 
     def run(self, on_progress, on_frame) -> None:
@@ -281,7 +283,7 @@ class Shaking:
         b = self.monitor
         moved = self.sim.state.position[b] - self.rest.position[b]
         turned = rotation_vectors(self.rest.quaternion[b:b + 1], self.sim.state.quaternion[b:b + 1])[0]
-        across = turned[1] if self.settings.motion.main_direction == 0 else -turned[0]
+        across = turned[1] if self.direction == 0 else -turned[0]
         ground = self.settings.motion.acceleration_at(self.time_s)
         self.rows.append((self.time_s, ground, moved, float(across), float(np.linalg.norm(turned))))
 
@@ -306,7 +308,7 @@ class Shaking:
     def result(self, ratio: float, restitution: float | None, runtime_s: float) -> ShakeResult:
         """The :class:`ShakeResult` of the history run."""
         times, ground, moved, turn, angle = (np.array(column) for column in zip(*self.rows))
-        history = History(times, ground, moved[:, 0], moved[:, 1], moved[:, 2], turn, ("y", "-x")[self.settings.motion.main_direction])
+        history = History(times, ground, moved[:, 0], moved[:, 1], moved[:, 2], turn, ("y", "-x")[self.direction])
         horizontal = np.hypot(history.ux_m, history.uy_m)
         return ShakeResult(
             settings=self.settings, monitored_block=self.sim.model.block_name[self.monitor], overturned=bool(self.fallen),
