@@ -267,6 +267,15 @@ def test_an_at2_value_that_is_not_a_plain_decimal_is_refused_naming_the_file_and
     refused(lambda: read_motion(path), f"{path}: line 6: '1_0' is not a number")
 
 
+@pytest.mark.parametrize("encoding", ["utf-8", "latin-1"])
+def test_an_at2_record_reads_as_utf8_or_latin1_and_names_a_unicode_minus_as_written(tmp_path, encoding):
+    path = tmp_path / "station.AT2"
+    path.write_bytes(AT2_NEW.replace("Test station", "Estación Sismológica").encode(encoding))
+    np.testing.assert_allclose(read_motion(path).acceleration_m_s2[:, 0], np.array(AT2_VALUES_G) * 9.81, rtol=1e-15)
+    path.write_bytes(AT2_NEW.replace(" -.1800000E-02", " \u22121.800000E-03").encode("utf-8"))
+    refused(lambda: read_motion(path), f"{path}: line 5: '\u22121.800000E-03' is not a number")
+
+
 def test_an_at2_direction_other_than_x_y_z_is_refused(tmp_path):
     path = written(tmp_path, "r.AT2", AT2_NEW)
     refused(lambda: read_at2(path, direction="north"), f"{path}: direction = 'north': must be one of ('x', 'y', 'z')")

@@ -12,6 +12,7 @@ import drydem as dd
 from drydem.cli import main
 from drydem.io.mesh import STL_TRIANGLE
 from drydem.io.model_file import save_model
+from drydem.io.target import load_target
 
 #: a unit cube as OBJ statements, lines 1-14 (8 vertices, 6 faces)
 CUBE = ("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
@@ -165,6 +166,14 @@ def test_a_target_that_is_no_file_is_named(tmp_path, monkeypatch, target, messag
     monkeypatch.chdir(tmp_path)
     os.mkfifo("pipe.toml")
     fails(["check", target], message)
+
+
+def test_a_target_with_a_control_character_is_named_escaped():
+    """Found by a hunt: a study's target "a\\u0000b.toml" was printed with its NUL byte raw."""
+    with pytest.raises(dd.ModelError) as error:
+        load_target("a\x00b\x1b[31m.toml")
+    assert str(error.value).startswith("'a\\x00b\\x1b[31m.toml': no such file, and not a built-in wall")
+    assert str(error.value).isprintable()
 
 
 def test_a_failed_export_keeps_the_old_file_whole(tmp_path, monkeypatch):

@@ -235,11 +235,11 @@ def test_animate_names_the_line_of_a_frame_whose_tilt_is_not_finite(run, tmp_pat
     (short / "frames.csv").write_text("\n".join(lines) + "\n")
     result = CliRunner().invoke(main, ["animate", str(short), "-o", str(tmp_path / "collapse.gif")])
     assert result.exit_code == 1
-    assert "frames.csv: line 3: not a frame of drydem tilt or shake --vtk (ValueError(\"tilt_deg 'nan': must be a finite number" in result.output
+    assert "frames.csv: line 3: not a frame of drydem tilt or shake --vtk (tilt_deg 'nan': must be a finite number" in result.output
     lines[2] = lines[2].replace("nan", "1e300", 1)  # found by a hunt: drawn as a caption
     (short / "frames.csv").write_text("\n".join(lines) + "\n")
     result = CliRunner().invoke(main, ["animate", str(short), "-o", str(tmp_path / "collapse.gif")])
-    assert result.exit_code == 1 and "line 3: not a frame of drydem tilt or shake --vtk (ValueError(\"tilt_deg '1e300': must be a " \
+    assert result.exit_code == 1 and "line 3: not a frame of drydem tilt or shake --vtk (tilt_deg '1e300': must be a " \
         "finite number in [0, 90]" in result.output, result.output
 
 
@@ -264,11 +264,11 @@ def _with_column(lines):
      "line 1: missing columns 'tilt_deg'"),
     (lambda lines: [lines[0].replace("load_direction", "ux_m"), *lines[1:]], "line 1: columns named twice: 'ux_m'; drydem writes each once"),
     (lambda lines: [lines[0], lines[1], lines[2] + ",1", lines[3]],
-     "line 3: not a frame of drydem tilt or shake --vtk (ValueError('6 values; the header has 5 columns'))"),
+     "line 3: not a frame of drydem tilt or shake --vtk (6 values; the header has 5 columns)"),
     (lambda lines: [lines[0], lines[1], _frame(lines[2], "+1"), lines[3]],
-     "line 3: not a frame of drydem tilt or shake --vtk (ValueError(\"frame '+1': must be written in the digits 0-9"),
+     "line 3: not a frame of drydem tilt or shake --vtk (frame '+1': must be written in the digits 0-9"),
     (lambda lines: [lines[0], lines[1], _frame(lines[2], "9" * 400), lines[3]],
-     "line 3: not a frame of drydem tilt or shake --vtk (ValueError(\"frame '99999999999999999...99999999999999999' "
+     "line 3: not a frame of drydem tilt or shake --vtk (frame '99999999999999999...99999999999999999' "
      "(402 characters): must be at most 999999999"),
 ], ids=["listed-twice", "out-of-order", "unknown-column", "missing-column", "column-twice", "extra-value", "plus-sign", "400-digits"])
 def test_animate_refuses_a_frames_csv_not_as_drydem_writes_it_naming_the_line_and_the_rule(run, tmp_path, edit, message):
@@ -358,7 +358,7 @@ def test_a_series_says_which_way_its_load_acts_and_one_written_before_that_is_re
     (frame,) = series_frames(older)
     assert frame.load_direction == 0 and frame.caption == "equilibrium: tilt 0.00 deg, monitored ux 0.00 mm"
     (older / "frames.csv").write_text(f"{lines[0]}\n{lines[1].rpartition(',')[0]},z\n")
-    with pytest.raises(DrydemError, match=r"frames.csv: line 2: not a frame of drydem tilt or shake --vtk \(ValueError\(\"load_direction 'z': "
+    with pytest.raises(DrydemError, match=r"frames.csv: line 2: not a frame of drydem tilt or shake --vtk \(load_direction 'z': "
                                           r"must be one of x, y"):
         series_frames(older)
     for bad in (-1, 2, True, 1.0):
@@ -436,6 +436,12 @@ def test_a_resumed_tilt_keeps_its_thinned_vtk_series_whole_and_refuses_to_leave_
     assert without.exit_code == 1 and "holds the VTK series of the run being resumed; resume with --vtk" in without.output
     other = CliRunner().invoke(main, [*tilt[:-1], "3", "--vtk", "--out", str(out), "--resume"])
     assert other.exit_code == 1 and "the VTK series was begun with --save-every 2" in other.output
+    settings = out / "vtk" / "series.json"
+    kept = settings.read_text()
+    settings.write_text('{"every_other": 2}')  # the reason in plain words, not KeyError('every')
+    foreign = CliRunner().invoke(main, [*tilt, "--vtk", "--out", str(out), "--resume"])
+    assert foreign.exit_code == 1 and "series.json: not the settings of a drydem tilt --vtk series (no 'every')" in foreign.output
+    settings.write_text(kept)
     resumed = CliRunner().invoke(main, [*tilt, "--vtk", "--out", str(out), "--resume"])
     assert resumed.exit_code == 0, resumed.output
     assert [(r["frame"], r["kind"], r["tilt_deg"]) for r in frames(out / "vtk")] == \

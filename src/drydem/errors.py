@@ -20,3 +20,11 @@ class DivergenceError(DrydemError):
 class OutputTakenError(DrydemError):
     """An output file is being written by another process, or was written by one while drydem
     wrote its own (which then keeps the other's)."""
+
+
+def plain_reason(exc: Exception) -> str:
+    """What ``exc`` says went wrong, as plain text for a message: its own words, a missing key
+    as "no 'name'", never Python's repr (a hunt found ValueError("...") in animate's messages)."""
+    if isinstance(exc, KeyError) and exc.args:
+        return f"no {exc.args[0]!r}"
+    return str(exc) or type(exc).__name__

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from drydem.masonry import designs
 from drydem.errors import ModelError
-from drydem.model.parameters import TEXT, check_arguments
+from drydem.model.parameters import TEXT, check_arguments, shown
 from drydem.files import read_toml
 from drydem.io.mesh import UNIT
 from drydem.io.model_file import model_from_dict
@@ -65,7 +65,8 @@ def load_target(target: str, *, unit_m: float = 1.0) -> Target:
         return Target(target, Path(target), builtin_building(target), builtin=True)
     builtin = designs.find(target)
     if builtin is None:
-        raise ModelError(f"{target}: {found}, and not a built-in wall ({', '.join(designs.names())}) "
+        named = target if target.isprintable() else shown(target)  # a NUL or an escape of a study's target, as written
+        raise ModelError(f"{named}: {found}, and not a built-in wall ({', '.join(designs.names())}) "
                          f"or building ({', '.join(BUILDINGS)})")
     return replace(_file_target(builtin, unit_m), builtin=True)
 

@@ -28,7 +28,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from drydem.engine.contacts import SubContacts, world_points
-from drydem.errors import DrydemError, ModelError
+from drydem.errors import DrydemError, ModelError, plain_reason
 from drydem.files import read_text, replaced_atomically, writable
 from drydem.model.assembly import Model
 from drydem.model.geometry import described
@@ -184,7 +184,7 @@ def _check_series_every(folder: Path, every: int) -> None:
     try:
         begun = json.loads(read_text(path, "series.json of drydem tilt --vtk is JSON text"))["every"]
     except (ValueError, TypeError, KeyError) as exc:
-        raise DrydemError(f"{path}: not the settings of a drydem tilt --vtk series ({exc!r})") from None
+        raise DrydemError(f"{path}: not the settings of a drydem tilt --vtk series ({plain_reason(exc)})") from None
     if begun != every:
         raise DrydemError(f"{path}: the VTK series was begun with --save-every {begun}; resumed with --save-every {every} its "
                           f"frames would be unevenly spaced: resume with --save-every {begun}")
@@ -279,7 +279,7 @@ def _equilibrium_rows(index: Path) -> list[tuple[int, str, float, float]]:
         try:
             frame = (frame_number(row["frame"]), row["kind"], float(row["tilt_deg"]), float(row["ux_m"]))
         except (KeyError, TypeError, ValueError) as exc:
-            raise DrydemError(f"{index}: line {line}: not a frame of drydem tilt --vtk ({exc!r})") from None
+            raise DrydemError(f"{index}: line {line}: not a frame of drydem tilt --vtk ({plain_reason(exc)})") from None
         if frame[1] == "equilibrium" and frame[0] == len(rows):
             rows.append(frame)
     return rows

@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drydem.errors import DrydemError, OutputTakenError
+from drydem.errors import DrydemError, OutputTakenError, plain_reason
 from drydem.files import PLAIN_NUMBER, regular_file, replaceable, replaced_atomically
 from drydem.io.vtk import FRAME_KINDS, LOAD_AXES, frame_number, frames_csv_rows
 from drydem.model.geometry import MAX_COORDINATE_M
@@ -155,7 +155,7 @@ def _listed_frame(index: Path, line: int, row: dict) -> tuple[Path, str, int]:
         load_direction = _load_direction(row)
         return index.parent / f"blocks_{frame:04d}.vtu", _caption(row, load_direction), load_direction
     except (KeyError, TypeError, ValueError) as exc:
-        raise DrydemError(f"{index}: line {line}: not a frame of drydem tilt or shake --vtk ({exc!r})") from None
+        raise DrydemError(f"{index}: line {line}: not a frame of drydem tilt or shake --vtk ({plain_reason(exc)})") from None
 
 
 def _same_model(frames: list[VideoFrame], listed: list[tuple[Path, str, int]]) -> list[VideoFrame]:
@@ -183,7 +183,7 @@ def _read_mesh(file: Path):
     try:
         return mesh, {name: np.concatenate(mesh.cell_data[name]) for name in FRAME_FIELDS}
     except (KeyError, TypeError, ValueError) as exc:  # a foreign file lacks the fields
-        raise DrydemError(f"{file}: cannot read the frame: {exc!r}") from None
+        raise DrydemError(f"{file}: cannot read the frame: {plain_reason(exc)}") from None
 
 
 def _read_frame(file: Path, caption: str, load_direction: int) -> VideoFrame:
@@ -201,7 +201,7 @@ def _read_frame(file: Path, caption: str, load_direction: int) -> VideoFrame:
         cells = [cell for block in mesh.cells for cell in block.data]
         blocks = [[mesh.points[face] for face in faces] for faces, on in zip(cells, active, strict=True) if on]
     except (IndexError, ValueError) as exc:  # a face naming a point the file lacks; fields and cells of other lengths
-        raise DrydemError(f"{file}: cannot read the frame: {exc!r}") from None
+        raise DrydemError(f"{file}: cannot read the frame: {plain_reason(exc)}") from None
     return VideoFrame(blocks, magnitude[active], caption, ~fixed[active], load_direction, len(cells))
 
 

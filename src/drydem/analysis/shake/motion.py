@@ -556,7 +556,7 @@ def read_at2(path: str | Path, direction: str = "x") -> GroundMotion:
     broken; the count of values must be NPTS (a truncated file is refused)."""
     path = Path(path)
     OneOf(DIRECTIONS).check(direction, f"{path}: direction")
-    lines = _read_text(path, "PEER .AT2", "latin-1").splitlines()
+    lines = _utf8_where_it_is(_read_text(path, "PEER .AT2", "latin-1")).splitlines()
     if len(lines) < 4:
         raise ModelError(f"{path}: {len(lines)} lines; a PEER .AT2 file has 4 header lines "
                          "(title; event and station; units; NPTS and DT), then the accelerations")
@@ -570,6 +570,16 @@ def read_at2(path: str | Path, direction: str = "x") -> GroundMotion:
     acceleration = np.zeros((npts, 3))
     acceleration[:, DIRECTIONS.index(direction)] = np.array(values) * G
     return GroundMotion(np.arange(npts) * dt_s, _moving(path, acceleration), path.name, source=str(path))
+
+
+def _utf8_where_it_is(text: str) -> str:
+    """``text``, read as Latin-1 (every byte a character: older records' station names), decoded
+    again as UTF-8 where its bytes are UTF-8 (found by a hunt: a unicode minus in a record was
+    shown as three Latin-1 characters)."""
+    try:
+        return text.encode("latin-1").decode("utf-8")
+    except UnicodeDecodeError:
+        return text
 
 
 def _at2_npts_dt(path: Path, line: str) -> tuple[int, float]:
