@@ -102,3 +102,22 @@ def test_dry_stack_buckles_under_its_own_weight_beyond_greenhills_height(height_
         assert 0.0 < growth < load / (1.0 - load)
     else:
         assert not result.converged and growth > 10.0
+
+
+def test_a_bond_with_cohesion_holds_until_its_heel_slips_at_the_brittle_closed_form():
+    """A 1.0 x 0.2 x 0.1 m block (W = 392.4 N) on a joint with cohesion c A = 0.2 W, mu = 0.5,
+    T = 0, in plane. Rigid on its springs, its four sub-contacts (x = +-0.5, +-1/6 m, areas
+    A/6, A/3, A/3, A/6) share the shear V = W sin(theta) by area and the normal force linearly,
+    the overturning moment M = V h / 2 taken by sum(a x^2) = 0.1019 A: the heel's Coulomb limit
+    is reached at (1 + mu h L / (4 sum(a x^2) / A)) sin(theta) = cA/W + mu cos(theta), 33.371 deg,
+    and the bond fails brittly from there (LA-A's plastic multiplier mu + cA/W = 0.7 is 34.99
+    deg). Found by a hunt: the bonds broke in the first cycle on the round-off of the drawn
+    touch (-1.4e-17 m) and the block slid at atan(mu) = 26.6 deg, as without cohesion."""
+    from drydem.analysis.tilt import TiltSettings, tilt_analysis
+
+    joint = dd.JointMaterial(kn=1e9, ks=1e9, friction=0.5, cohesion=392.4)
+    model = stack_model([0.1], size_xy=(1.0, 0.2), joint=joint, supports=dd.Supports(fix_y=True), density=2000.0)
+    sim = dd.Simulation(model)
+    assert sim.cycle_to_equilibrium().converged and sim.contacts.intact.all()
+    result = tilt_analysis(model, TiltSettings(increment_deg=0.1, adaptive=True))
+    assert 33.371 - 0.1 < result.collapse_angle_deg <= 33.371

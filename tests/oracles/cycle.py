@@ -13,7 +13,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from drydem.engine.cycle3d import cycle_loop
-from drydem.engine.joints import CLOSING_CYCLES, StressJoint, normal_stress
+from drydem.engine.joints import CLOSING_CYCLES, TOUCH_ROUND_OFF, StressJoint, normal_stress
 from oracles.joints import shear_stiffness
 
 
@@ -67,7 +67,10 @@ def step(state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, dam
     else:
         fn = joint.kn * area * -gap
         shear_scale = joint.ks * area
-    opened = fn < -np.where(sub.intact, joint.tension * area, 0.0)
+    # an intact sub-contact opened by no more than the round-off of its coordinates is touching
+    touching = sub.intact & (-gap >= -TOUCH_ROUND_OFF * (np.abs(pos[b] - pos[a]).sum(axis=1) + np.abs(sub.offset[sub.contact])))
+    fn = np.where(touching, np.maximum(fn, -joint.tension * area), fn)
+    opened = ~touching & (fn < -np.where(sub.intact, joint.tension * area, 0.0))
     # a stress-dependent joint closing past its limit within CLOSING_CYCLES cycles at its speed
     closing = -gap - CLOSING_CYCLES * np.minimum(np.einsum("ni,ni->n", v_rel, n), 0.0) * dt
     stiffer = isinstance(joint, StressJoint) and bool((closing > closure_limit)[~opened].any())

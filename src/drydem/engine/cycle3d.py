@@ -29,7 +29,7 @@ import numpy as np
 
 from drydem import compiled_cache
 from drydem.engine.damping import dashpot_force, dashpot_per_area, has_dashpots, local_damping
-from drydem.engine.joints import normal_law, shear_law, stiffer_than_timestep
+from drydem.engine.joints import normal_law, shear_law, stiffer_than_timestep, touch_slack
 from drydem.engine.loop import FASTMATH, block_maxima, cycle_loop, workspace
 from drydem.model.rotation import mat_t_vec, mat_vec, quaternion_to_matrix, rotate_by_vector
 
@@ -94,6 +94,7 @@ def contact_forces(state, rot, inv_mass, sub, joint, closure_limit, damping, dt,
         nx, ny, nz = mat_vec(rot[a], normal_body[c, 0], normal_body[c, 1], normal_body[c, 2])
         dx, dy, dz = pos[b, 0] - pos[a, 0], pos[b, 1] - pos[a, 1], pos[b, 2] - pos[a, 2]
         base_gap = dx * nx + dy * ny + dz * nz - offset[c]
+        slack = touch_slack(dx, dy, dz, offset[c])
         wa, wb = omega[a], omega[b]
         v0x = vel[b, 0] - vel[a, 0] - (wa[1] * dz - wa[2] * dy)
         v0y = vel[b, 1] - vel[a, 1] - (wa[2] * dx - wa[0] * dz)
@@ -106,7 +107,7 @@ def contact_forces(state, rot, inv_mass, sub, joint, closure_limit, damping, dt,
         for s in range(start[c], start[c + 1]):
             p = point[s]
             rx, ry, rz = mat_vec(rb, p[0], p[1], p[2])
-            fn, carries = normal_law(-(base_gap + rx * nx + ry * ny + rz * nz), area[s], intact_now[s], joint)
+            fn, carries = normal_law(-(base_gap + rx * nx + ry * ny + rz * nz), area[s], intact_now[s], joint, slack)
             fs = shear[s]
             if not carries:
                 normal[s] = 0.0

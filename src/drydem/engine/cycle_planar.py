@@ -24,7 +24,7 @@ import numpy as np
 
 from drydem import compiled_cache
 from drydem.engine.damping import dashpot_force, dashpot_per_area, has_dashpots, local_damping
-from drydem.engine.joints import normal_law, shear_law, stiffer_than_timestep
+from drydem.engine.joints import normal_law, shear_law, stiffer_than_timestep, touch_slack
 from drydem.engine.loop import FASTMATH, block_maxima, cycle_loop, workspace
 from drydem.model.rotation import rotate_about_y
 
@@ -79,6 +79,7 @@ def contact_forces(state, inv_mass, sub, joint, closure_limit, damping, dt, cont
         nx, nz = ca * nbx + sa * nbz, ca * nbz - sa * nbx
         dx, dz = pos[b, 0] - pos[a, 0], pos[b, 2] - pos[a, 2]
         base_gap = dx * nx + dz * nz - offset[c]
+        slack = touch_slack(dx, 0.0, dz, offset[c])
         wa = omega[a, 1]
         dw = omega[b, 1] - wa
         v0x = vel[b, 0] - vel[a, 0] - wa * dz
@@ -95,7 +96,7 @@ def contact_forces(state, inv_mass, sub, joint, closure_limit, damping, dt, cont
         for s in range(start[c], start[c + 1]):
             rx, rz = cb * point[s, 0] + sb * point[s, 2], cb * point[s, 2] - sb * point[s, 0]
             closure = -(base_gap + rx * nx + rz * nz)
-            fn, carries = normal_law(closure, area[s], intact[s], joint)
+            fn, carries = normal_law(closure, area[s], intact[s], joint, slack)
             if not carries:
                 normal[s] = 0.0
                 shear[s, 0] = shear[s, 2] = 0.0
