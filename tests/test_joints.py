@@ -41,9 +41,11 @@ def test_a_bond_opened_within_the_round_off_of_its_coordinates_keeps_its_cohesio
     assert law(-1.4e-17, fs=(0.5, 0, 0), slack=slack, **bonded) == (0.0, 0.5, 0.0, 0.0, True)
     assert law(-1.01 * slack, fs=(0.5, 0, 0), slack=slack, **bonded) == (0.0, 0.0, 0.0, 0.0, False)
     assert law(-1.4e-17, fs=(0.5, 0, 0), slack=slack, intact=False, **bonded) == (0.0, 0.0, 0.0, 0.0, False)
-    # with a tensile strength, the round-off's tension is the spring's, within T A
+    # with a tensile strength, the round-off's tension is the spring's, within T A; without a
+    # bond (no cohesion, no tension) an opening is an opening
     fn, *_, intact = law(-1.4e-17, slack=slack, cohesion=1e4, tension=1e3)
     assert intact and fn == pytest.approx(-1e8 * AREA * 1.4e-17)
+    assert law(-1.4e-17, fs=(0.5, 0, 0), slack=slack) == (0.0, 0.0, 0.0, 0.0, False)
 
 
 def test_elastic_shear_is_incremental_and_opposes_the_slip():

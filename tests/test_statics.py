@@ -121,3 +121,19 @@ def test_a_bond_with_cohesion_holds_until_its_heel_slips_at_the_brittle_closed_f
     assert sim.cycle_to_equilibrium().converged and sim.contacts.intact.all()
     result = tilt_analysis(model, TiltSettings(increment_deg=0.1, adaptive=True))
     assert 33.371 - 0.1 < result.collapse_angle_deg <= 33.371
+
+
+def test_a_small_brick_on_its_end_topples_at_atan_b_over_h_however_little_it_moves():
+    """A 5.5 x 12 x 25 mm brick standing on its end (mu = 0.5, stiff joints) topples at
+    atan(b / h) = atan(5.5 / 25) = 12.41 deg, less its joints' elastic rotation (a little, at
+    kn = 1e10), onto its side: its centroid moves (b + h) / 2 = 15 mm, far less than the default
+    stop displacement (0.10 m), and it does not drop two of its heights. Its turn past 45 deg
+    ends the analysis (found by a hunt: it lay on its side until it slid, at atan(mu) = 26.5
+    deg, the collapse angle reported)."""
+    from drydem.analysis.tilt import MONITOR_TOPPLED, TiltSettings, tilt_analysis
+
+    joint = dd.JointMaterial(kn=1e10, ks=1e10, friction=0.5)
+    model = stack_model([0.025], size_xy=(0.0055, 0.012), joint=joint, supports=dd.Supports(fix_y=True))
+    result = tilt_analysis(model, TiltSettings(increment_deg=0.1, adaptive=True))
+    assert result.ended_by == MONITOR_TOPPLED
+    assert np.degrees(np.arctan(5.5 / 25.0)) - 0.3 < result.collapse_angle_deg <= np.degrees(np.arctan(5.5 / 25.0))

@@ -67,10 +67,12 @@ def step(state, blocks, sub, joint, closure_limit, gravity, dt, velocity_dt, dam
     else:
         fn = joint.kn * area * -gap
         shear_scale = joint.ks * area
-    # an intact sub-contact opened by no more than the round-off of its coordinates is touching
-    touching = sub.intact & (-gap >= -TOUCH_ROUND_OFF * (np.abs(pos[b] - pos[a]).sum(axis=1) + np.abs(sub.offset[sub.contact])))
-    fn = np.where(touching, np.maximum(fn, -joint.tension * area), fn)
-    opened = ~touching & (fn < -np.where(sub.intact, joint.tension * area, 0.0))
+    opened = fn < -np.where(sub.intact, joint.tension * area, 0.0)
+    # an intact bond opened by no more than the round-off of its coordinates is touching, at -T A
+    round_off = TOUCH_ROUND_OFF * (np.abs(pos[b] - pos[a]).sum(axis=1) + np.abs(sub.offset[sub.contact]))
+    touching = opened & sub.intact & (joint.cohesion > 0 or joint.tension > 0) & (-gap >= -round_off)
+    fn = np.where(touching, -joint.tension * area, fn)
+    opened &= ~touching
     # a stress-dependent joint closing past its limit within CLOSING_CYCLES cycles at its speed
     closing = -gap - CLOSING_CYCLES * np.minimum(np.einsum("ni,ni->n", v_rel, n), 0.0) * dt
     stiffer = isinstance(joint, StressJoint) and bool((closing > closure_limit)[~opened].any())

@@ -317,12 +317,13 @@ def normal_law(closure, area, intact, joint, slack):
     carries load at all.
 
     It does not once opened beyond its tensile strength (any opening when T = 0 or failed);
-    then F_n = F_s = 0 and the sub-contact has failed. An intact one opened by no more than
-    ``slack`` (m, :func:`touch_slack`) is touching, at F_n >= -T A."""
+    then F_n = F_s = 0 and the sub-contact has failed. An intact bond (a joint with cohesion or
+    tension) opened by no more than ``slack`` (m, :func:`touch_slack`) is touching, at -T A."""
     fn = normal_force(closure, area, joint)
-    if intact and closure >= -slack:
-        return max(fn, -joint.tension * area), True
-    return fn, fn >= -(joint.tension * area if intact else 0.0)
+    if fn >= -(joint.tension * area if intact else 0.0):
+        return fn, True
+    bonded = intact and (joint.cohesion > 0.0 or joint.tension > 0.0)
+    return -joint.tension * area, bonded and closure >= -slack
 
 
 @numba.njit(cache=True, inline="always")

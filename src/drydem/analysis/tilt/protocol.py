@@ -16,7 +16,7 @@ from pathlib import Path
 from drydem.analysis.tilt import checkpointing
 from drydem.analysis.tilt.run import Saved, TiltRun, Trace, trial_limit
 from drydem.analysis.tilt.settings import (
-    EQUILIBRIUM, MAX_CYCLES, MAXIMUM_ANGLE, MONITOR_FELL, NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY, STOP_DISPLACEMENT,
+    EQUILIBRIUM, MAX_CYCLES, MAXIMUM_ANGLE, MONITOR_FELL, MONITOR_TOPPLED, NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY, STOP_DISPLACEMENT,
     UNSTABLE_UNDER_GRAVITY, Frame, Record, TiltResult, TiltSettings,
 )
 from drydem.model.assembly import Model
@@ -155,7 +155,7 @@ def tilt_result(protocol: TiltProtocol, stable: bool | None, ended_by: str, runt
         wall_height_m=run.height,
         stable_under_gravity=stable,
         last_equilibrium_deg=protocol.theta if stable else None,
-        collapse_angle_deg=protocol.theta if ended_by in (MONITOR_FELL, STOP_DISPLACEMENT) else None,
+        collapse_angle_deg=protocol.theta if ended_by in (MONITOR_FELL, MONITOR_TOPPLED, STOP_DISPLACEMENT) else None,
         records=protocol.records,
         lost_blocks=run.lost,
         cycles=run.sim.cycles,

@@ -4,6 +4,7 @@ adaptive trial is abandoned (:func:`trial_limit`)."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from functools import partial
 
@@ -11,8 +12,8 @@ import numpy as np
 
 from drydem.analysis.support import dropped_out, lost_drops
 from drydem.analysis.tilt.settings import (
-    EQUILIBRIUM, FELL, GAVE_UP, MAX_CYCLES, MONITOR_FELL, STOP_DISPLACEMENT, Frame, Record, TiltSettings, check_loading,
-    monitor_index, wall_height,
+    EQUILIBRIUM, FELL, GAVE_UP, MAX_CYCLES, MONITOR_FELL, MONITOR_TOPPLED, STOP_DISPLACEMENT, TOPPLED_RAD, Frame, Record,
+    TiltSettings, check_loading, monitor_index, wall_height,
 )
 from drydem.engine.contacts import SubContacts
 from drydem.engine.inertia import contact_stiffness, stiffness_bound
@@ -113,9 +114,10 @@ class TiltRun:
 
     def equilibrate(self, theta_deg: float, *, vertical: bool = False, chunk_cycles: int | None = None,
                     trace: Trace | None = None, give_up: Callable[[], bool] | None = None) -> tuple[str, int]:
-        """Cycle at ``theta_deg`` until equilibrium, the stop displacement, the fall of the
-        monitored block, ``give_up()`` or max cycles; returns how it ended (EQUILIBRIUM,
-        STOP_DISPLACEMENT, MONITOR_FELL, GAVE_UP, MAX_CYCLES, or FELL under vertical gravity) and
+        """Cycle at ``theta_deg`` until equilibrium, the stop displacement, the fall or toppling
+        of the monitored block, ``give_up()`` or max cycles; returns how it ended (EQUILIBRIUM,
+        STOP_DISPLACEMENT, MONITOR_FELL, MONITOR_TOPPLED, GAVE_UP, MAX_CYCLES, or FELL under
+        vertical gravity) and
         the cycles run. Progress is reported and a frame added to ``trace`` every
         ``chunk_cycles`` (default the settings').
 
@@ -145,11 +147,12 @@ class TiltRun:
 
     def _stop(self, give_up: Callable[[], bool] | None) -> bool:
         """Whether to stop cycling the chunk early: a block fell out, the monitored one
-        included, the monitored point moved the stop displacement, or ``give_up()``."""
+        included, the monitored block toppled, its point moved the stop displacement, or ``give_up()``."""
         dropped = self._dropped()
         return (
             self._fallen(dropped).size > 0
             or bool(dropped[self.monitor])
+            or self.toppled()
             or abs(self.displacement()[0]) >= self.settings.stop_displacement_m
             or (give_up is not None and give_up())
         )
@@ -176,9 +179,16 @@ class TiltRun:
             return FELL if vertical else MONITOR_FELL
         if give_up is not None and not converged and give_up():
             return GAVE_UP
+        if self.toppled():
+            return FELL if vertical else MONITOR_TOPPLED
         if abs(ux) >= self.settings.stop_displacement_m:  # at rest there or not: it went on to the maximum angle, or
             return FELL if vertical else STOP_DISPLACEMENT  # stood in stage 1 and "collapsed" at the first step
         return EQUILIBRIUM if converged else None
+
+    def toppled(self) -> bool:
+        """Whether the monitored block has turned more than :data:`TOPPLED_RAD` from where it
+        was drawn (2 acos |q_w| of its quaternion)."""
+        return 2.0 * math.acos(min(abs(float(self.sim.state.quaternion[self.monitor, 0])), 1.0)) > TOPPLED_RAD
 
     def _dropped(self) -> np.ndarray:
         """(nb,) bool: the block, still in the analysis, has a rigid-body drop beyond its

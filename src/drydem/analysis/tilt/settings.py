@@ -21,11 +21,16 @@ from drydem.model.state import State
 
 LOADINGS = ("tilt", "multiplier")
 #: how a call of :meth:`~drydem.analysis.tilt.run.TiltRun.equilibrate` ended
-EQUILIBRIUM, FELL, MONITOR_FELL, STOP_DISPLACEMENT, GAVE_UP, MAX_CYCLES = (
-    "equilibrium", "fell", "monitored block fell", "stop displacement", "gave up", "max cycles",
+EQUILIBRIUM, FELL, MONITOR_FELL, MONITOR_TOPPLED, STOP_DISPLACEMENT, GAVE_UP, MAX_CYCLES = (
+    "equilibrium", "fell", "monitored block fell", "monitored block toppled", "stop displacement", "gave up", "max cycles",
 )
-#: why an analysis ended (TiltResult.ended_by): a collapse (MONITOR_FELL, STOP_DISPLACEMENT),
-#: or one of these, none of which is a collapse
+#: the turn from where it was drawn, rad, past which the monitored block has toppled (it lies on
+#: another face or rocks on an edge: a collapse, however little it moved; found by a hunt: a
+#: 5.5 x 25 mm brick on its end toppled at 9.7 deg, moved 16 mm, lay on its side and was given
+#: the collapse angle of its sliding, 26.5 deg, the default stop displacement being 0.10 m)
+TOPPLED_RAD = math.radians(45.0)
+#: why an analysis ended (TiltResult.ended_by): a collapse (MONITOR_FELL, MONITOR_TOPPLED,
+#: STOP_DISPLACEMENT), or one of these, none of which is a collapse
 UNSTABLE_UNDER_GRAVITY = "unstable under gravity"
 NO_EQUILIBRIUM_UNDER_GRAVITY = "no equilibrium under gravity within max_cycles"
 NO_EQUILIBRIUM = "no equilibrium within max_cycles"
