@@ -240,6 +240,13 @@ def test_an_empty_out_is_refused_not_read_as_the_current_folder(tmp_path, monkey
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("blank", ["", " "])
+def test_an_empty_calibrate_results_dir_is_refused_not_read_as_the_current_folder(tmp_path, monkeypatch, blank):
+    monkeypatch.chdir(tmp_path)  # found by a hunt: `drydem calibrate ""` began writing its runs here
+    refused(invoke("calibrate", blank, "--designs", "WD3"), "Invalid value for 'RESULTS_DIR'", f"{blank!r}: an empty path", code=2)
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_an_empty_export_output_is_refused(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     refused(invoke("export", "WD1", ""), "Invalid value for 'OUTPUT': '': an empty path; give a file name", code=2)

@@ -236,6 +236,29 @@ def test_the_folders_of_tilt_and_limit_runs_are_reported_as_the_users_runs(tmp_p
     assert "No run of the paper's walls" in text and "## Table" not in text and "(figures/fig" not in text
 
 
+def test_a_target_named_with_markdown_and_html_characters_is_shown_as_written(tmp_path):
+    """Found by a hunt: a target named a|b.toml split its row (the friction column showed
+    "b.toml", the multiplier fell off), and one named with an <img onerror=...> tag put the
+    tag into report.html. Both files now show the name as written."""
+    import html
+    import re
+
+    name = "w|<img src=x onerror=alert(1)>`*[a](b).toml"
+    model = tmp_path / name
+    model.write_text(PIER)
+    results = tmp_path / "results"
+    assert CliRunner().invoke(main, ["limit", str(model), "--out", str(results / "one")]).exit_code == 0
+    reported = CliRunner().invoke(main, ["report", str(results)])
+    assert reported.exit_code == 0, reported.output
+    page = (results / "report" / "report.html").read_text()
+    assert "<img src=x" not in page
+    rows = re.findall(r"<tr>\s*(.*?)\s*</tr>", page, flags=re.S)
+    cells = [html.unescape(c) for c in re.findall(r"<td>(.*?)</td>", rows[-1])]
+    assert cells == [name, "0.5", "associative", "24.4", "0.4545"]
+    text = (results / "report" / "report.md").read_text()
+    assert "| w\\|&lt;img src=x onerror=alert(1)&gt;\\`\\*\\[a\\](b).toml | 0.5 | associative | 24.4 | 0.4545 |" in text
+
+
 def test_a_target_of_a_long_name_gets_a_figure_name_the_system_takes(tmp_path):
     """A run of a 245-character model file name was fine, and then no report could be made: its
     figure's name passed the 255 bytes a file name may have (found by a hunt)."""

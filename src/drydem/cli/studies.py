@@ -132,7 +132,7 @@ def report(results_dir: Path, out: Path | None, overwrite: bool) -> None:
 
 
 @main.command()
-@click.argument("results_dir", type=click.Path(path_type=Path))
+@click.argument("results_dir", type=click.Path(), callback=out_path)
 @click.option("--designs", default="WD1,WD2,WD3,WD4,WD5,WD6,WD7", show_default=True, help="Walls to fit, comma-separated, each once.")
 @click.option("--kn-min", type=PLAIN_FLOAT, default=1e7, show_default=True, help="Smallest kn searched, Pa/m.")
 @click.option("--kn-max", type=PLAIN_FLOAT, default=1e9, show_default=True, help="Largest kn searched, Pa/m.")

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -275,7 +276,7 @@ def build_report(results: Path, out: Path | None = None, *, overwrite: bool = Fa
         f", {len(folders.valid)} of them in the folders of `drydem tilt` and `drydem limit` runs" if folders.valid else "")
     about = f"{NOTE} Published values: {paper['source'].split(' - ')[0]}." if of_paper else NO_PAPER_RUNS
     sections = [
-        f"# Report of the study in `{results}`",
+        f"# Report of the study in {_code(results)}",
         f"{counted}. {about}",
         *([_corrupt(records.corrupt)] if records.corrupt else []),
         *_yours(records.valid, figures, paper),
@@ -338,7 +339,7 @@ def _paper_tables(runs: Runs, paper: dict) -> list[str]:
     left_out = runs.left_out()
     shown = ("Also recorded, in no table or figure (another run of the same wall, joints, points and protocol is shown: "
              "adaptive, then the finest increment, preferred):\n\n"
-             + "\n".join(f"- `{r['id']}`: {paper_wall(r)}, {_joints(r)}, {r['spec']['protocol']}, increment "
+             + "\n".join(f"- {_code(r['id'])}: {paper_wall(r)}, {_joints(r)}, {r['spec']['protocol']}, increment "
                           f"{_cell(r['spec']['increment_deg'], '{:g}')} deg: collapse angle {angle_text(r['summary'])} deg"
                           for r in left_out))
     return [_table2(runs, paper), _table3(runs, paper), _table4(runs, paper), *([shown] if left_out else [])]
@@ -469,11 +470,11 @@ def _yours(records: list[dict], figures: Path, paper: dict) -> list[str]:
     ok = [r for r in mine if r["status"] == "ok"]
     tilts, limits = ([r for r in ok if r["spec"]["analysis"] == analysis] for analysis in ("tilt", "limit"))
     failed = [r for r in mine if r["status"] != "ok"]
-    intro = (f"## {YOURS_TITLE}\n\nTargets: {len(labels)} ({', '.join(f'`{label}`' for label in sorted(labels.values()))}); "
+    intro = (f"## {YOURS_TITLE}\n\nTargets: {len(labels)} ({', '.join(_code(label) for label in sorted(labels.values()))}); "
              f"tilting runs: {len(tilts)}; limit analyses: {len(limits)}; failed runs: {len(failed)}."
              f"\n\n{YOURS_NOTE.format(friction=paper['wall']['friction'])}")
     if failed:
-        intro += "\n\nFailed runs:\n\n" + "\n".join(f"- `{r['id']}`: {r['error']}" for r in failed)
+        intro += "\n\nFailed runs:\n\n" + "\n".join(f"- {_code(r['id'])}: {_md(r['error'])}" for r in failed)
     sections = [intro]
     if tilts:
         rows = [[labels[r["spec"]["target"]], *_settings(r).values(), angle_text(r["summary"]), _cell(dls_angle(r["summary"]))]
@@ -488,7 +489,7 @@ def _yours(records: list[dict], figures: Path, paper: dict) -> list[str]:
     for k, target in enumerate(dict.fromkeys(r["spec"]["target"] for r in tilts if r["pushover"])):
         curves = [r for r in tilts if r["spec"]["target"] == target and r["pushover"]]
         name = "yours{}_{}_pushover".format(k + 1, _file_part(Path(target).name))
-        sections.append(_figure(figures, name, f"{YOURS}: pushover curves of {labels[target]}, EC8 drift limits dashed",
+        sections.append(_figure(figures, name, f"{YOURS}: pushover curves of {_md(labels[target])}, EC8 drift limits dashed",
                                 lambda ax, curves=curves: _run_curves(ax, curves)))
     return sections
 
@@ -598,7 +599,7 @@ def _montecarlo(found: list[MonteCarloRun], unreadable: list[str], figures: Path
               "experiment CoV (%)"]
     text = _table(MONTECARLO_TITLE, header, rows) + f"\n\n{MONTECARLO_NOTE}"
     if unreadable:
-        text += f"\n\n{len(unreadable)} Monte Carlo summaries cannot be read, left out:\n\n" + "\n".join(f"- `{u}`" for u in unreadable)
+        text += f"\n\n{len(unreadable)} Monte Carlo summaries cannot be read, left out:\n\n" + "\n".join(f"- {_code(u)}" for u in unreadable)
     if not found:
         return [text]
     return [text, _figure(figures, "montecarlo_cov", "Monte Carlo: CoV of the computed collapse angle (imperfect walls) against the "
@@ -622,7 +623,7 @@ def _cov_bars(ax, found: list[MonteCarloRun], experiment: dict) -> bool:
 
 def _corrupt(errors: list[RecordError]) -> str:
     """The paragraph naming the records left out, each with its file and fault."""
-    lines = "\n".join(f"- `{error}`" for error in errors)
+    lines = "\n".join(f"- {_code(error)}" for error in errors)
     return (f"{len(errors)} corrupt records left out (a sweep's are run again by the same `drydem sweep`; a run folder's, by "
             f"its command with --overwrite):\n\n{lines}")
 
@@ -632,8 +633,27 @@ def _cell(value: float | None, fmt: str = "{:.1f}") -> str:
 
 
 def _table(title: str, header: list[str], rows: list[list[str]]) -> str:
+    """A Markdown table; its cells (names, numbers) shown as written (:func:`_md`)."""
     lines = [f"## {title}", "", "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    return "\n".join(lines + ["| " + " | ".join(row) + " |" for row in rows])
+    return "\n".join(lines + ["| " + " | ".join(map(_md, row)) + " |" for row in rows])
+
+
+def _md(text) -> str:
+    """``text`` (a name, a path, a message) as Markdown that shows it as written, in report.md
+    and in report.html: its HTML characters as entities and its Markdown ones escaped (found
+    by a hunt: a target named a|b.toml moved the values of its row into the wrong columns, and
+    one named with an <img onerror=...> tag put the tag into report.html)."""
+    text = str(text).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    return re.sub(r"([\\`*\[\]|])", r"\\\1", text)
+
+
+def _code(text) -> str:
+    """``text`` as a Markdown code span (which Markdown shows as written, HTML escaped), fenced
+    by more backticks than it holds in a row."""
+    text = str(text)
+    fence = "`" * (max((len(run) for run in re.findall("`+", text)), default=0) + 1)
+    pad = " " if text.startswith("`") or text.endswith("`") else ""
+    return f"{fence}{pad}{text}{pad}{fence}"
 
 
 def _table2(runs: Runs, paper: dict) -> str:
