@@ -10,7 +10,7 @@ from click.testing import CliRunner
 
 import drydem as dd
 from drydem.cli import main
-from drydem.io.mesh import STL_TRIANGLE
+from drydem.io.mesh import STL_TRIANGLE, read_mesh, write_mesh
 from drydem.io.model_file import save_model
 from drydem.io.target import load_target
 
@@ -71,6 +71,16 @@ def fails(args: list[str], *messages: str):
     ("empty.stl", "", "not an STL file: it does not start with 'solid' (ASCII), and its 0 bytes are too few for a binary STL "
      "(an 80-byte header and a 4-byte triangle count"),
     ("abc.stl", "abc", "not an STL file: it does not start with 'solid' (ASCII), and its 3 bytes are too few for a binary STL"),
+    # found by a hunt: extra words and numbers were read past
+    ("junk.obj", CUBE.replace("v 1 1 0\n", "v 1 1 0 abc\n"), "line 3: vertex 3: '1 1 0 abc': the coordinates must be numbers"),
+    ("five.obj", CUBE.replace("v 1 1 0\n", "v 1 1 0 1 2\n"), "line 3: vertex 3: '1 1 0 1 2': 5 numbers; a vertex is x y z, x y z w or "
+     "x y z r g b"),
+    ("nanw.obj", CUBE.replace("v 1 1 0\n", "v 1 1 0 nan\n"), "line 3: vertex 3: '1 1 0 nan': a vertex needs three finite numbers"),
+    ("four.stl", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0 7\n", "line 4: vertex: '0 0 0 7': 4 numbers; a vertex is x y z"),
+    ("loop.stl", "solid a\nfacet normal 0 0 1\nouter loop extra\n", "line 3: 'outer loop extra': the statement is outer loop, alone"),
+    ("endloop.stl", "solid a\nfacet normal 0 0 1\nouter loop\nendloop x\n", "line 4: 'endloop x': the statement is endloop, alone"),
+    ("nul.obj", "o b\x00c\n" + CUBE, "nul.obj: line 1: object name 'b\\x00c': must be a non-empty text on one line"),
+    ("rtl.obj", "o a\u202eb\n" + CUBE, "rtl.obj: line 1: object name 'a\\u202eb': must be a non-empty text on one line"),
 ])
 def test_a_bad_mesh_file_is_refused_naming_the_file_and_line(tmp_path, name, text, message):
     path = tmp_path / name
@@ -278,3 +288,17 @@ def test_ctrl_c_while_a_checkpoint_is_written_comes_after_it_is_whole(tmp_path, 
     snapshot, progress = checkpoint.load_checkpoint(path)
     assert float(progress["theta_deg"]) == 1.5 and np.array_equal(snapshot.state.position, sim.state.position)
     assert [p.name for p in tmp_path.iterdir()] == ["checkpoint.npz"]
+
+
+def test_a_mesh_file_s_byte_order_mark_is_dropped_and_a_statement_not_obj_is_named(tmp_path):
+    """Found by a hunt: a UTF-8 byte order mark was read as part of the first statement (an
+    OBJ lost its object's name, or its first vertex; an STL was no STL), and a statement that is
+    not OBJ (a typo, V for v) was skipped without a word. An OBJ vertex may give w or a colour."""
+    obj, stl = tmp_path / "bom.obj", tmp_path / "bom.stl"
+    obj.write_bytes(b"\xef\xbb\xbf" + ("o brick\n" + CUBE.replace("v 1 1 1", "v 1 1 1 0.5 0.5 0.5") + "V 1 1 1\nvt 0 0\n").encode())
+    blocks, notes = read_mesh(obj)
+    assert [b.name for b in blocks] == ["brick"]
+    assert notes == [f"{obj}: not OBJ statements, skipped: 'V' (line 16)"]
+    write_mesh(dd.build_model(blocks, density=1800.0), stl)
+    stl.write_bytes(b"\xef\xbb\xbf" + stl.read_bytes())
+    assert [b.name for b in read_mesh(stl)[0]] == ["brick"]

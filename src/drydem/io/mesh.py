@@ -23,6 +23,7 @@ are a handful of statements. Every error names the file and the line (or binary 
 
 from __future__ import annotations
 
+import codecs
 import math
 import re
 from dataclasses import dataclass, field
@@ -35,7 +36,7 @@ from drydem.errors import ModelError
 from drydem.files import PLAIN_INTEGER, PLAIN_NUMBER, regular_file, write_text
 from drydem.model.geometry import convex_hull, far_vertex_problem
 from drydem.model.assembly import Block, Model
-from drydem.model.parameters import FILE_PATH, InstanceOf, Range, check_arguments, shown
+from drydem.model.parameters import FILE_PATH, NAME, InstanceOf, Range, check_arguments, shown
 
 #: vertices closer than this fraction of the mesh's size are one vertex
 MERGE_FRACTION = 1e-9
@@ -110,7 +111,7 @@ def read_mesh(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], li
     except OSError as exc:
         raise ModelError(f"{path}: cannot read: {exc.strerror or exc}") from None
     reader = _read_obj if path.suffix.lower() == ".obj" else _read_stl
-    points, solids = reader(path, data)
+    points, solids, notes = reader(path, data)
     if not any(s.faces for s in solids):
         raise ModelError(f"{path}: no faces: the file holds no block")
     points = np.asarray(points, dtype=float) * unit_m
@@ -129,6 +130,8 @@ def read_mesh(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], li
         runs = _closed_runs(faces, solid.origins, lambda k, names=names, first=first: f"{path}: {names[first + k]!r}")
         for k, (a, b) in enumerate(runs):
             name, fixed = names[first + k], solid.fixed[a:b]
+            if name not in NAME:  # found by a hunt: a NUL in an object's name was refused naming neither file nor line
+                raise ModelError(f"{path}: line {solid.named[0]}: {solid.kind} name {shown(name)}: {NAME}")
             where = f"{path}: {name!r}"
             if any(fixed) and not all(fixed):
                 raise ModelError(f"{where}: {sum(fixed)} of its {b - a} faces are marked fixed (from {solid.origins[a + fixed.index(True)]}), "
@@ -137,7 +140,6 @@ def read_mesh(path: str | Path, *, unit_m: float = 1.0) -> tuple[list[Block], li
             blocks.append(Block(name=name, shape=block.shape, fixed=all(fixed)))
         unnamed += len(runs) if solid.name is None else 0
         renamed += _renamed(path, solid, [names[first + k] for k in range(len(runs))])
-    notes = []
     if unnamed:
         what = "a binary STL names no block" if _is_binary_stl(path, data) else "some faces are in no named object or solid"
         skip = ", skipping the names of the file's objects" if any(re.fullmatch(r"part\d+", name) for name in taken) else ""
@@ -233,11 +235,22 @@ def enclosed_volume(points: np.ndarray, faces: list[list[int]]) -> float:
     return abs(total) / 6.0
 
 
-def _read_obj(path: Path, data: bytes) -> tuple[list[list[float]], list[_Solid]]:
-    """Vertices and solids of an OBJ file: ``v``, ``f`` (``i``, ``i/t``, ``i/t/n``, ``i//n``;
-    negative indices count back from the last vertex), ``o``, ``g``, ``usemtl``; the other
-    statements (normals, texture coordinates, smoothing, lines) do not shape blocks."""
+#: the OBJ statements that do not shape blocks (normals, texture coordinates, smoothing, lines,
+#: free-form geometry, display attributes: Wavefront's OBJ specification); any other is noted
+OBJ_OTHER_STATEMENTS = frozenset(
+    "vt vn vp s l p mtllib usemap maplib cstype deg bmat step curv curv2 surf parm trim hole scrv sp end con mg lod bevel "
+    "c_interp d_interp trace_obj shadow_obj ctech stech call csh".split())
+#: the numbers an OBJ vertex may give after x y z: none, w, or a colour r g b
+OBJ_VERTEX_EXTRAS = (0, 1, 3)
+
+
+def _read_obj(path: Path, data: bytes) -> tuple[list[list[float]], list[_Solid], list[str]]:
+    """Vertices, solids and notes of an OBJ file: ``v``, ``f`` (``i``, ``i/t``, ``i/t/n``,
+    ``i//n``; negative indices count back from the last vertex), ``o``, ``g``, ``usemtl``; the
+    statements of :data:`OBJ_OTHER_STATEMENTS` do not shape blocks; any other is not OBJ (a
+    typo: ``V 1 1 1``), skipped and named in a note (found by a hunt: skipped without a word)."""
     points: list[list[float]] = []
+    unknown: dict[str, int] = {}  # a statement that is not OBJ, and the first line it is on
     faces = []  # (line, object, group, material, vertex indices)
     obj = group = material = None
     stated: dict[str, dict[str, list[int]]] = {"o": {}, "g": {}}  # the lines naming each object and group
@@ -247,7 +260,7 @@ def _read_obj(path: Path, data: bytes) -> tuple[list[list[float]], list[_Solid]]
             continue
         key, rest = words[0], line.strip()[len(words[0]):].strip() or None
         if key == "v":
-            points.append(_coordinates(words[1:4], f"{path}: line {number}: vertex {len(points) + 1}"))
+            points.append(_coordinates(words[1:], f"{path}: line {number}: vertex {len(points) + 1}", extras=OBJ_VERTEX_EXTRAS))
         elif key == "f":
             faces.append((number, obj, group, material, _face(words[1:], len(points), f"{path}: line {number}")))
         elif key == "o":
@@ -256,6 +269,8 @@ def _read_obj(path: Path, data: bytes) -> tuple[list[list[float]], list[_Solid]]
             group = rest
         elif key == "usemtl":
             material = rest
+        elif key not in OBJ_OTHER_STATEMENTS:
+            unknown.setdefault(key, number)
         if key in stated and rest is not None:
             stated[key].setdefault(rest, []).append(number)
     for number, *_, face in faces:
@@ -268,7 +283,8 @@ def _read_obj(path: Path, data: bytes) -> tuple[list[list[float]], list[_Solid]]
         name = obj if by_object else group
         solid = solids.setdefault(name, _Solid(name, kind, stated[statement].get(name, [])))
         solid.add(face, f"line {number}", (material or "").lower() == FIXED_MATERIAL)
-    return points, list(solids.values())
+    notes = [f"{path}: not OBJ statements, skipped: " + _first_few([f"{shown(key)} (line {line})" for key, line in unknown.items()])]
+    return points, list(solids.values()), notes if unknown else []
 
 
 def _face(words: list[str], count: int, where: str) -> list[int]:
@@ -303,7 +319,7 @@ def _vertex_reference(word: str, where: str) -> int:
         raise ModelError(f"{where}: {shown(word)} is not a vertex number ({len(parts[0]):,} digits)") from None
 
 
-def _read_stl(path: Path, data: bytes) -> tuple[list[list[float]], list[_Solid]]:
+def _read_stl(path: Path, data: bytes) -> tuple[list[list[float]], list[_Solid], list[str]]:
     """Vertices and solids of a binary or ASCII STL file, told apart by the size: a binary file
     is 84 + 50 n bytes for the n triangles its header counts (some start with "solid" too)."""
     if _is_binary_stl(path, data):
@@ -313,15 +329,15 @@ def _read_stl(path: Path, data: bytes) -> tuple[list[list[float]], list[_Solid]]
             raise ModelError(f"{path}: binary triangle {bad[0]}: a vertex is not a finite number ({len(bad)} such triangles)")
         solid = _Solid(None, faces=np.arange(3 * len(triangles)).reshape(-1, 3).tolist(),
                        origins=[f"triangle {k}" for k in range(len(triangles))], fixed=[False] * len(triangles))
-        return triangles.reshape(-1, 3).tolist(), [solid]
-    if not data.lstrip().startswith(b"solid"):
+        return triangles.reshape(-1, 3).tolist(), [solid], []
+    if not data.removeprefix(codecs.BOM_UTF8).lstrip().startswith(b"solid"):
         if len(data) < 84:
             raise ModelError(f"{path}: not an STL file: it does not start with 'solid' (ASCII), and its {len(data)} bytes are "
                              "too few for a binary STL (an 80-byte header and a 4-byte triangle count, then 50 bytes a triangle)")
         count = int.from_bytes(data[80:84], "little")
         raise ModelError(f"{path}: not an STL file: it does not start with 'solid' (ASCII), and its {len(data)} bytes are not "
                          f"84 + 50 x {count} (binary, {count} triangles by its header)")
-    return _read_ascii_stl(path, _text(path, data))
+    return *_read_ascii_stl(path, _text(path, data)), []
 
 
 def _is_binary_stl(path: Path, data: bytes) -> bool:
@@ -355,7 +371,9 @@ def _read_ascii_stl(path: Path, text: str) -> tuple[list[list[float]], list[_Sol
             fixed = name is not None and name.endswith(FIXED_SOLID)
             solid = _Solid(name[: -len(FIXED_SOLID)] if fixed else name, "solid", [number])
             solids.append(solid)
-        elif key == "facet":  # its normal is not used, but read: a NaN there is a damaged file
+        elif key in ("outer", "endloop", "endfacet") and words[1:] != (["loop"] if key == "outer" else []):
+            raise ModelError(f"{where}: {shown(line.strip())}: the statement is {'outer loop' if key == 'outer' else key}, alone on its line")
+        if key == "facet":  # its normal is not used, but read: a NaN there is a damaged file
             if len(words) < 2 or words[1].lower() != "normal":
                 raise ModelError(f"{where}: {shown(line.strip())}: a facet begins 'facet normal nx ny nz'")
             _coordinates(words[2:], where, "a facet normal")
@@ -387,23 +405,28 @@ def _check_endsolid(closing: str, opened: str | None, line: int, where: str) -> 
                          f"{line}: the name after endsolid, when given, must be the solid's (is the file cut short?)")
 
 
-def _coordinates(words: list[str], where: str, what: str = "a vertex") -> list[float]:
-    """x, y, z: three finite numbers (an OBJ vertex may add w or a colour, which are not used),
-    each a :data:`~drydem.files.PLAIN_NUMBER` (float() also takes 1_0 for 10); ``what`` they are, in the message."""
-    try:
-        if not all(PLAIN_NUMBER.fullmatch(w) for w in words[:3]):
-            raise ValueError
-        xyz = [float(w) for w in words[:3]]
-    except ValueError:
-        raise ModelError(f"{where}: {shown(' '.join(words))}: the coordinates must be numbers") from None
-    if len(xyz) < 3 or not all(map(math.isfinite, xyz)):
+def _coordinates(words: list[str], where: str, what: str = "a vertex", extras: tuple[int, ...] = (0,)) -> list[float]:
+    """x, y, z: three finite numbers, then as many more as one of ``extras`` allows (an OBJ
+    vertex's w or colour, which are not used; found by a hunt: ``v 1 1 1 abc`` and STL's
+    ``vertex 1 2 3 7 junk`` were read), each a :data:`~drydem.files.PLAIN_NUMBER` (float() also
+    takes 1_0 for 10); ``what`` they are, in the message."""
+    if not all(PLAIN_NUMBER.fullmatch(w) for w in words):
+        raise ModelError(f"{where}: {shown(' '.join(words))}: the coordinates must be numbers")
+    numbers = [float(w) for w in words]
+    if len(numbers) < 3 or not all(map(math.isfinite, numbers)):
         raise ModelError(f"{where}: {shown(' '.join(words))}: {what} needs three finite numbers x y z")
-    return xyz
+    if len(numbers) - 3 not in extras:
+        forms = [{0: "x y z", 1: "x y z w", 3: "x y z r g b"}[n] for n in extras]
+        raise ModelError(f"{where}: {shown(' '.join(words))}: {len(numbers)} numbers; {what} is "
+                         f"{', '.join(forms[:-1]) + ' or ' if len(forms) > 1 else ''}{forms[-1]}")
+    return numbers[:3]
 
 
 def _text(path: Path, data: bytes) -> str:
+    """``data`` as UTF-8 text, a byte order mark at its start dropped (found by a hunt: it was
+    read as part of the first statement, whose name or vertex was lost)."""
     try:
-        return data.decode("utf-8")
+        return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise ModelError(f"{path}: not a text file (byte {exc.start} is not UTF-8)") from None
 

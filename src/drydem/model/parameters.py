@@ -180,15 +180,20 @@ class Text(Rule):
 TEXT = Text()
 
 
+#: Unicode's bidirectional controls (UAX #9): marks, embeddings, overrides and isolates
+BIDI_CONTROLS = frozenset("\u061c\u200e\u200f\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
+
+
 class Name(Text):
     """A block's name: a :class:`Text` of characters that UTF-8 can write, as every file drydem
     writes a model to (TOML, OBJ, STL, VTK, compas JSON) holds it (a lone surrogate, U+D800
     alone, is none: save_model and write_mesh failed on it with a UnicodeEncodeError), on one
-    line and printable: no control character (a NUL went raw into OBJ and 3DEC files) nor line
-    or paragraph separator (U+2028 broke a 3DEC group name's line)."""
+    line and printable: no control character (a NUL went raw into OBJ and 3DEC files), line
+    or paragraph separator (U+2028 broke a 3DEC group name's line) nor bidirectional control
+    (U+202E turns the text after it around: a name that reads as another)."""
 
     def __contains__(self, value) -> bool:
-        if not super().__contains__(value) or any(unicodedata.category(c) in ("Cc", "Zl", "Zp") for c in value):
+        if not super().__contains__(value) or any(unicodedata.category(c) in ("Cc", "Zl", "Zp") or c in BIDI_CONTROLS for c in value):
             return False
         try:
             value.encode("utf-8")
