@@ -256,7 +256,7 @@ def test_a_target_named_with_markdown_and_html_characters_is_shown_as_written(tm
     cells = [html.unescape(c) for c in re.findall(r"<td>(.*?)</td>", rows[-1])]
     assert cells == [name, "0.5", "associative", "24.4", "0.4545"]
     text = (results / "report" / "report.md").read_text()
-    assert "| w\\|&lt;img src=x onerror=alert(1)&gt;\\`\\*\\[a\\](b).toml | 0.5 | associative | 24.4 | 0.4545 |" in text
+    assert "| w\\|&lt;img src=x onerror=alert(1)>\\`\\*[a]\\(b).toml | 0.5 | associative | 24.4 | 0.4545 |" in text
 
 
 def test_a_target_of_a_long_name_gets_a_figure_name_the_system_takes(tmp_path):
@@ -326,6 +326,9 @@ def test_a_broken_run_folder_is_named_and_left_out_and_an_empty_folder_has_nothi
     assert f"corrupt record left out: {tmp_path / 'cut' / 'summary.json'}: not a JSON summary" in reported.output
     text = (tmp_path / "report" / "report.md").read_text()
     assert "1 runs recorded (0 failed)." in text and str(tmp_path / "cut" / "summary.json") in text
+    # found by a hunt: the shake run's folder was left out without a word
+    assert f"1 run folder(s) of another analysis left out (a `drydem shake` run's folder is its own report" in text
+    assert f"`{tmp_path / 'shake'}`" in text
 
 
 def test_a_paper_wall_tilted_otherwise_than_the_papers_test_is_yours_with_the_change_named(tmp_path):

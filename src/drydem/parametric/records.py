@@ -18,7 +18,7 @@ import math
 import os
 import sys
 from collections.abc import Collection, Mapping
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -262,10 +262,12 @@ def _numeric(value) -> bool:
 @dataclass(frozen=True)
 class Records:
     """The records of a results folder: ``valid`` ones, and the ``corrupt`` ones' errors (each
-    naming its file), left out."""
+    naming its file), left out; and the run folders of other analyses (``other``: a shake's, a
+    Monte Carlo run's), which hold no record."""
 
     valid: list[dict]
     corrupt: list[RecordError]
+    other: list[Path] = field(default_factory=list)
 
 
 def load_records(results: Path) -> Records:
@@ -375,8 +377,9 @@ def run_folders(results: Path) -> list[Path]:
 
 def load_run_folders(results: Path) -> Records:
     """The records of the ``drydem tilt`` and ``drydem limit`` run folders among ``results`` and
-    its sub-folders (:func:`run_folders`, :func:`run_folder_record`)."""
-    valid, corrupt = [], []
+    its sub-folders (:func:`run_folders`, :func:`run_folder_record`), and the folders of the
+    runs of other analyses (``other``)."""
+    valid, corrupt, other = [], [], []
     for folder in run_folders(results):
         try:
             record = run_folder_record(folder)
@@ -385,4 +388,6 @@ def load_run_folders(results: Path) -> Records:
             continue
         if record is not None:
             valid.append(record)
-    return Records(valid, corrupt)
+        elif (folder / SUMMARY_FILE).is_file():
+            other.append(folder)
+    return Records(valid, corrupt, other)

@@ -279,6 +279,7 @@ def build_report(results: Path, out: Path | None = None, *, overwrite: bool = Fa
         f"# Report of the study in {_code(results)}",
         f"{counted}. {about}",
         *([_corrupt(records.corrupt)] if records.corrupt else []),
+        *_others([f for f in folders.other if f / SUMMARY_FILE not in summaries]),
         *_yours(records.valid, figures, paper),
         *(_paper_tables(runs, paper) if of_paper else []),
         *_laws(records.valid, runs),
@@ -621,6 +622,15 @@ def _cov_bars(ax, found: list[MonteCarloRun], experiment: dict) -> bool:
     return not np.all(np.isnan(computed))
 
 
+def _others(folders: list[Path]) -> list[str]:
+    """The paragraph naming the run folders of other analyses, left out (found by a hunt: a
+    shake run's folder beside tilting runs was left out without a word); none without any."""
+    if not folders:
+        return []
+    return [f"{len(folders)} run folder(s) of another analysis left out (a `drydem shake` run's folder is its own report: "
+            f"summary.json, history.csv, history.png; a sweep's shake runs are reported): {', '.join(map(_code, folders))}"]
+
+
 def _corrupt(errors: list[RecordError]) -> str:
     """The paragraph naming the records left out, each with its file and fault."""
     lines = "\n".join(f"- {_code(error)}" for error in errors)
@@ -640,11 +650,11 @@ def _table(title: str, header: list[str], rows: list[list[str]]) -> str:
 
 def _md(text) -> str:
     """``text`` (a name, a path, a message) as Markdown that shows it as written, in report.md
-    and in report.html: its HTML characters as entities and its Markdown ones escaped (found
+    and in report.html: & and < as entities and Markdown's characters escaped (found
     by a hunt: a target named a|b.toml moved the values of its row into the wrong columns, and
     one named with an <img onerror=...> tag put the tag into report.html)."""
-    text = str(text).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
-    return re.sub(r"([\\`*\[\]|])", r"\\\1", text)
+    text = str(text).replace("&", "&amp;").replace("<", "&lt;")  # no tag begins without a <
+    return re.sub(r"([\\`*|])", r"\\\1", text).replace("](", "]\\(")  # [text](url) is no link: a [joint] stays as written
 
 
 def _code(text) -> str:
