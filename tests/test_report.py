@@ -327,7 +327,7 @@ def test_a_broken_run_folder_is_named_and_left_out_and_an_empty_folder_has_nothi
     text = (tmp_path / "report" / "report.md").read_text()
     assert "1 runs recorded (0 failed)." in text and str(tmp_path / "cut" / "summary.json") in text
     # found by a hunt: the shake run's folder was left out without a word
-    assert f"1 run folder(s) of another analysis left out (a `drydem shake` run's folder is its own report" in text
+    assert "1 run folder(s) of another analysis left out (a `drydem shake` run's folder is its own report" in text
     assert f"`{tmp_path / 'shake'}`" in text
 
 
