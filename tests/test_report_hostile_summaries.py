@@ -148,8 +148,12 @@ def test_a_pushover_csv_with_a_field_past_the_csv_limit_is_named_corrupt():
     ("", "not a pushover curve"),
     (f"{','.join(PUSHOVER_COLUMNS)}\n0,0,nan,0,0,1\n", "pushover row 0 [0.0, nan, 0.0, 0.0, 1.0]: the numbers must be finite"),
     (f"{','.join(PUSHOVER_COLUMNS)}\n1e300,0,0,0,0,1\n", "pushover row 0 [1e+300, 0.0, 0.0, 0.0, 1.0]: the numbers must be finite, the tilt an angle in [0, 90] deg"),
+    # found by a hunt: fractional cycles and rows in reverse order were drawn
+    (f"{','.join(PUSHOVER_COLUMNS)}\n0,0,0,0,0,3.5\n", "pushover row 0 [0.0, 0.0, 0.0, 0.0, 3.5]: the numbers must be finite, the tilt "
+     "an angle in [0, 90] deg and the cycles a whole number"),
+    (f"{','.join(PUSHOVER_COLUMNS)}\n1,0,0,0,0,1\n0,0,0,0,0,1\n", "pushover row 1: tilt 0 deg, not above the row before's 1: the tilts must increase"),
 ])
-def test_a_pushover_csv_empty_or_with_a_nan_or_an_absurd_tilt_is_named_corrupt(tmp_path, content, message):
+def test_a_pushover_csv_empty_or_with_a_nan_or_an_absurd_tilt_or_out_of_order_is_named_corrupt(tmp_path, content, message):
     """Found by a hunt: such a curve was counted and drawn as a run's, with no note."""
     run_folder(tmp_path, "good", tilt_summary())
     bad = run_folder(tmp_path, "bad", tilt_summary())
@@ -332,3 +336,13 @@ def test_a_report_of_corrupt_records_only_is_written_and_exits_non_zero(tmp_path
     assert f"corrupt record left out: {bad}" in result.output
     assert f"every record of {tmp_path} is corrupt (1, named above and in the report): the report holds no run" in result.output
     assert "0 runs recorded" in (tmp_path / "report" / "report.md").read_text()
+
+
+def test_a_summary_naming_a_key_twice_is_named_corrupt(tmp_path):
+    """Found by a hunt: Python's json keeps the last of two equal keys, so a collapse angle
+    appended to a summary replaced the run's in the tables."""
+    run_folder(tmp_path, "good", tilt_summary())
+    bad = run_folder(tmp_path, "bad", json.dumps(tilt_summary())[:-1] + ', "collapse_angle_deg": 3.0}')
+    stderr, text = report(tmp_path)
+    assert f"corrupt record left out: {bad}: not a summary drydem wrote: the key 'collapse_angle_deg' is given twice" in stderr
+    assert "1 runs recorded (0 failed)" in text and GOOD_TILT_ROW in text

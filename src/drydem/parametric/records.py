@@ -117,7 +117,10 @@ def read_json(path: Path, what: str):
     cannot be read, is not JSON (a run killed while writing it without the atomic write, a hand
     edit) or is nested deeper than Python's recursion limit (no file drydem writes is)."""
     try:
-        return json.loads(regular_file(path, f"a drydem {what}").read_text(encoding="utf-8"))  # a pipe would hang
+        text = regular_file(path, f"a drydem {what}").read_text(encoding="utf-8")  # a pipe would hang
+        return json.loads(text, object_pairs_hook=_unique_keys)
+    except _RepeatedKey as exc:
+        raise RecordError(f"{path}: not a {what} drydem wrote: {exc}") from None
     except ModelError as exc:
         raise RecordError(str(exc)) from None
     except OSError as exc:
@@ -126,6 +129,21 @@ def read_json(path: Path, what: str):
         raise RecordError(f"{path}: not a JSON {what}, empty or cut short? ({exc})") from None
     except RecursionError:
         raise RecordError(f"{path}: not a {what}: JSON nested deeper than {sys.getrecursionlimit()} levels") from None
+
+
+class _RepeatedKey(ValueError):
+    """A JSON object names a key twice (Python's json keeps the last: found by a hunt, a
+    collapse angle appended to a summary replaced the run's)."""
+
+
+def _unique_keys(pairs: list[tuple[str, object]]) -> dict:
+    """The JSON object of ``pairs``; _RepeatedKey if a key is given twice."""
+    table = {}
+    for key, value in pairs:
+        if key in table:
+            raise _RepeatedKey(f"the key {key!r} is given twice")
+        table[key] = value
+    return table
 
 
 def table_problems(table: Mapping, rules: Mapping[str, Rule], where: str, *, optional: Collection[str] = ()) -> list[str]:
@@ -198,9 +216,11 @@ def _curve_problem(curve) -> str | None:
     if not isinstance(curve, list) or not all(isinstance(row, list) and len(row) == CURVE_COLUMNS and all(map(_numeric, row)) for row in curve):
         return f"pushover must be a list of rows of {CURVE_COLUMNS} numbers (tilt, ux, uz, drift, cycles)"
     for k, (tilt, ux, uz, drift, cycles) in enumerate(curve):
-        if not all(map(math.isfinite, (tilt, ux, uz, drift, cycles))) or tilt not in ANGLE or cycles < 0:
-            return (f"pushover row {k} {[tilt, ux, uz, drift, cycles]}: the numbers must be finite, the tilt an angle in [0, 90] deg "
-                    "and the cycles none or more")
+        if not all(map(math.isfinite, (tilt, ux, uz, drift, cycles))) or tilt not in ANGLE or cycles < 0 or cycles % 1:
+            return (f"pushover row {k} {[tilt, ux, uz, drift, cycles]}: the numbers must be finite, the tilt an angle in [0, 90] "
+                    "deg and the cycles a whole number, none or more")
+        if k and tilt <= curve[k - 1][0]:  # found by a hunt: rows in reverse order were drawn
+            return f"pushover row {k}: tilt {tilt:g} deg, not above the row before's {curve[k - 1][0]:g}: the tilts must increase"
     return None
 
 
@@ -343,8 +363,6 @@ def _rows_problem(summary: dict, curve: list) -> str | None:
 def _protocol(analysis: str, summary: dict) -> str:
     """A run folder's protocol (:data:`~drydem.parametric.study.ANALYSES`): a tilt's adaptive or fixed, a limit analysis' method."""
     return ("adaptive" if summary["analysis"].get("adaptive") else "fixed") if analysis == "tilt" else str(summary["method"])
-
-
 
 
 def _pushover_csv(path: Path) -> list[list[float]]:
