@@ -1,5 +1,6 @@
 """Calibration of kn: the search finds a known optimum and reuses what it evaluated."""
 
+import json
 import math
 
 import pytest
@@ -109,7 +110,6 @@ def made_up_runs(monkeypatch):
 
 
 def test_the_calibration_file_holds_every_evaluation_the_best_and_the_noise_at_the_best_kn(tmp_path, made_up_runs):
-    import json
     from concurrent.futures import ThreadPoolExecutor
 
     from drydem.parametric.calibrate import StiffnessSearch, calibrate_stiffness, experimental_angles
@@ -163,7 +163,6 @@ def calibrate_command(tmp_path, *options):
 
 
 def test_calibrate_prints_the_noise_and_keeps_a_finished_calibration_unless_told(tmp_path, made_up_runs):
-    import json
 
     first = calibrate_command(tmp_path)
     assert first.exit_code == 0, first.output
@@ -188,7 +187,10 @@ def test_an_interrupted_calibration_goes_on_from_its_file_and_a_foreign_file_is_
     search = StiffnessSearch(("WD1", "WD6"), kn_min=1e5)
     write_calibration(path, calibration_content(search, []))  # what a calibration killed before its first kn leaves
     assert calibrate_command(tmp_path).exit_code == 0
-    for foreign in ("not a calibration", "[]", '{"finished": false, "settings": []}', '{"finished": 0, "settings": {}}', "[" * 100_000):
+    unfinished = calibration_content(search, [])
+    lots = json.dumps(unfinished | {"evaluations": "lots"})  # found by a hunt: taken, and rewritten without a word
+    for foreign in ("not a calibration", "[]", '{"finished": false, "settings": []}', '{"finished": 0, "settings": {}}', "[" * 100_000,
+                    lots, json.dumps(unfinished | {"evaluations": [1]})):
         path.write_text(foreign)
         refused = calibrate_command(tmp_path)
         assert refused.exit_code == 1 and f"{path}: exists and is not a drydem calibration; pass --overwrite" in refused.output

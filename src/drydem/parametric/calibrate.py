@@ -353,15 +353,17 @@ def calibration_content(search: StiffnessSearch, evaluations: Sequence[Evaluatio
 def check_calibration_file(path: Path, search: StiffnessSearch, *, overwrite: bool = False) -> None:
     """DrydemError unless a calibration of ``search`` may write ``path``: there is no such file,
     or it is an unfinished calibration with the same settings (it goes on: its runs are in the
-    results folder), or ``overwrite`` is asked. Nothing is lost otherwise."""
+    results folder, and its evaluations are made again from them), or ``overwrite`` is asked.
+    Nothing is lost otherwise."""
     if overwrite or not Path(path).exists():
         return
     try:
         recorded = read_json(Path(path), "calibration")
-        finished, settings = recorded["finished"], recorded["settings"]
+        finished, settings, evaluations = recorded["finished"], recorded["settings"], recorded["evaluations"]
     except (RecordError, TypeError, KeyError):
-        finished = settings = None
-    if not (isinstance(finished, bool) and isinstance(settings, dict)):
+        finished = settings = evaluations = None
+    if not (isinstance(finished, bool) and isinstance(settings, dict) and isinstance(evaluations, list)
+            and all(isinstance(e, dict) for e in evaluations)):  # found by a hunt: "evaluations": "lots" was taken
         raise DrydemError(f"{path}: exists and is not a drydem calibration; pass --overwrite to replace it, or another --out")
     if finished or settings != search.settings():
         differ = sorted(key for key in settings.keys() | search.settings().keys() if settings.get(key) != search.settings().get(key))
