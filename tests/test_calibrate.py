@@ -216,4 +216,4 @@ def test_a_joint_law_missing_its_keys_is_named_once_not_at_each_end_of_the_kn_ra
     result = calibrate_command(tmp_path, "--joint-model", "power")
     assert result.exit_code == 1 and "Traceback" not in result.output
     assert result.output.count("needs kn_exponent") == 1 and "at kn =" not in result.output
-    assert "joint law {'model': 'power'}: [joint] model = 'power' needs kn_exponent" in result.output
+    assert "joint law model = power: [joint] model = 'power' needs kn_exponent" in result.output

@@ -258,7 +258,7 @@ ELL_FACES = [[5, 4, 3, 2, 1, 0], [6, 7, 8, 9, 10, 11]] + [[i, (i + 1) % 6, (i + 
 
 @pytest.mark.parametrize("content, message", [
     ("{", r"not JSON: Expecting property name enclosed in double quotes at line 1, column 2"),
-    (42, r"the file holds a JSON int; drydem reads a compas Mesh"),
+    (42, r"the file holds a JSON number; drydem reads a compas Mesh"),
     ([], r"no mesh: the file holds no block"),
     ({"collapse_angle_deg": 21.0}, r"mesh 'collapse_angle_deg': not a compas object \(no 'dtype'\)"),
     ({"dtype": "compas.geometry/Box", "data": {"xsize": 1}},

@@ -53,6 +53,7 @@ def fails(args: list[str], *messages: str):
     ("half.obj", "o stone\nusemtl fixed\n" + CUBE.replace("f 3 4 8 7", "usemtl stone\nf 3 4 8 7"),
      "'stone': 4 of its 6 faces are marked fixed (from line 11), the others not"),
     ("cut.stl", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n", "line 4: the file ends inside the solid 'a' (no endsolid)"),
+    ("nameless.stl", "solid\n", "line 1: the file ends inside a nameless solid (no endsolid)"),  # found by a hunt: "the solid None"
     ("stray.stl", "solid a\nvertex 0 0 0\n", "line 2: 'vertex' is out of place (inside a solid)"),
     ("word.stl", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 zero\n", "line 4: vertex: '0 0 zero': the coordinates must be numbers"),
     ("outside.stl", "solid a\nendsolid a\nfacet normal 0 0 1\n", "line 3: 'facet' is out of place (outside any solid)"),

@@ -526,7 +526,7 @@ def test_a_scheduler_address_that_is_not_one_is_named(folder, address):
     (["--ks-ratio", "1e9"], "--ks-ratio = 1000000000.0: ks = ratio x kn, 1e+16 to 1e+18 Pa/m, must be a number in [1e+04, 1e+15]"),
     (["--increment", "0"], "--increment = 0.0: must be a number in [0.001, 90) deg"),
     (["--increment", "90"], "--increment = 90.0: must be a number in [0.001, 90) deg"),
-    (["--designs", "WD1,WD9"], "--designs 'WD1,WD9': no experimental collapse angle for ['WD9']; known: WD1, WD2"),
+    (["--designs", "WD1,WD9"], "--designs 'WD1,WD9': no experimental collapse angle for WD9; known: WD1, WD2"),
     (["--designs", " , "], "--designs ',': an empty name (two commas in a row, or one at an end)"),
     (["--designs", ""], "--designs '': needs at least one wall"),
     (["--designs", "WD1,,WD2"], "--designs 'WD1,,WD2': an empty name (two commas in a row, or one at an end)"),

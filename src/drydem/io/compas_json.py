@@ -170,12 +170,16 @@ def _mesh_json(name: str, shape, fixed: bool) -> dict:
     return {"dtype": MESH_DTYPE, "data": data, "name": name}
 
 
+#: the JSON name of each kind of value Python's json makes
+JSON_KINDS = {type(None): "null", bool: "true or false", int: "number", float: "number", str: "string", list: "array", dict: "object"}
+
+
 def _parts(data, source: str) -> list[_Part]:
     """The meshes of the file's top-level value, by its kind."""
     if isinstance(data, list):
         return [_mesh_part(item, _name(item, f"{source}: mesh {k}"), k, f"{source}: mesh {k}") for k, item in enumerate(data)]
     if not isinstance(data, dict):
-        raise ModelError(f"{source}: the file holds a JSON {type(data).__name__}; drydem reads {READS}")
+        raise ModelError(f"{source}: the file holds a JSON {JSON_KINDS.get(type(data), type(data).__name__)}; drydem reads {READS}")
     if "dtype" not in data:
         return [_mesh_part(item, key, k, f"{source}: mesh") for k, (key, item) in enumerate(data.items())]
     if _is(data, MODEL_DTYPE) or data.get("dtype") == BLOCK_MODEL_DTYPE:

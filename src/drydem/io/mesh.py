@@ -392,7 +392,8 @@ def _read_ascii_stl(path: Path, text: str) -> tuple[list[list[float]], list[_Sol
             _check_endsolid(line.strip()[len(words[0]):].strip(), name, solid.named[0], where)
             solid = None
     if solid is not None:
-        raise ModelError(f"{path}: line {number}: the file ends inside the solid {solid.name!r} (no endsolid): is it cut short?")
+        inside = "a nameless solid" if solid.name is None else f"the solid {solid.name!r}"
+        raise ModelError(f"{path}: line {number}: the file ends inside {inside} (no endsolid): is it cut short?")
     return points, solids
 
 

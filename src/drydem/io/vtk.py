@@ -258,15 +258,16 @@ MAX_FRAME = 999_999_999
 
 def frame_number(text: str) -> int:
     """The frame number ``text`` of a row of ``frames.csv``: digits 0-9 (int() also takes +1, 1_0
-    and digits of other scripts), at most :data:`MAX_FRAME`; a ValueError saying the rule."""
-    frame = int(text)
-    if frame < 0:
-        raise ValueError(f"frame {shown(frame)}: must be an integer >= 0")
-    if not (text.isascii() and text.isdigit()):
+    and digits of other scripts), at most :data:`MAX_FRAME`; a ValueError saying the rule (found
+    by a hunt: 3.0 was refused in int()'s words)."""
+    digits = text.removeprefix("-")
+    if not (digits.isascii() and digits.isdigit()):
         raise ValueError(f"frame {shown(text)}: must be written in the digits 0-9, as drydem writes it")
-    if frame > MAX_FRAME:
+    if digits != text:
+        raise ValueError(f"frame {shown(text) if len(text) > 12 else text}: must be an integer >= 0")
+    if len(text.lstrip("0")) > len(str(MAX_FRAME)) or int(text) > MAX_FRAME:  # int() refuses more than 4,300 digits
         raise ValueError(f"frame {shown(text)}: must be at most {MAX_FRAME} (more frames than any series holds)")
-    return frame
+    return int(text)
 
 
 def _equilibrium_rows(index: Path) -> list[tuple[int, str, float, float]]:

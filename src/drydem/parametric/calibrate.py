@@ -221,7 +221,7 @@ def _design_problems(designs: tuple[str, ...], name: Callable[[str], str]) -> li
         return [f"{given}: {what}; {listed}"]
     unknown = [d for d in designs if d not in known]
     twice = list(dict.fromkeys(d for d in designs if designs.count(d) > 1))
-    found = [f"{given}: no experimental collapse angle for {unknown}; {listed}"] if unknown else []
+    found = [f"{given}: no experimental collapse angle for {', '.join(unknown)}; {listed}"] if unknown else []
     return found + ([f"{given}: {', '.join(twice)} given more than once; give each wall once (its error would count twice in "
                      "the mean)"] if twice else [])
 
@@ -235,7 +235,8 @@ def _law_problems(law: dict, kn_range: tuple[float, float], ks_ratio: float) -> 
             JointMaterial(kn=kn, ks=ks_ratio * kn, **law)
         except (ModelError, TypeError) as exc:
             found.setdefault(str(exc), []).append(kn)
-    return [f"joint law {law}{'' if len(kns) == len(kn_range) else f' at kn = {kns[0]:.4g} Pa/m'}: {reason}" for reason, kns in found.items()]
+    words = ", ".join(f"{key} = {value}" for key, value in law.items())  # found by a hunt: shown as a dict
+    return [f"joint law {words}{'' if len(kns) == len(kn_range) else f' at kn = {kns[0]:.4g} Pa/m'}: {reason}" for reason, kns in found.items()]
 
 
 @dataclass(frozen=True)
