@@ -157,7 +157,7 @@ def test_animate_refuses_a_frame_of_another_model(wall, tmp_path):
     ("1,bogus,1.000000,0,x", "kind 'bogus': must be one of 'equilibrium', 'past collapse'"),
     ("1,equilibrium,1.000000,0,z", "load_direction 'z': must be one of x, y"),
     ("-1,equilibrium,1.000000,0,x", "frame -1: must be an integer >= 0"),
-    ("3.0,equilibrium,1.000000,0,x", "frame '3.0': must be written in the digits 0-9"),  # found by a hunt: in int()'s words
+    ("3.0,equilibrium,1.000000,0,x", "frame '3.0': must be written in the digits 0-9, as drydem writes it"),  # found by a hunt: in int()'s words
 ], ids=["kind", "load-direction", "frame-number", "decimal-frame"])
 def test_animate_refuses_a_row_of_frames_csv_not_as_drydem_writes_it(wall, tmp_path, row, message):
     folder = series(tmp_path / "vtk", wall, count=2, rows=["0,equilibrium,0.000000,0,x", row])
