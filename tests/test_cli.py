@@ -56,7 +56,20 @@ def test_check_settle_stops_when_a_block_falls_out(tmp_path):
                     .split('[[block]]\nname = "small"')[0])
     result = CliRunner().invoke(main, ["check", str(path), "--settle"])
     assert result.exit_code == 1, result.output
-    assert "equilibrium     NOT converged" in result.output and "fell out        1 blocks dropped more than two of their heights: 'big'" in result.output
+    assert "equilibrium     stopped, a block fell" in result.output
+    assert "fell out        1 blocks dropped more than two of their heights: 'big': the model cannot stand under its own weight" in result.output
+
+
+def test_check_settle_says_a_model_on_too_soft_joints_cannot_stand_and_why(tmp_path):
+    """Found by a hunt: a 0.2 m block on kn = 1e4 Pa/m (its own weight closes 392 mm) was "NOT
+    converged" by check --settle, where tilt says it cannot stand and why."""
+    path = tmp_path / "soft.toml"
+    path.write_text('[joint]\nkn = 1e4\nks = 1e4\n[[block]]\nname = "base"\nfixed = true\nbox = { min = [-1, -1, -0.2], max = [2, 1, 0] }\n'
+                    '[[block]]\nname = "b0"\nbox = { min = [0, -0.1, 0], max = [1.0, 0.1, 0.2] }\n')
+    result = CliRunner().invoke(main, ["check", str(path), "--settle"])
+    assert result.exit_code == 1, result.output
+    assert "'b0': the model cannot stand under its own weight; the joints are too soft to carry it" in result.output
+    assert "NOT converged" not in result.output
 
 
 def test_bad_model_exits_with_its_message(tmp_path):

@@ -28,6 +28,7 @@ from drydem.model.parameters import DENSITY, JOINT_MODELS, JOINT_RULES, POINTS, 
 
 if TYPE_CHECKING:
     from drydem.io.target import Target
+    from drydem.model.assembly import Model
     from drydem.masonry.imperfections import Imperfections
 
 
@@ -370,3 +371,16 @@ def imperfections_from_options(height_sd: float | None, height_distribution: str
                              **{name: 0.0 if value is None else value for name, value in amplitudes.items()})
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
+
+
+def more_cycles_advice(model: Model, advice: str) -> str:
+    """``advice`` (more cycles), unless round-off keeps the unbalanced-force ratio above the
+    criterion (:func:`drydem.analysis.support.roundoff_ratio`), where no number of cycles helps."""
+    from drydem.analysis.support import roundoff_ratio
+
+    floor = roundoff_ratio(model)
+    if model.solver.criterion != "ratio" or floor < model.solver.ratio:
+        return advice
+    return (f"round-off keeps the unbalanced-force ratio at about {floor:.2g} (kn times a block's largest face times the spacing of "
+            f"doubles at the farthest coordinate, over the mean block weight) against [solver] ratio = {model.solver.ratio:g}: "
+            "more cycles cannot reach it; bring the model near the origin, soften [joint] kn or raise ratio")

@@ -12,8 +12,8 @@ import click
 from drydem.masonry import designs
 from drydem.errors import DrydemError
 from drydem.cli.common import (
-    _factor, IMPERFECTION_OPTIONS, PLAIN_FLOAT, imperfection_options, imperfections_from_options, main, out_path, resolve_target,
-    unit_option,
+    _factor, IMPERFECTION_OPTIONS, PLAIN_FLOAT, imperfection_options, imperfections_from_options, main, more_cycles_advice, out_path,
+    resolve_target, unit_option,
 )
 
 if TYPE_CHECKING:
@@ -112,7 +112,7 @@ def _settle(sim: Simulation) -> None:
     import numpy as np
     from tqdm import tqdm
 
-    from drydem.analysis.support import dropped_out, lost_drops
+    from drydem.analysis.support import dropped_out, lost_drops, too_soft_joints
     from drydem.analysis.tilt import TiltSettings
 
     model = sim.model
@@ -133,11 +133,16 @@ def _settle(sim: Simulation) -> None:
         result = sim.cycle_to_equilibrium(progress=progress, stop=fell)
     elapsed = time.perf_counter() - start
     drop = model.block_centroid[:, 2] - sim.state.position[:, 2]
-    status = "converged" if result.converged else "NOT converged"
+    status = "converged" if result.converged else "stopped, a block fell" if fallen else "NOT converged"
     click.echo(f"equilibrium     {status} after {result.cycles} cycles ({result.criterion} {result.ratio:.2e}), {elapsed:.2f} s")
-    if fallen:
+    if fallen:  # the verdict and reasons of tilt's stage 1 (found by a hunt: said to be no convergence)
+        soft = too_soft_joints(model, fallen)
         click.echo(f"fell out        {len(fallen)} blocks dropped more than two of their heights: "
-                   + ", ".join(repr(model.block_name[b]) for b in fallen[:10]) + (", ..." if len(fallen) > 10 else ""), err=True)
+                   + ", ".join(repr(model.block_name[b]) for b in fallen[:10]) + (", ..." if len(fallen) > 10 else "")
+                   + ": the model cannot stand under its own weight" + (f"; {soft}" if soft else ""), err=True)
+    elif not result.converged:
+        click.echo(f"no equilibrium  within [solver] max_cycles = {model.solver.max_cycles}: no verdict on whether it stands; "
+                   + more_cycles_advice(model, "raise max_cycles (or check damping) and run again"), err=True)
     top = int(np.argmax(model.block_centroid[:, 2]))
     click.echo(f"settlement      {drop.max() * 1e3:.4g} mm max, top block {model.block_name[top]!r} {drop[top] * 1e3:.4g} mm")
     if not result.converged:

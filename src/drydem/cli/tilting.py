@@ -13,8 +13,9 @@ import click
 from drydem.errors import DrydemError
 from drydem.model.parameters import CRITERIA
 from drydem.cli.common import (
-    CHECKPOINT, MODEL_OPTIONS, PLAIN_FLOAT, PlainIntRange, check_save_every, discard_unstarted, joint_law_options, main, out_path,
-    resolve_target, failure_message, results_folder, ruled, signals_interrupt, threads_option, unit_option, writing_results,
+    CHECKPOINT, MODEL_OPTIONS, PLAIN_FLOAT, PlainIntRange, check_save_every, discard_unstarted, joint_law_options, main,
+    more_cycles_advice, out_path, resolve_target, failure_message, results_folder, ruled, signals_interrupt, threads_option, unit_option,
+    writing_results,
 )
 
 if TYPE_CHECKING:
@@ -303,28 +304,15 @@ def _tilt_verdict(result, model: Model) -> list[str]:
         return [f"the model cannot stand under its own weight: {what} (state in mechanism.png)" + (f"; {soft}" if soft else "")]
     if result.ended_by == NO_EQUILIBRIUM_UNDER_GRAVITY:
         return [f"no equilibrium under gravity within [solver] max_cycles = {model.solver.max_cycles}: no verdict on whether it "
-                f"stands; {_more_cycles(model, 'raise max_cycles (or check damping) and run again')}"]
+                f"stands; {more_cycles_advice(model, 'raise max_cycles (or check damping) and run again')}"]
     if result.ended_by == MAXIMUM_ANGLE:
         return [f"no collapse up to {result.last_equilibrium_deg:.2f} deg (the last step within max_angle_deg = "
                 f"{result.settings.max_angle_deg:g})"]
     if result.ended_by == NO_EQUILIBRIUM:
         return [f"last equilibrium {result.last_equilibrium_deg:.2f} deg; the next step reached no equilibrium within [solver] "
                 f"max_cycles = {model.solver.max_cycles} and did not collapse either: no collapse angle "
-                f"({_more_cycles(model, 'raise max_cycles to decide')})"]
+                f"({more_cycles_advice(model, 'raise max_cycles to decide')})"]
     return [f"collapse angle  {result.collapse_angle_deg:.2f} deg (load multiplier {result.load_multiplier:.4f}; ended by {result.ended_by})"]
-
-
-def _more_cycles(model: Model, advice: str) -> str:
-    """``advice`` (more cycles), unless round-off keeps the unbalanced-force ratio above the
-    criterion (:func:`drydem.analysis.support.roundoff_ratio`), where no number of cycles helps."""
-    from drydem.analysis.support import roundoff_ratio
-
-    floor = roundoff_ratio(model)
-    if model.solver.criterion != "ratio" or floor < model.solver.ratio:
-        return advice
-    return (f"round-off keeps the unbalanced-force ratio at about {floor:.2g} (kn times a block's largest face times the spacing of "
-            f"doubles at the farthest coordinate, over the mean block weight) against [solver] ratio = {model.solver.ratio:g}: "
-            "more cycles cannot reach it; bring the model near the origin, soften [joint] kn or raise ratio")
 
 
 def _fps(ctx, param, value):
