@@ -372,7 +372,8 @@ def _read_ascii_stl(path: Path, text: str) -> tuple[list[list[float]], list[_Sol
             solid = _Solid(name[: -len(FIXED_SOLID)] if fixed else name, "solid", [number])
             solids.append(solid)
         elif key in ("outer", "endloop", "endfacet") and words[1:] != (["loop"] if key == "outer" else []):
-            raise ModelError(f"{where}: {shown(line.strip())}: the statement is {'outer loop' if key == 'outer' else key}, alone on its line")
+            statement = "outer loop" if key == "outer" else key
+            raise ModelError(f"{where}: {shown(line.strip())}: the statement is {statement}, alone on its line")
         if key == "facet":  # its normal is not used, but read: a NaN there is a damaged file
             if len(words) < 2 or words[1].lower() != "normal":
                 raise ModelError(f"{where}: {shown(line.strip())}: a facet begins 'facet normal nx ny nz'")

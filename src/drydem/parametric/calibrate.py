@@ -236,7 +236,8 @@ def _law_problems(law: dict, kn_range: tuple[float, float], ks_ratio: float) -> 
         except (ModelError, TypeError) as exc:
             found.setdefault(str(exc), []).append(kn)
     words = ", ".join(f"{key} = {value}" for key, value in law.items())  # found by a hunt: shown as a dict
-    return [f"joint law {words}{'' if len(kns) == len(kn_range) else f' at kn = {kns[0]:.4g} Pa/m'}: {reason}" for reason, kns in found.items()]
+    return [f"joint law {words}{'' if len(kns) == len(kn_range) else f' at kn = {kns[0]:.4g} Pa/m'}: {reason}"
+            for reason, kns in found.items()]
 
 
 @dataclass(frozen=True)

@@ -600,7 +600,8 @@ def _montecarlo(found: list[MonteCarloRun], unreadable: list[str], figures: Path
               "experiment CoV (%)"]
     text = _table(MONTECARLO_TITLE, header, rows) + f"\n\n{MONTECARLO_NOTE}"
     if unreadable:
-        text += f"\n\n{len(unreadable)} Monte Carlo summaries cannot be read, left out:\n\n" + "\n".join(f"- {_code(u)}" for u in unreadable)
+        text += (f"\n\n{len(unreadable)} Monte Carlo summaries cannot be read, left out:\n\n"
+                 + "\n".join(f"- {_code(u)}" for u in unreadable))
     if not found:
         return [text]
     return [text, _figure(figures, "montecarlo_cov", "Monte Carlo: CoV of the computed collapse angle (imperfect walls) against the "

@@ -65,15 +65,16 @@ from drydem.analysis.tilt.protocol import (
 )
 from drydem.analysis.tilt.run import TiltRun, Trace, elastic_closure, trial_limit
 from drydem.analysis.tilt.settings import (
-    EQUILIBRIUM, FELL, GAVE_UP, LOADINGS, MAX_CYCLES, MAXIMUM_ANGLE, MONITOR_FELL, MONITOR_TOPPLED, NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY,
-    SETTING_RANGES, STOP_DISPLACEMENT, TILT_AXES, TOPPLED_RAD, UNSTABLE_UNDER_GRAVITY, Frame, Record, TiltResult, TiltSettings,
-    check_loading, check_stop_displacement, monitor_index, monitored_block, wall_height,
+    EQUILIBRIUM, FELL, GAVE_UP, LOADINGS, MAX_CYCLES, MAXIMUM_ANGLE, MONITOR_FELL, MONITOR_TOPPLED, NO_EQUILIBRIUM,
+    NO_EQUILIBRIUM_UNDER_GRAVITY, SETTING_RANGES, STOP_DISPLACEMENT, TILT_AXES, TOPPLED_RAD, UNSTABLE_UNDER_GRAVITY, Frame, Record,
+    TiltResult, TiltSettings, check_loading, check_stop_displacement, monitor_index, monitored_block, wall_height,
 )
 
 __all__ = [
     "CHECKPOINT_EVERY", "CHECKPOINT_EVERY_S", "EQUILIBRIUM", "FELL", "FRAME_SAMPLING", "GAVE_UP", "LOADINGS",
     "MAX_CYCLES", "MAXIMUM_ANGLE", "MONITOR_FELL", "MONITOR_TOPPLED",
-    "NO_EQUILIBRIUM", "NO_EQUILIBRIUM_UNDER_GRAVITY", "SETTING_RANGES", "STOP_DISPLACEMENT", "TILT_AXES", "TOPPLED_RAD", "UNSTABLE_UNDER_GRAVITY",
+    "NO_EQUILIBRIUM", "NO_EQUILIBRIUM_UNDER_GRAVITY", "SETTING_RANGES", "STOP_DISPLACEMENT", "TILT_AXES", "TOPPLED_RAD",
+    "UNSTABLE_UNDER_GRAVITY",
     "Frame", "Record", "TiltProtocol", "TiltResult", "TiltRun", "TiltSettings", "Trace", "check_loading", "check_stop_displacement",
     "elastic_closure", "monitor_index",
     "monitored_block", "replay_collapse", "stand_under_gravity", "step_up", "tilt_analysis", "tilt_result", "trial_limit",

@@ -117,9 +117,8 @@ class TiltRun:
         """Cycle at ``theta_deg`` until equilibrium, the stop displacement, the fall or toppling
         of the monitored block, ``give_up()`` or max cycles; returns how it ended (EQUILIBRIUM,
         STOP_DISPLACEMENT, MONITOR_FELL, MONITOR_TOPPLED, GAVE_UP, MAX_CYCLES, or FELL under
-        vertical gravity) and
-        the cycles run. Progress is reported and a frame added to ``trace`` every
-        ``chunk_cycles`` (default the settings').
+        vertical gravity) and the cycles run. Progress is reported and a frame added to
+        ``trace`` every ``chunk_cycles`` (default the settings').
 
         Blocks that fall out are taken out and the cycling goes on, except under vertical
         gravity (stage 1): a model that loses a block under its own weight cannot stand (the
