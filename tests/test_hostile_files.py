@@ -248,6 +248,18 @@ def test_an_empty_calibrate_results_dir_is_refused_not_read_as_the_current_folde
     assert list(tmp_path.iterdir()) == []
 
 
+def test_an_empty_motion_is_refused_not_read_as_the_current_folder(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # found by a hunt: ".: is a folder, not a motion file"
+    refused(invoke("shake", "WD3", "--motion", ""), "Invalid value for '--motion': '': an empty path", code=2)
+
+
+def test_a_model_file_with_a_byte_order_mark_reads(tmp_path):
+    path = tmp_path / "bom.toml"  # found by a hunt: as Windows editors write it, refused as "Invalid statement"
+    path.write_bytes(b"\xef\xbb\xbf" + b'[[block]]\nname = "b"\nbox = { min = [0, 0, 0], max = [0.2, 0.1, 0.05] }\n')
+    result = invoke("check", path)
+    assert result.exit_code == 0 and "blocks          1 (1 movable, 0 fixed)" in result.output, result.output
+
+
 def test_an_empty_export_output_is_refused(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     refused(invoke("export", "WD1", ""), "Invalid value for 'OUTPUT': '': an empty path; give a file name", code=2)

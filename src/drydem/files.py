@@ -326,14 +326,15 @@ def regular_file(path: Path, expected: str) -> Path:
 
 def read_text(path: Path, expected: str, *, encoding: str = "utf-8") -> str:
     """The text of ``path`` (UTF-8 unless ``encoding`` says otherwise) once it is a regular file
-    (:func:`regular_file`); ModelError naming the file if it cannot be read, or if it is not text,
-    then saying what was ``expected`` of it."""
+    (:func:`regular_file`), a UTF-8 byte order mark at its start dropped (as Windows editors write
+    it; found by a hunt: a TOML file and a frames.csv with one were refused); ModelError naming the
+    file if it cannot be read, or if it is not text, then saying what was ``expected`` of it."""
     try:
-        return regular_file(path, expected).read_text(encoding=encoding)
+        return regular_file(path, expected).read_text(encoding="utf-8-sig" if encoding == "utf-8" else encoding)
     except OSError as exc:
         raise ModelError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
     except UnicodeDecodeError as exc:
-        raise ModelError(f"{path}: not a text file (byte {exc.start} is not {exc.encoding.upper()}); {expected}") from None
+        raise ModelError(f"{path}: not a text file (byte {exc.start} is not {encoding.upper()}); {expected}") from None
 
 
 def read_toml(path: Path) -> tuple[dict, str]:

@@ -179,7 +179,7 @@ def joint_law_options(command):
 
 
 def out_path(ctx, param, value: str | None) -> Path | None:
-    """--out of every command, and calibrate's RESULTS_DIR: None where not given, else its Path;
+    """--out of every command, calibrate's RESULTS_DIR and shake's --motion: None where not given, else its Path;
     a usage error for an empty or blank one, which the system would read as the current folder
     (Path("") is "."; found by a hunt: `drydem calibrate ""` began writing its runs here)."""
     if value is None:

@@ -50,7 +50,7 @@ class _Restitution(click.ParamType):
 
 @main.command()
 @click.argument("target")
-@click.option("--motion", type=click.Path(path_type=Path),
+@click.option("--motion", type=click.Path(), callback=out_path,
               help="Ground motion record: a CSV file with the header time_s,acc_x_m_s2[,acc_y_m_s2,acc_z_m_s2] (s, m/s2), or a "
                    "PEER NGA .AT2 file (in g).")
 @click.option("--direction", type=click.Choice(["x", "y", "z"]), help="Direction of an .AT2 record or of a --pulse (default x); a CSV "
