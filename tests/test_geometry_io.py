@@ -92,6 +92,8 @@ def test_a_vrml_name_the_file_gives_is_not_taken_by_a_repeated_one(tmp_path):
     ("#VRML V2.0 utf8\nPROTO Brick [] { Group {} }\n", r"line 2: PROTO is not supported"),
     ("#VRML V2.0 utf8\nTransform {\n children [ Shape { geometry Box { size 1 1 1 } }\n", r"unexpected end of file"),
     ("#VRML V2.0 utf8\nTransform { translation 1 2 children [] }\n", r"line 2: Transform.translation must be 3 numbers"),
+    ("#VRML V2.0 utf8\nTransform { translation TRUE 0 0.5 children [] }\n",  # found by a hunt: shown as [True]
+     r"line 2: Transform.translation must be 3 numbers, got 'TRUE'"),
     ("#VRML V2.0 utf8\nShape { geometry IndexedFaceSet {\n coord Coordinate { point [0 0 0, 1 0 0, 0 1 0, 0 0 1] }\n"
      " coordIndex [0 2 1 -1, 0 1 3 -1, 1 2 3 -1] } }\n", r"line 2: Shape 'shape0': the surface is not closed"),
 ])

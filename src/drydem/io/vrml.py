@@ -210,7 +210,8 @@ def _field(node: Node, name: str, default, count: int | None, source: str) -> li
         return list(default)
     if not all(map(_is_value_number, values)) or (count is not None and len(values) != count):
         expected = f"{count} numbers" if count else "numbers"
-        raise ModelError(f"{source}, line {node.line}: {node.type}.{name} must be {expected}, got {shown(values)}")
+        written = " ".join("TRUE" if v is True else "FALSE" if v is False else str(v) for v in values)  # as in the file
+        raise ModelError(f"{source}, line {node.line}: {node.type}.{name} must be {expected}, got {shown(written)}")
     return values
 
 

@@ -256,8 +256,8 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
 
     try:
         hull = ConvexHull(pts)
-    except QhullError as exc:
-        raise GeometryError(f"{name}: degenerate block (vertices coplanar or collinear): {exc.args[0].splitlines()[0]}") from None
+    except QhullError:  # its text is Qhull's own (QH6013 qhull input error: ...; found by a hunt)
+        raise GeometryError(f"{name}: degenerate block: its vertices are coplanar or collinear, it has no volume") from None
     tol = HULL_TOLERANCE * scale
     _refuse_flat(hull.volume, scale, name)
     depth = -(pts @ hull.equations[:, :3].T + hull.equations[:, 3]).max(axis=1)
