@@ -397,3 +397,18 @@ def test_the_drydem_program_exits_as_click_does_on_usage_errors_and_help(monkeyp
             ended = exc.code
         assert ended in ((code,) if code else (None, 0)), (argv, ended)
     assert "Invalid value for '--increment'" in capsys.readouterr().err
+
+
+def test_check_settle_notes_joints_closed_by_a_large_fraction_of_a_block(tmp_path):
+    """Found by a hunt: five 0.2 m blocks on kn = 1e5 Pa/m "converged" 19 % below the sum of
+    W / (kn A), the bottom joint closed most of a block's thickness, without a word. On kn = 1e9
+    (closures of micrometres) nothing is said."""
+    blocks = "".join(f'[[block]]\nname = "b{k}"\nbox = {{ min = [0, -0.1, {0.2 * k:g}], max = [1.0, 0.1, {0.2 * (k + 1):g}] }}\n'
+                     for k in range(5))
+    for kn, noted in (("1e5", True), ("1e9", False)):
+        path = tmp_path / f"stack{kn}.toml"
+        path.write_text(f'[joint]\nkn = {kn}\nks = {kn}\n[[block]]\nname = "base"\nfixed = true\n'
+                        f'box = {{ min = [-1, -1, -0.2], max = [2, 1, 0] }}\n{blocks}')
+        result = CliRunner().invoke(main, ["check", str(path), "--settle"])
+        assert result.exit_code == 0, result.output
+        assert ("note: a joint of 'b0' closes by" in result.output and "of the block's thickness" in result.output) == noted
