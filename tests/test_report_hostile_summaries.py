@@ -346,3 +346,19 @@ def test_a_summary_naming_a_key_twice_is_named_corrupt(tmp_path):
     stderr, text = report(tmp_path)
     assert f"corrupt record left out: {bad}: not a summary drydem wrote: the key 'collapse_angle_deg' is given twice" in stderr
     assert "1 runs recorded (0 failed)" in text and GOOD_TILT_ROW in text
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"analysis": {"increment_deg": 1.0, "adaptive": False, "tilt_axis": "z"}}, "summary analysis tilt_axis = 'z': must be one of"),
+    ({"analysis": {"increment_deg": 1.0, "adaptive": False, "loading": "gravity"}}, "summary analysis loading = 'gravity': must be one of"),
+    ({"drift_limit_angles_deg": {"0.005": 10.0, "0.01": 89.0}},
+     "summary drift_limit_angles_deg 0.01 = 89: above the last equilibrium, 24 deg (a drift limit is reached at an equilibrium)"),
+], ids=["tilt-axis", "loading", "drift-limit"])
+def test_a_summary_whose_settings_or_drift_limits_drydem_cannot_have_written_is_named_corrupt(tmp_path, change, message):
+    """Found by a hunt: a tilt_axis "z", a loading "gravity" and a drift limit reached at 89 deg
+    beside a collapse at 24 were tabled."""
+    run_folder(tmp_path, "good", tilt_summary())
+    bad = run_folder(tmp_path, "bad", tilt_summary() | change)
+    stderr, text = report(tmp_path)
+    assert f"corrupt record left out: {bad}: " in stderr and message in stderr
+    assert "1 runs recorded (0 failed)" in text and GOOD_TILT_ROW in text

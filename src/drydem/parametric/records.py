@@ -22,6 +22,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from types import SimpleNamespace
 
+from drydem.analysis.tilt.settings import LOADINGS, TILT_AXES
 from drydem.errors import DrydemError, ModelError
 from drydem.files import regular_file
 from drydem.model.parameters import FLAG, FRICTION, JOINT_RULES, JOINT_STIFFNESS, POINTS, OneOf, Range, Rule, field_problems
@@ -87,7 +88,7 @@ SUMMARY_NOT_NULL = ("wall_height_m", "method")
 #: drydem.analysis.tilt.settings.SETTING_RANGES (0.001 deg) are results still
 RECORDED_INCREMENT = Range(0.0, 90.0, low_open=True, high_open=True, unit="deg")
 #: the rules of a tilt summary's settings (``analysis``) that a run folder's record takes
-TILT_SETTING_RULES = {"increment_deg": RECORDED_INCREMENT, "adaptive": FLAG}
+TILT_SETTING_RULES = {"increment_deg": RECORDED_INCREMENT, "adaptive": FLAG, "tilt_axis": OneOf(TILT_AXES), "loading": OneOf(LOADINGS)}
 #: the rules of the tables of a summary's model (:func:`drydem.io.results.model_summary`) the
 #: report reads: the joint's (kn, ks and friction never null; its law's fields where given) and
 #: the contacts' points per length (null: not recorded)
@@ -252,11 +253,17 @@ def collapse_problem(analysis: str, summary: dict) -> str | None:
 
 def _tilt_problems(summary: dict) -> list[str]:
     """The problems of a tilt summary beyond :data:`SUMMARY_RULES`: each drift limit's angle in
-    [0, 90] deg or null (never reached); the settings within :data:`TILT_SETTING_RULES`."""
+    [0, 90] deg or null (never reached), and at most the last equilibrium's (a limit is reached at
+    an equilibrium; found by a hunt: one at 89 deg beside a collapse at 25 was tabled); the
+    settings within :data:`TILT_SETTING_RULES` (a tilt_axis "z" was taken)."""
     drift = summary["drift_limit_angles_deg"]
     if not isinstance(drift, dict):
         return ["summary drift_limit_angles_deg must map drift limits to angles"]
     problems = table_problems(drift, dict.fromkeys(drift, ANGLE), "summary drift_limit_angles_deg", optional=drift)
+    last = summary.get("last_equilibrium_deg")
+    if not problems and _numeric(last):
+        problems = [f"summary drift_limit_angles_deg {limit} = {angle:g}: above the last equilibrium, {last:g} deg (a drift limit is "
+                    "reached at an equilibrium)" for limit, angle in drift.items() if angle is not None and angle > last + 1e-9]
     settings = summary.get("analysis", {})
     if not isinstance(settings, dict):
         return [*problems, "summary analysis must be the tilting settings (a table)"]
