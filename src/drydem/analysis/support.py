@@ -105,11 +105,15 @@ def own_weight_closures(model, block: int) -> tuple[np.ndarray, np.ndarray, np.n
     shape = model.block_shape[block]
     faces = [f for f in range(len(shape.faces)) if not (model.in_plane and abs(shape.face_normals[f, 1]) > SUPPORT_COSINE)]
     area = np.array([shape.face_area(f) for f in faces])
-    stress = model.block_mass[block] * G / area
-    joint = kernel_joint(model.joint)
-    closure = normal_closures(stress, joint) if isinstance(joint, StressJoint) else stress / joint.kn
     heights = shape.vertices @ shape.face_normals[faces].T
-    return closure, heights.max(axis=0) - heights.min(axis=0), area
+    return joint_closures(model, model.block_mass[block] * G / area), heights.max(axis=0) - heights.min(axis=0), area
+
+
+def joint_closures(model, stress: np.ndarray) -> np.ndarray:
+    """u(sigma), m, of the model's joint law at each normal stress (n,) Pa >= 0: sigma / kn for a
+    constant kn (:func:`~drydem.engine.joints.normal_closures` for a stress-dependent law)."""
+    joint = kernel_joint(model.joint)
+    return normal_closures(stress, joint) if isinstance(joint, StressJoint) else stress / joint.kn
 
 
 #: a joint closed by more than this fraction of the thinner of its two blocks has left the small
@@ -122,9 +126,7 @@ def largest_closure(model, contacts: SubContacts) -> tuple[float, int]:
     """The largest closure of a loaded sub-contact of ``contacts`` (u(F_n / A) of the joint law)
     over the thickness of the thinner movable block it joins (its least extent along x, y or z),
     and that block; (0.0, -1) if none is loaded."""
-    stress = np.maximum(contacts.normal_force, 0.0) / contacts.area
-    joint = kernel_joint(model.joint)
-    closure = normal_closures(stress, joint) if isinstance(joint, StressJoint) else stress / joint.kn
+    closure = joint_closures(model, np.maximum(contacts.normal_force, 0.0) / contacts.area)
     thickness = np.array([np.ptp(shape.vertices, axis=0).min() for shape in model.block_shape])
     thickness[~model.block_movable] = np.inf
     ref, inc = contacts.block_ref, contacts.block_inc

@@ -102,7 +102,8 @@ def _strict_needs_a_wall(strict: bool, found: Target) -> None:
 def _fail_if_strict(strict: bool, violations: list[str], found: Target) -> None:
     """Exit 1 if ``strict`` and the wall of ``found`` breaks the brief (``violations``)."""
     if strict and violations:
-        raise click.ClickException(f"{found.path}: breaks the competition brief ({len(violations)} violation{'s' if len(violations) != 1 else ''})")
+        plural = "s" if len(violations) != 1 else ""
+        raise click.ClickException(f"{found.path}: breaks the competition brief ({len(violations)} violation{plural})")
 
 
 def _settle(sim: Simulation) -> None:

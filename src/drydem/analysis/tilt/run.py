@@ -4,7 +4,6 @@ adaptive trial is abandoned (:func:`trial_limit`)."""
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from functools import partial
 
@@ -21,7 +20,7 @@ from drydem.engine.joints import kernel_joint
 from drydem.engine.simulation import Simulation, Snapshot
 from drydem.model.assembly import Model
 from drydem.model.parameters import G
-from drydem.model.rotation import rotation_vectors
+from drydem.model.rotation import rotation_vectors, turn_angles
 from drydem.model.state import State
 
 #: what :meth:`TiltRun.restore` goes back to: the simulation and the blocks lost by then
@@ -186,8 +185,9 @@ class TiltRun:
 
     def toppled(self) -> bool:
         """Whether the monitored block has turned more than :data:`TOPPLED_RAD` from where it
-        was drawn (2 acos |q_w| of its quaternion)."""
-        return 2.0 * math.acos(min(abs(float(self.sim.state.quaternion[self.monitor, 0])), 1.0)) > TOPPLED_RAD
+        was drawn (the identity quaternion: :func:`~drydem.model.rotation.turn_angles`)."""
+        drawn = np.array([[1.0, 0.0, 0.0, 0.0]])
+        return bool(turn_angles(drawn, self.sim.state.quaternion[self.monitor:self.monitor + 1])[0] > TOPPLED_RAD)
 
     def _dropped(self) -> np.ndarray:
         """(nb,) bool: the block, still in the analysis, has a rigid-body drop beyond its
