@@ -132,6 +132,13 @@ def test_a_binary_file_named_csv_is_refused(tmp_path):
     refused(lambda: read_motion(path), f"{path}: not a text file")
 
 
+def test_a_binary_at2_record_is_refused_as_binary(tmp_path):
+    """Found by a hunt: Latin-1 decodes any byte, so a binary .AT2 was refused at "line 3: ''"."""
+    path = tmp_path / "binary.AT2"
+    path.write_bytes(b"title\nevent\n\x00\x01\x02\n\xff\x00")
+    refused(lambda: read_motion(path), f"{path}: not a text file (character 12 is a NUL byte); a PEER .AT2 file is text")
+
+
 def test_a_folder_a_missing_file_and_an_unknown_suffix_are_refused(tmp_path):
     folder = tmp_path / "record.csv"
     folder.mkdir()

@@ -173,6 +173,19 @@ def test_animate_refuses_a_shaking_row_loaded_along_z(wall, tmp_path):
     refused(invoke("animate", folder, "--out", tmp_path / "v.gif"), "line 2: not a frame", "load_direction 'z': must be one of x, y")
 
 
+def test_animate_names_a_shake_runs_video_as_shake_video_does(wall, tmp_path):
+    """Found by a hunt: a shake run was animated to RESULT_DIR/collapse.mp4, beside the
+    shake.mp4 that ``shake --video`` writes."""
+    folder = tmp_path / "run" / "vtk"
+    folder.mkdir(parents=True)
+    for k in range(2):
+        write_vtu(wall, folder / f"blocks_{k:04d}.vtu")
+    (folder / "frames.csv").write_text("frame,time_s,ux_m,load_direction\n0,0,0,x\n1,0.04,0.001,x\n")
+    result = invoke("animate", tmp_path / "run")
+    assert result.exit_code == 0, result.output
+    assert not list((tmp_path / "run").glob("collapse.*")) and list((tmp_path / "run").glob("shake.*"))
+
+
 def test_animate_notes_the_frames_on_disk_that_frames_csv_does_not_list(wall, tmp_path):
     """A frames.csv cut short is drawn as it stands, with a note naming the frames left out (a
     run stopped between a frame and its index, or resumed and ending sooner, leaves such files)."""

@@ -19,7 +19,7 @@ from drydem.analysis.tilt import TiltSettings, tilt_analysis
 from drydem.cli import main
 from drydem.engine.checkpoint import DIGEST, digest
 from drydem.errors import DrydemError
-from drydem.files import WRITING, lock_exclusively, partial_name, unlock
+from drydem.files import WRITING, lock_exclusively, partial_name, replaced_atomically, unlock
 from drydem.io.results import FOLDER_LOCK, RUN_MARK
 
 #: a brick on a base: the cheapest model that tilts (slides at atan 0.5 = 26.6 deg)
@@ -237,6 +237,14 @@ def test_no_run_writes_inside_a_folder_another_run_is_writing_in(tmp_path):
     assert run("tilt", path, "--out", mc / "samples" / "x", "--increment", "2").exit_code == 0
     (tmp_path / "loop").symlink_to(tmp_path / "loop")  # the folders above a link that leads nowhere: no RuntimeError
     assert refused(run("tilt", path, "--out", tmp_path / "loop" / "x"), "loop/x: cannot write results there")
+
+
+def test_a_file_written_where_no_file_can_be_made_is_named_before_its_lock(tmp_path):
+    """Found by a hunt: ``drydem export WD3 /proc/model.dat`` named only /proc/.model.writing.dat."""
+    target = tmp_path / "missing" / "model.dat"
+    with pytest.raises(DrydemError, match=f"^{re.escape(str(target))}: cannot write: .*writing.dat: cannot make the lock file"):
+        with replaced_atomically(target):
+            pass
 
 
 def test_a_lock_is_refused_by_name_where_its_file_cannot_be_made_and_taken_again_once_released(tmp_path):

@@ -227,7 +227,7 @@ CORRUPTIONS = {
     "summary lacks keys": (lambda text: json.dumps(json.loads(text) | {"summary": {}}), "summary must hold"),
     "bad curve": (lambda text: json.dumps(json.loads(text) | {"pushover": [[1, 2]]}), "pushover must be a list of rows of 5 numbers"),
     "a NaN in the curve": (lambda text: json.dumps(json.loads(text) | {"pushover": [[1, float("nan"), 0, 0, 10]]}),
-                           "pushover row 0 [1, nan, 0, 0, 10]: the numbers must be finite"),
+                           "pushover row 0 (1, nan, 0, 0, 10): the numbers must be finite"),
     "another run's": (lambda text: json.dumps(json.loads(text) | {"spec": asdict(OTHER)}), f"are those of run '{OTHER.id}'"),
     "bad spec": (lambda text: json.dumps(json.loads(text) | {"spec": {"kn": 1}}), "spec is not the parameters of a run"),
 }

@@ -146,10 +146,10 @@ def test_a_pushover_csv_with_a_field_past_the_csv_limit_is_named_corrupt():
 
 @pytest.mark.parametrize("content, message", [
     ("", "not a pushover curve"),
-    (f"{','.join(PUSHOVER_COLUMNS)}\n0,0,nan,0,0,1\n", "pushover row 0 [0.0, nan, 0.0, 0.0, 1.0]: the numbers must be finite"),
-    (f"{','.join(PUSHOVER_COLUMNS)}\n1e300,0,0,0,0,1\n", "pushover row 0 [1e+300, 0.0, 0.0, 0.0, 1.0]: the numbers must be finite, the tilt an angle in [0, 90] deg"),
+    (f"{','.join(PUSHOVER_COLUMNS)}\n0,0,nan,0,0,1\n", "pushover row 0 (0, nan, 0, 0, 1): the numbers must be finite"),
+    (f"{','.join(PUSHOVER_COLUMNS)}\n1e300,0,0,0,0,1\n", "pushover row 0 (1e+300, 0, 0, 0, 1): the numbers must be finite, the tilt an angle in [0, 90] deg"),
     # found by a hunt: fractional cycles and rows in reverse order were drawn
-    (f"{','.join(PUSHOVER_COLUMNS)}\n0,0,0,0,0,3.5\n", "pushover row 0 [0.0, 0.0, 0.0, 0.0, 3.5]: the numbers must be finite, the tilt "
+    (f"{','.join(PUSHOVER_COLUMNS)}\n0,0,0,0,0,3.5\n", "pushover row 0 (0, 0, 0, 0, 3.5): the numbers must be finite, the tilt "
      "an angle in [0, 90] deg and the cycles a whole number"),
     (f"{','.join(PUSHOVER_COLUMNS)}\n1,0,0,0,0,1\n0,0,0,0,0,1\n", "pushover row 1: tilt 0 deg, not above the row before's 1: the tilts must increase"),
 ])

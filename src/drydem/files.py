@@ -141,7 +141,7 @@ def replaced_atomically(path: str | Path, *, replace: bool = True):
     path = Path(path)
     temporary = partial_name(path)
     busy = f"{path}: another drydem process is writing it; wait for it to end, or give another name"
-    with held(partial_name(path, WRITING), busy, OutputTakenError):
+    with held(partial_name(path, WRITING), busy, OutputTakenError, guarding=path):
         try:
             if temporary.is_symlink() or temporary.is_file():
                 temporary.unlink()
@@ -260,10 +260,16 @@ def locked_by_another(path: Path) -> bool:
 
 
 @contextmanager
-def held(path: Path, busy: str, error: type[DrydemError] = DrydemError) -> Iterator[None]:
+def held(path: Path, busy: str, error: type[DrydemError] = DrydemError, *, guarding: Path | None = None) -> Iterator[None]:
     """``path`` locked (:func:`lock_exclusively`) for the block; ``error(busy)`` if another
-    process holds it."""
-    fd = lock_exclusively(path)
+    process holds it. A lock that cannot be made names the file it is ``guarding`` first, if
+    given (found by a hunt: an export into a folder where no file can be made named only the lock)."""
+    try:
+        fd = lock_exclusively(path)
+    except DrydemError as exc:
+        if guarding is None:
+            raise
+        raise DrydemError(f"{guarding}: cannot write: {exc}") from None
     if fd is None:
         raise error(busy)
     try:

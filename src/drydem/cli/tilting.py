@@ -327,7 +327,7 @@ def _fps(ctx, param, value):
 
 @main.command()
 @click.argument("result_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
-@click.option("--out", "-o", type=click.Path(dir_okay=False), callback=out_path, help="Video file, .mp4 or .gif (default: RESULT_DIR/collapse.mp4).")
+@click.option("--out", "-o", type=click.Path(dir_okay=False), callback=out_path, help="Video file, .mp4 or .gif (default: RESULT_DIR/collapse.mp4, or shake.mp4 for a shake run).")
 @click.option("--fps", type=PLAIN_FLOAT, default=8.0, show_default=True, callback=_fps,
               help="Frames per second, 0.1 to 100 (10 s a frame to the fastest a GIF can show: it counts in hundredths of a second).")
 @click.option("--overwrite", is_flag=True, help="Replace the video if it exists (else an existing file is kept and the command fails).")
@@ -341,7 +341,21 @@ def animate(result_dir: Path, out: Path | None, fps: float, overwrite: bool) -> 
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     folder = result_dir / "vtk" if (result_dir / "vtk").is_dir() else result_dir
-    _render(folder, out or result_dir / "collapse.mp4", fps=fps, overwrite=overwrite)
+    _render(folder, out or _default_video(result_dir, folder), fps=fps, overwrite=overwrite)
+
+
+def _default_video(result_dir: Path, series: Path) -> Path:
+    """RESULT_DIR/shake.mp4 for a shaking-table series (its frames.csv has a time_s column), as
+    shake --video names it, else RESULT_DIR/collapse.mp4, as tilt --video (found by a hunt: a
+    shake run was animated to collapse.mp4). A series that cannot be read is given a tilt's
+    name: rendering it then says why."""
+    from drydem.files import read_text
+
+    try:
+        header = read_text(series / "frames.csv", "frames.csv is CSV text").partition("\n")[0]
+    except DrydemError:
+        header = ""
+    return result_dir / ("shake.mp4" if "time_s" in header.strip().split(",") else "collapse.mp4")
 
 
 def _render(folder: Path, path: Path, *, fps: float, overwrite: bool = True) -> None:

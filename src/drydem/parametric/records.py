@@ -218,7 +218,8 @@ def _curve_problem(curve) -> str | None:
         return f"pushover must be a list of rows of {CURVE_COLUMNS} numbers (tilt, ux, uz, drift, cycles)"
     for k, (tilt, ux, uz, drift, cycles) in enumerate(curve):
         if not all(map(math.isfinite, (tilt, ux, uz, drift, cycles))) or tilt not in ANGLE or cycles < 0 or cycles % 1:
-            return (f"pushover row {k} {[tilt, ux, uz, drift, cycles]}: the numbers must be finite, the tilt an angle in [0, 90] "
+            row = ", ".join(f"{value:g}" for value in (tilt, ux, uz, drift, cycles))
+            return (f"pushover row {k} ({row}): the numbers must be finite, the tilt an angle in [0, 90] "
                     "deg and the cycles a whole number, none or more")
         if k and tilt <= curve[k - 1][0]:  # found by a hunt: rows in reverse order were drawn
             return f"pushover row {k}: tilt {tilt:g} deg, not above the row before's {curve[k - 1][0]:g}: the tilts must increase"

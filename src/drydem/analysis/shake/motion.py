@@ -416,9 +416,14 @@ def _check_file(path: Path, kind: str) -> None:
 
 
 def _read_text(path: Path, kind: str, encoding: str) -> str:
-    """The text of ``path``; a ModelError naming it if it is missing, a folder or unreadable (:func:`~drydem.files.read_text`)."""
+    """The text of ``path``; a ModelError naming it if it is missing, a folder or unreadable
+    (:func:`~drydem.files.read_text`), or binary: a NUL byte, which Latin-1 decodes like any
+    other (found by a hunt: a binary .AT2 was refused at "line 3: ''")."""
     _check_file(path, kind)
-    return read_text(path, f"a {kind} file is text", encoding=encoding)
+    text = read_text(path, f"a {kind} file is text", encoding=encoding)
+    if (nul := text.find("\0")) >= 0:
+        raise ModelError(f"{path}: not a text file (character {nul} is a NUL byte); a {kind} file is text")
+    return text
 
 
 def _number(text: str, where: str) -> float:
