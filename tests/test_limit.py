@@ -115,6 +115,25 @@ def test_non_associative_never_exceeds_associative(case):
     assert non_associative.history[0] == pytest.approx(associative.load_multiplier)
 
 
+@pytest.mark.parametrize("supports", [dd.Supports(), dd.Supports(fix_y=True)], ids=["3D", "in-plane"])
+def test_a_tension_beyond_the_coulomb_apex_adds_nothing_associative_or_not(supports):
+    """|T| <= c A + mu N holds no shear at N < -c A / mu, so a tension strength counts up to c / mu
+    (README, Joint law). Found by a hunt: LA-NA took the whole tension, 25 % above b / h for a
+    slender block without cohesion, and never converged. Without cohesion: b / h = 0.25, the
+    closed form of toppling; with it, the multiplier of t = 3 c / mu is that of t = c / mu."""
+    for cohesion, tensions in ((0.0, (0.0, 1e3)), (500.0, (500.0, 1500.0))):
+        joints = [dd.JointMaterial(kn=1e10, ks=1e10, friction=1.0, cohesion=cohesion, tension=t) for t in tensions]
+        results = [limit_analysis(stack_model([0.04], size_xy=(0.01, 0.012), joint=joint, supports=supports), settings)
+                   for joint in joints for settings in (LimitSettings(), NA)]
+        assert all(result.converged for result in results)
+        lams = [result.load_multiplier for result in results]
+        assert lams == pytest.approx([lams[0]] * 4, rel=1e-6)
+        if cohesion == 0.0:
+            assert lams[0] == pytest.approx(0.25, rel=1e-6)
+        else:
+            assert lams[0] > 0.25 * 1.2  # the capped tension holds the heel down
+
+
 def test_friction_without_dilatancy_lowers_the_capacity_of_a_competition_wall():
     # the paper's Table 2: LA-NA is below LA-A for six of the seven walls; for the WD6
     # reconstruction the piers' sliding under the lintel costs 2.7 deg (measured: 14.5 -> 11.8)

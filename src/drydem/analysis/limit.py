@@ -225,7 +225,9 @@ def limit_analysis(model: Model, settings: LimitSettings = LimitSettings(), *,
     joint, weight = model.joint, problem.weight
     friction = joint.friction
     cohesion = joint.cohesion * problem.area / weight
-    tension = joint.tension * problem.area / weight
+    # the Coulomb cone's apex: a tension beyond c / mu leaves no shear capacity, so no point holds
+    # more (found by a hunt: LA-NA took the uncapped tension, 7.8-25 % above LA-A)
+    tension = np.minimum(joint.tension * problem.area / weight, cohesion / friction)
 
     cone = EXACT_CONE and problem.n_tangents == 2
     solve, program, solver = (_solve_cone, "SOCP", "Clarabel") if cone else (_solve, "LP", "HiGHS")
@@ -338,16 +340,16 @@ def _solve(problem: _Problem, *, friction: float, cohesion: np.ndarray, tension:
 
     Shear limits: T inside the polygon (2 sides in-plane, :data:`PYRAMID_SIDES` in 3D, a vertex
     along t1) of circumradius cohesion + friction N, N >= -tension; or, with ``capacity``, of
-    circumradius capacity (fixed: no dependence on N, no dilatancy), N >= -tension.
+    circumradius capacity (fixed: no dependence on N, no dilatancy), N >= -tension; ``tension``
+    at most cohesion / friction (the cone's apex, as :func:`limit_analysis` caps it).
 
     The admissible set of each point is written by its generators rather than its facets (the
     same set, so the same LP optimum; only the equilibrium rows are rows): a point's force is
 
         f = -floor n + sum_s beta_s (n + friction v_s) + w,   beta_s >= 0,  w in radius * polygon,
 
-    v_s the polygon's unit vertices; associative: floor = min(tension, cohesion / friction) (the
-    cone's apex cuts off a larger tension) and radius = cohesion - friction floor >= 0;
-    non-associative: one ray n, floor = tension, radius = capacity. In-plane, w is one column
+    v_s the polygon's unit vertices; floor = tension; associative: radius = cohesion - friction
+    floor >= 0; non-associative: one ray n, radius = capacity. In-plane, w is one column
     bounded by +-radius; in 3D, w = sum_s gamma_s v_s, gamma_s >= 0, sum_s gamma_s <= radius (one
     row per point with radius > 0: none with the default zero cohesion and tension). The facet
     form had 2 (3D: 16) inequality rows per point besides the ~3 (6) equilibrium rows per block:
@@ -370,12 +372,12 @@ def _solve(problem: _Problem, *, friction: float, cohesion: np.ndarray, tension:
             total = total + part
         return total if cols is None else total[:, cols]
 
+    floor = tension
     if capacity is None:
-        floor = np.minimum(tension, cohesion / friction)
         radius = np.maximum(cohesion - friction * floor, 0.0)
         rays = [b_normal + along(s, friction) for s in range(sides)]
     else:
-        floor, radius = tension, capacity
+        radius = capacity
         rays = [b_normal]
     n_rays = len(rays)
     sheared = np.flatnonzero(radius > 0)
