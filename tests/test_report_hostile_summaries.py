@@ -164,6 +164,17 @@ def test_a_pushover_csv_empty_or_with_a_nan_or_an_absurd_tilt_or_out_of_order_is
     assert "1 runs recorded (0 failed)" in text and GOOD_TILT_ROW in text
 
 
+def test_a_pushover_row_at_or_past_the_stop_displacement_is_named_corrupt(tmp_path):
+    """A tilt ends where the monitored block reaches its stop displacement, at rest there or not
+    (drydem.analysis.tilt.run), so no equilibrium row of pushover.csv is there (ux 1e-4 t m here)."""
+    run_folder(tmp_path, "good", changed(tilt_summary(), ("analysis", "stop_displacement_m"), 0.1))
+    bad = run_folder(tmp_path, "past", changed(tilt_summary(), ("analysis", "stop_displacement_m"), 0.001))
+    stderr, text = report(tmp_path)
+    assert (f"corrupt record left out: {bad.parent / 'pushover.csv'}: pushover row 10: ux 0.001 m, at or past the run's stop "
+            "displacement 0.001 m, where it ended: no equilibrium is recorded there") in stderr
+    assert "1 runs recorded (0 failed)" in text and GOOD_TILT_ROW in text
+
+
 def test_a_pushover_csv_cut_short_of_the_summary_s_equilibria_is_named_corrupt(tmp_path):
     """Found by a hunt: a pushover.csv cut to 49 of its 201 rows was drawn up to 4.8 deg beside
     tables saying 20.0 deg. The summary records one row per equilibrium state (25 here)."""

@@ -360,11 +360,17 @@ def run_folder_record(folder: Path) -> dict | None:
 def _rows_problem(summary: dict, curve: list) -> str | None:
     """A tilt's pushover.csv without one row per equilibrium state its summary records, or None
     (found by a hunt: a pushover.csv cut to 49 of its 201 rows was drawn beside the tables of
-    the whole run). A summary that records no count (a drydem before it) is not checked."""
+    the whole run), or with a row at or past the stop displacement (summary analysis
+    stop_displacement_m). What a summary does not record (a drydem before it) is not checked."""
     states = summary.get("equilibrium_states")
     if isinstance(states, int) and not isinstance(states, bool) and states != len(curve):
         return (f"{len(curve)} rows, where summary.json records {states} equilibrium states (one row each): cut short or "
                 "edited by hand?")
+    stop = summary["analysis"].get("stop_displacement_m")
+    past = [k for k, row in enumerate(curve) if _numeric(stop) and abs(row[1]) >= stop]
+    if past:  # the run ends at the stop displacement, equilibrium or not (drydem.analysis.tilt.run)
+        return (f"pushover row {past[0]}: ux {curve[past[0]][1]:g} m, at or past the run's stop displacement {stop:g} m, where "
+                "it ended: no equilibrium is recorded there")
     return None
 
 
