@@ -137,9 +137,9 @@ def model_to_dict(model: Model) -> dict:
             entry["density"] = float(rho)
         lo, hi = shape.vertices.min(0), shape.vertices.max(0)
         if np.isclose(shape.volume, np.prod(hi - lo), rtol=1e-12):
-            entry["box"] = {"min": _rounded(lo), "max": _rounded(hi)}
+            entry["box"] = {"min": lo.tolist(), "max": hi.tolist()}
         else:
-            entry["vertices"] = [_rounded(v) for v in shape.vertices]
+            entry["vertices"] = shape.vertices.tolist()
         blocks.append(entry)
     data["block"] = blocks
     return data
@@ -167,11 +167,6 @@ def save_model(model: Model, path: str | Path, *, header: str = "") -> None:
     for entry in data["block"]:
         lines += ["", "[[block]]"] + [f"{k} = {_toml(v)}" for k, v in entry.items()]
     write_text(path, "\n".join(lines).lstrip("\n") + "\n")
-
-
-def _rounded(values) -> list[float]:
-    """Coordinates to 12 significant digits (drops the 1e-17 noise of float arithmetic)."""
-    return [float(f"{c:.12g}") for c in values]
 
 
 def _toml(value) -> str:
