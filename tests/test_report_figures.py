@@ -165,3 +165,20 @@ def test_a_building_mechanism_draws_lost_blocks_faded_on_one_scale_with_the_lege
     legend = fig.legends[0].get_window_extent()
     assert f"monitored: {monitored}" in texts(fig) and LOST_STYLE["label"] in texts(fig)
     assert not any(legend.overlaps(ax.get_window_extent()) for ax in panels)
+
+
+def test_a_log_axis_reads_its_powers_of_ten_while_a_dollar_in_a_name_stays_text(tmp_path):
+    """Found by a hunt: plain_text turned off mathtext in the tick labels of the report's kn
+    axes too, which then read $\\mathdefault{10^{8}}$; a $ in a name is still no formula."""
+    from drydem.report.plots import new_figure, saved
+
+    fig = new_figure()
+    ax = fig.add_subplot()
+    ax.plot([3e7, 1e8, 1e9], [1.0, 0.8, 0.6], label="a$^$b")
+    ax.set(xscale="log", title="wall a$^$b")
+    ax.legend()
+    saved(fig, tmp_path / "log.png")
+    labels = [label for label in ax.get_xticklabels() if label.get_text()]
+    assert labels and all(label.get_parse_math() for label in labels)
+    assert "$\\mathdefault{10^{8}}$" in [label.get_text() for label in labels]
+    assert not ax.title.get_parse_math() and not ax.get_legend().get_texts()[0].get_parse_math()

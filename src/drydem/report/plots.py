@@ -74,12 +74,16 @@ def plain_text(fig) -> None:
     mathtext (a $ in a file or block name is no formula: found by a hunt, a model file named
     ``a$^$.toml`` made every figure raise matplotlib's ParseSyntaxException), and a file name's
     bytes that are not UTF-8 (Python's surrogate escapes, which FreeType refuses: a TypeError)
-    shown as "?"."""
+    shown as "?". A text still empty is a tick label its axis' formatter writes when the figure is
+    drawn: numbers, in mathtext by design (a log axis' 10^8), so it is left to be parsed (found by
+    a hunt: the report's kn axes read $\\mathdefault{10^{8}}$)."""
     from matplotlib.text import Text
 
     for text in fig.findobj(Text):
-        text.set_parse_math(False)
         written = text.get_text()
+        if not written:
+            continue
+        text.set_parse_math(False)
         shown_text = written.encode("utf-8", "replace").decode("utf-8")
         if shown_text != written:
             text.set_text(shown_text)
