@@ -450,3 +450,20 @@ def test_a_blank_monitor_name_is_refused_when_the_settings_are_made():
 
     with pytest.raises(dd.ModelError, match=r"tilt setting monitor = '': must be a block name"):
         TiltSettings(monitor="")  # found by a hunt: refused only later, as "no block named ''"
+
+
+def test_the_drift_is_the_displacement_since_the_wall_stood_under_its_own_weight():
+    """A tilting table's transducers are zeroed once the wall stands, and 3DEC's displacements
+    reset after the initial equilibrium: the drift (and the EC8 angles read from it) is the
+    displacement the tilt caused. WD1 (kn 3e7) settles ~0.1 mm back under its own weight, its
+    pushover's first row, which the drift was measured past (found by a hunt: an imperfect
+    pier that settled 0.66 mm sideways reached every drift limit at 0 deg)."""
+    from drydem.io.target import load_target
+
+    result = tilt_analysis(load_target("WD1").model, TiltSettings(increment_deg=2.0, adaptive=False))
+    tilt, ux = np.array([[r.tilt_deg, r.ux_m] for r in result.records]).T
+    assert abs(ux[0]) > 5e-5  # the settlement under its own weight moved the monitored block sideways
+    since = (ux - ux[0]) / result.wall_height_m
+    assert result.records[0].drift == 0.0
+    np.testing.assert_allclose([r.drift for r in result.records], since, rtol=0.0, atol=1e-15)
+    assert result.drift_limit_angles_deg == drift_limit_angles(tilt, since)

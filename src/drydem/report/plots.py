@@ -99,15 +99,16 @@ DRIFT_STYLES = {0.005: ("tab:purple", ":"), 0.0075: ("tab:brown", "-."), 0.01: (
 
 
 def pushover_drawing(result: TiltResult, *, title: str = ""):
-    """The pushover curve, a Figure: tilt angle against the monitored horizontal displacement,
-    mm; the EN 1998-1 4.4.3.2 drift limits (lines at limit x wall height) named by the
+    """The pushover curve, a Figure: tilt angle against the monitored horizontal displacement
+    since the tilt began (from the first record's, as the drift: :class:`~drydem.analysis.tilt.Record`), mm; the EN
+    1998-1 4.4.3.2 drift limits (lines at limit x wall height) named by the
     buildings they are for (:data:`~drydem.analysis.drift.EC8_DRIFT_MEANINGS`), each with the
     angle at which the curve first reaches it, marked on the curve, or "not reached"; the
     blocks lost on the way (:func:`draw_lost_blocks`), so that a plateau where bricks fell is
     not read as ductility; the collapse angle."""
     fig = new_figure(figsize=(7.2, 6.4), layout="constrained")
     ax = fig.subplots()
-    ux_mm = np.array([r.ux_m for r in result.records]) * 1e3
+    ux_mm = (np.array([r.ux_m for r in result.records]) - result.records[0].ux_m) * 1e3 if result.records else np.zeros(0)
     tilt = np.array([r.tilt_deg for r in result.records])
     ax.plot(ux_mm, tilt, "-", marker="." if len(tilt) < 60 else None, color="tab:blue", label="equilibrium states")
     angles = result.drift_limit_angles_deg
@@ -126,7 +127,7 @@ def pushover_drawing(result: TiltResult, *, title: str = ""):
         ax.axhline(result.collapse_angle_deg, color="tab:red", linewidth=1, label=f"collapse {result.collapse_angle_deg:.2f} deg")
     ylabel = "tilt angle (deg)" if result.settings.loading == "tilt" else "atan(load multiplier) (deg)"
     along = "" if result.settings.load_direction == 0 else " along y"
-    ax.set(xlabel=f"horizontal displacement of {result.monitored_block}{along} (mm)", ylabel=ylabel, title=title)
+    ax.set(xlabel=f"horizontal displacement of {result.monitored_block}{along} since 0 deg (mm)", ylabel=ylabel, title=title)
     ax.set_xlim(left=min(0.0, ux_mm.min(initial=0.0)))
     ax.set_ylim(bottom=0.0)
     ax.grid(alpha=0.3)

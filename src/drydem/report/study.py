@@ -510,7 +510,7 @@ def _run_curves(ax, runs: list[dict]) -> bool:
     for run, setting in zip(runs, settings):
         _plot_pushover(ax, run, ", ".join(setting[key] if key in ("joints", "protocol") else f"{key} {setting[key]}" for key in differ))
     _drift_lines(ax, runs[-1]["summary"]["wall_height_m"])
-    ax.set(xlabel="monitored displacement (mm)", ylabel="tilt (deg)", xlim=(0, None))
+    ax.set(xlabel="monitored displacement since 0 deg (mm)", ylabel="tilt (deg)", xlim=(0, None))
     _legend(ax)
     return True
 
@@ -752,9 +752,11 @@ def _stiffness(ax, runs: Runs, paper: dict) -> bool:
 
 
 def _plot_pushover(ax, run: dict, label: str) -> None:
-    """A run's pushover curve: tilt (deg) against the monitored displacement (mm)."""
+    """A run's pushover curve: tilt (deg) against the monitored displacement since the tilt began
+    (from its first row's, as the drift: :class:`~drydem.analysis.tilt.Record`), mm (found by a
+    hunt: WD1, which settles 0.11 mm back under its own weight, was drawn from 0.76 deg on)."""
     curve = np.array(run["pushover"])
-    ax.plot(curve[:, 1] * 1e3, curve[:, 0], label=label)
+    ax.plot((curve[:, 1] - curve[0, 1]) * 1e3, curve[:, 0], label=label)
 
 
 def _drift_lines(ax, height_m: float | None) -> None:
@@ -775,7 +777,7 @@ def _pushover(axes, runs: Runs, designs: list[str]) -> bool:
             height = run["summary"]["wall_height_m"]
         _drift_lines(ax, height)
         drew |= height is not None
-        ax.set(title=d, xlabel="monitored displacement (mm)", ylabel="tilt (deg)", xlim=(0, None))
+        ax.set(title=d, xlabel="monitored displacement since 0 deg (mm)", ylabel="tilt (deg)", xlim=(0, None))
         _legend(ax)
     return drew
 

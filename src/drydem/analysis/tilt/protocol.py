@@ -70,7 +70,7 @@ class TiltProtocol:
         # the checkpoint after the callbacks: an interrupt before it is saved redoes this step
         # on --resume, which hands the callbacks this equilibrium again rather than never
         self.theta = theta
-        self.records.append(self.run.record(theta, cycles))
+        self.records.append(self.run.record(theta, cycles, self.records[0].ux_m if self.records else None))
         self.run.remember(theta)
         if self.on_record is not None:
             self.on_record(self.records[-1])

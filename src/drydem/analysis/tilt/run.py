@@ -204,10 +204,13 @@ class TiltRun:
         """The current state as a :class:`Frame` of ``kind`` at ``theta_deg``."""
         return Frame(kind, theta_deg, self.displacement()[0], self.sim.state.copy(), self.sim.contacts.copy(), self.sim.active.copy())
 
-    def record(self, theta_deg: float, cycles: int) -> Record:
-        """The current state as the :class:`Record` of an equilibrium at ``theta_deg``."""
+    def record(self, theta_deg: float, cycles: int, settled_ux_m: float | None) -> Record:
+        """The current state as the :class:`Record` of an equilibrium at ``theta_deg``, its drift
+        measured from ``settled_ux_m`` (m), the monitored displacement at the equilibrium under
+        the model's own weight (None: this is that equilibrium, of drift 0)."""
         ux, uz = self.displacement()
-        return Record(tilt_deg=theta_deg, ux_m=ux, uz_m=uz, drift=ux / self.height, cycles=cycles)
+        drift = (ux - (ux if settled_ux_m is None else settled_ux_m)) / self.height
+        return Record(tilt_deg=theta_deg, ux_m=ux, uz_m=uz, drift=drift, cycles=cycles)
 
 
 def elastic_closure(model: Model, contacts: SubContacts) -> float:

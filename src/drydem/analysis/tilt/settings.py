@@ -143,8 +143,14 @@ class TiltSettings:
 @dataclass(frozen=True)
 class Record:
     """One equilibrium state of the pushover curve: tilt (deg), the monitored block's
-    displacement along the load direction (``ux_m``: along x, or along y when tilting about x)
-    and vertically (``uz_m``), m, the drift (ux / wall height) and the cycles this step took."""
+    displacement from where it was drawn along the load direction (``ux_m``: along x, or along y
+    when tilting about x) and vertically (``uz_m``), m, the drift and the cycles this step took.
+
+    The drift is the displacement the tilt caused over the wall's height, (ux - ux_0) / height,
+    ux_0 that of the first record, the equilibrium under the model's own weight (0 deg): as a
+    tilting table's transducers are zeroed once the wall stands, and 3DEC's displacements reset
+    after the initial equilibrium (found by a hunt: an imperfect pier that settled 0.66 mm
+    sideways under its own weight reached every drift limit at 0 deg)."""
 
     tilt_deg: float
     ux_m: float
