@@ -110,7 +110,8 @@ def _restored(run: TiltRun, snapshot, saved: dict, records: list[Record]) -> tup
     if unknown:
         raise ModelError(f"its lost blocks {unknown}: not blocks of the model")
     run.sim.restore(snapshot)
-    records += [Record(*row[:4], int(row[4])) for row in saved["records"].tolist()]
+    rows = saved["records"].tolist()  # the drift from ux, as Record defines it (a checkpoint before it measured it from as drawn)
+    records += [Record(tilt, ux, uz, (ux - rows[0][1]) / run.height, int(cycles)) for tilt, ux, uz, _, cycles in rows]
     run.lost = lost
     rest = np.zeros((run.model.n_blocks, 3))
     for th, x, q in zip(saved["previous_theta_deg"], saved["previous_position"], saved["previous_quaternion"]):
