@@ -182,3 +182,16 @@ def test_a_log_axis_reads_its_powers_of_ten_while_a_dollar_in_a_name_stays_text(
     assert labels and all(label.get_parse_math() for label in labels)
     assert "$\\mathdefault{10^{8}}$" in [label.get_text() for label in labels]
     assert not ax.title.get_parse_math() and not ax.get_legend().get_texts()[0].get_parse_math()
+
+
+def test_a_histogram_of_angles_on_the_tilt_s_steps_centres_a_bar_on_each_step():
+    """Found by a hunt: with numpy's "auto" bins the edges fell on 21.5, ... deg, so nine
+    samples at 21.5 deg were drawn in the [21.5, 22.0) bar and one at 23.5 in [23.0, 23.5]."""
+    from drydem.report.plots import histogram_bins
+
+    angles = np.array([21.5] * 9 + [22.0, 23.5])
+    edges = histogram_bins(angles)
+    counts, _ = np.histogram(angles, edges)
+    centres = (edges[:-1] + edges[1:]) / 2
+    assert np.allclose(centres, [21.5, 22.0, 22.5, 23.0, 23.5]) and counts.tolist() == [9, 1, 0, 0, 1]
+    assert histogram_bins(np.array([20.0, 20.3, 21.7, 20.07])) == "auto" and histogram_bins(np.array([3.0, 3.0])) == 1

@@ -451,6 +451,26 @@ def layout_figure(model: Model, path: Path, *, kinds: list[str] | None = None, v
     return saved(fig, path)
 
 
+#: the most bars a histogram of angles on a lattice is drawn with, one per step (more: numpy's "auto")
+MAX_LATTICE_BARS = 60
+
+
+def histogram_bins(angles: np.ndarray):
+    """The bins of a histogram of ``angles``: one bar per step, centred on it, where the distinct
+    angles lie on a lattice of their smallest spacing (tilts' collapse angles are multiples of
+    the increment: with numpy's "auto" bins their edges fell on the values, each drawn in the
+    bar above it but the last, drawn in the bar below; found by a hunt), at most
+    :data:`MAX_LATTICE_BARS`; else numpy's "auto" (one bar for a single value)."""
+    values = np.unique(angles)
+    if values.size < 2:
+        return 1
+    step = float(np.diff(values).min())
+    steps = (values - values[0]) / step
+    if np.abs(steps - np.round(steps)).max() > 1e-6 or steps[-1] >= MAX_LATTICE_BARS:
+        return "auto"
+    return values[0] + step * (np.arange(round(steps[-1]) + 2) - 0.5)
+
+
 def histogram_figure(angles_deg, path: Path, *, title: str = "", mean_deg: float | None = None, p05_deg: float | None = None,
                      experiment: tuple[float, float] | None = None, xlabel: str = "collapse angle (deg)") -> Path:
     """Histogram of the samples' ``angles_deg`` (a Monte Carlo run), with their mean and 5th
@@ -462,7 +482,7 @@ def histogram_figure(angles_deg, path: Path, *, title: str = "", mean_deg: float
     fig = new_figure(figsize=(6.4, 4.4), layout="constrained")
     ax = fig.subplots()
     if angles.size:
-        ax.hist(angles, bins="auto" if angles.size > 1 else 1, color="tab:blue", alpha=0.75, edgecolor="white",
+        ax.hist(angles, bins=histogram_bins(angles), color="tab:blue", alpha=0.75, edgecolor="white",
                 label=f"{angles.size} samples")
     if experiment is not None:
         mean, cov = experiment
