@@ -267,6 +267,21 @@ def test_a_records_folder_or_record_path_taken_by_something_else_is_refused_befo
     assert "runs done" not in result.output and first.is_dir() and not list((out / "runs").glob("*.tmp"))
 
 
+def test_a_sweep_that_left_runs_to_another_sweep_does_not_say_the_study_is_complete(folder):
+    """Found by a hunt: it exited 0, though the other sweep, killed meanwhile, never recorded them."""
+    out = folder / "results"
+    assert invoke("sweep", folder / "small.toml", "--out", out, "--workers", "2").exit_code == 0
+    first = sorted((out / "runs").glob("*.json"))[0]
+    first.unlink()
+    held = claim(out, first.stem)  # another sweep's (a lock is per open file)
+    try:
+        result = invoke("sweep", folder / "small.toml", "--out", out, "--workers", "2")
+    finally:
+        release(out, first.stem, held)
+    refused(result, f"the study is not complete: 1 runs left to another sweep working on {out}")
+    assert "0 runs done (0 failed)" in result.output and not first.exists()
+
+
 def test_more_workers_than_four_a_core_are_refused_naming_the_bound(folder):
     from drydem.parametric.workers import cores
 

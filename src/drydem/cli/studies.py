@@ -78,18 +78,19 @@ def sweep(study_file: str, out: Path | None, workers: int | None, scheduler: str
     for failure in failures:
         click.echo(f"failed: {failure}", err=True)
     click.echo(f"{outcome.finished} runs done ({outcome.failed} failed), {outcome.skipped} skipped; records in {out / 'runs'}")
-    if outcome.elsewhere:
-        click.echo(f"{outcome.elsewhere} runs left to another sweep working on {out} (it holds their claims, runs/*.lock); "
-                   "run this command again once it has finished to check that every run is recorded")
     problems = _incomplete(outcome, out)
     if problems:
         raise click.ClickException("the study is not complete: " + "; ".join(problems))
 
 
 def _incomplete(outcome, out: Path) -> list[str]:
-    """What keeps a sweep's study from being complete, in words: runs failed, now or before, and
-    runs recorded on input files that changed since (not retried)."""
+    """What keeps a sweep's study from being complete, in words: runs failed, now or before, runs
+    recorded on input files that changed since (not retried), and runs left to another sweep
+    (found by a hunt: they exited 0, though a sweep killed meanwhile may never record them)."""
     problems = []
+    if outcome.elsewhere:
+        problems.append(f"{outcome.elsewhere} runs left to another sweep working on {out} (it holds their claims, runs/*.lock); "
+                        "run this command again once it has finished to check that every run is recorded")
     if outcome.failed or outcome.failed_before:
         before = f" and {outcome.failed_before} recorded as failed before" if outcome.failed_before else ""
         problems.append(f"{outcome.failed} runs failed now{before} (each record in {out / 'runs'} holds its error); fix the cause "
