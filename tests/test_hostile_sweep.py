@@ -502,7 +502,10 @@ def test_two_sweeps_on_one_folder_compute_each_run_once(folder):
         for s in sweeps:
             s.kill()
     outputs = [log.read_text() for log in logs]
-    assert [s.returncode for s in sweeps] == [0, 0], outputs
+    # the last to end finds every run recorded; the first may end while the other still runs
+    # some it left to it, and then says the study is not complete yet
+    codes = [s.returncode for s in sweeps]
+    assert 0 in codes and all(code == 0 or "left to another sweep" in text for code, text in zip(codes, outputs)), outputs
     done = [int(re.search(r"(\d+) runs done \(0 failed\)", text).group(1)) for text in outputs]
     assert sum(done) == 12, outputs  # each run computed by one of them
     assert len(load_records(out).valid) == 12 and not list((out / "runs").glob("*.lock"))

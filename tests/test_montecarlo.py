@@ -202,6 +202,29 @@ def test_a_recorded_sample_with_an_angle_out_of_range_is_corrupt_not_averaged_in
     assert len(again.corrupt) == 1 and all(0.0 <= s["collapse_angle_deg"] <= 90.0 for s in again.summary["samples"])
 
 
+def test_a_sample_whose_curve_is_cut_short_is_corrupt_and_a_file_in_a_sample_s_place_refused(tall_brick, tmp_path):
+    """Found by a hunt: a pushover.csv cut to 2 rows was kept as the sample's; a file where a
+    sample's folder goes made every --resume compute the sample, then fail to write it."""
+    wall = load_wall(tall_brick)
+    with ThreadPoolExecutor(1) as pool:
+        monte_carlo(wall, settings(2), tmp_path, pool, target={"name": "tall"})
+    curve = tmp_path / "samples" / "0001" / "pushover.csv"
+    curve.write_text("".join(curve.read_text().splitlines(keepends=True)[:2]))
+    with pytest.raises(MonteCarloError, match=re.escape(f"{curve}: 1 rows, where summary.json records")):
+        read_sample(tmp_path, settings(2), 1)
+    computed = []
+    with ThreadPoolExecutor(1) as pool:
+        again = monte_carlo(wall, settings(2), tmp_path, pool, target={"name": "tall"}, on_sample=lambda e: computed.append(e["index"]))
+    assert computed == [1] and len(again.corrupt) == 1 and len(curve.read_text().splitlines()) > 2
+    shutil.rmtree(tmp_path / "samples" / "0001")
+    (tmp_path / "samples" / "0001").write_text("mine")
+    with pytest.raises(MonteCarloError, match=re.escape(f"{tmp_path / 'samples' / '0001'}: is not a folder but where sample 1 goes; "
+                                                        "move it away")):
+        with ThreadPoolExecutor(1) as pool:
+            monte_carlo(wall, settings(2), tmp_path, pool, target={"name": "tall"})
+    assert (tmp_path / "samples" / "0001").read_text() == "mine"
+
+
 def test_a_samples_folder_that_is_a_link_is_refused_and_the_run_it_leads_to_left_alone(tall_brick, tmp_path):
     """Found by a hunt: a resumed run whose samples/ linked to another run's wrote its new
     samples there, mixing the two runs (the other one's summary still counting its own)."""

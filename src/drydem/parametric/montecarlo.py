@@ -54,7 +54,7 @@ from drydem.masonry.walls import Wall
 from drydem.model.parameters import CALLBACK, FILE_PATH, InstanceOf, Range, check_arguments, field_problems, refuse, shown
 from drydem.parametric.calibrate import wall_angle
 from drydem.parametric.limits import SAMPLES
-from drydem.parametric.records import RecordError, collapse_problem, read_json
+from drydem.parametric.records import RecordError, collapse_problem, read_json, read_pushover
 
 #: the percentile reported as ``p05``
 PERCENTILE = 5.0
@@ -184,8 +184,8 @@ def read_sample(folder: Path, settings: MonteCarloSettings, index: int) -> dict:
         wrong = [key for key, value in expected.items() if sample[key] != json.loads(json.dumps(value))]
         if wrong:
             raise MonteCarloError(f"{path}: its {', '.join(wrong)} are not sample {index}'s")
-        if sample["status"] == "ok" and not (path.parent / "pushover.csv").is_file():
-            raise MonteCarloError(f"{path.parent}: no pushover.csv")
+        if sample["status"] == "ok":  # found by a hunt: a pushover.csv cut to 2 rows was kept
+            read_pushover(path.parent, summary)
         problem = collapse_problem("tilt", summary) if sample["status"] == "ok" else None
         if problem is not None:  # an angle of -40 deg was averaged in
             raise MonteCarloError(f"{path}: {problem}")
@@ -209,13 +209,16 @@ class PendingSamples:
 def pending_samples(folder: Path, settings: MonteCarloSettings) -> PendingSamples:
     """What is recorded in ``folder`` and what is left to run (see :class:`PendingSamples`); the
     folder is listed once (:func:`sample_indices`), not looked up once per sample, so that a
-    large run starts at once."""
+    large run starts at once. MonteCarloError if a sample's place holds something other than a
+    folder (it could not be written there)."""
     recorded, todo, corrupt = {}, [], []
     present = sample_indices(folder)
     for index in range(settings.samples):
         if index not in present:
             todo.append(index)
             continue
+        if not sample_folder(folder, index).is_dir():  # found by a hunt: computed, then not written, at every --resume
+            raise MonteCarloError(f"{sample_folder(folder, index)}: is not a folder but where sample {index} goes; move it away")
         try:
             recorded[index] = read_sample(folder, settings, index)
         except MonteCarloError as exc:

@@ -347,14 +347,25 @@ def run_folder_record(folder: Path) -> dict | None:
                    friction=joint.get("friction"), points=contacts.get("points_per_length"),
                    increment_deg=settings.get("increment_deg") if analysis == "tilt" else None,
                    joint_law=joint_law_text(law) if law.get("model", "constant") != "constant" else None)
-    curve_path = Path(folder) / PUSHOVER_FILE
-    curve = _pushover_csv(curve_path) if analysis == "tilt" else []
-    for named, problem in ((curve_path, _curve_problem(curve) or _rows_problem(summary, curve)),
-                           (path, _result_problem(spec, summary, curve))):
-        if problem is not None:  # a row of the curve is pushover.csv's, not summary.json's
-            raise RecordError(f"{named}: {problem}")
+    curve = read_pushover(folder, summary) if analysis == "tilt" else []
+    problem = _result_problem(spec, summary, curve)
+    if problem is not None:
+        raise RecordError(f"{path}: {problem}")
     return {"id": Path(folder).resolve().name, "spec": asdict(spec), "status": "ok", "error": None, "summary": summary,
             "pushover": curve}
+
+
+def read_pushover(folder: str | Path, summary: dict) -> list[list[float]]:
+    """The pushover curve of the tilt run in ``folder`` whose summary.json holds ``summary`` (its
+    rows: :data:`CURVE_FROM_CSV`); RecordError naming pushover.csv if it cannot be read, or its
+    rows are not a finished run's (:func:`_curve_problem`) or not those its summary records
+    (:func:`_rows_problem`): a row of the curve is pushover.csv's fault, not summary.json's."""
+    path = Path(folder) / PUSHOVER_FILE
+    curve = _pushover_csv(path)
+    problem = _curve_problem(curve) or _rows_problem(summary, curve)
+    if problem is not None:
+        raise RecordError(f"{path}: {problem}")
+    return curve
 
 
 def _rows_problem(summary: dict, curve: list) -> str | None:

@@ -196,8 +196,8 @@ class SweepOutcome:
     """How a sweep went: runs ``finished`` now (``failed`` of them failed), ``skipped`` (validly
     recorded, before the sweep or by another sweep since; ``failed_before`` of them recorded as
     failed before the sweep and not retried; ``changed_before``: {id: files} of them run on
-    input files that changed since, not retried), ``elsewhere`` (being computed by
-    another sweep on the same folder, left to it), ``corrupt`` (the errors of the records found
+    input files that changed since, not retried), ``elsewhere`` (left to another sweep on the
+    same folder, which had not recorded them when this one ended), ``corrupt`` (the errors of the records found
     corrupt, each naming its file: run again, unless left to another sweep)."""
 
     finished: int
@@ -228,7 +228,8 @@ def sweep(runs: Iterable[RunSpec], results: Path, executor: Executor, *, retry_f
     queue = iter(plan.todo)
     window = in_flight or max(len(plan.todo), 1)
     claims: dict[Future, tuple[RunSpec, int]] = {}
-    finished = failed = skipped = elsewhere = 0
+    finished = failed = skipped = 0
+    left: list[RunSpec] = []
     try:
         while True:
             while len(claims) < window and (spec := next(queue, None)) is not None:
@@ -237,7 +238,7 @@ def sweep(runs: Iterable[RunSpec], results: Path, executor: Executor, *, retry_f
                     claims[_submit(executor, spec, fd, results)] = (spec, fd)
                     continue
                 if fd is None:
-                    elsewhere += 1
+                    left.append(spec)
                 else:  # recorded by another sweep since pending() looked
                     release(results, spec.id, fd)
                     skipped += 1
@@ -260,8 +261,11 @@ def sweep(runs: Iterable[RunSpec], results: Path, executor: Executor, *, retry_f
     finally:
         for spec, fd in claims.values():
             release(results, spec.id, fd)
-    return SweepOutcome(finished=finished, skipped=plan.recorded + skipped, failed=failed, failed_before=plan.failed,
-                        elsewhere=elsewhere, corrupt=tuple(str(exc) for exc in plan.corrupt), changed_before=plan.changed)
+    # the runs left to another sweep that it has recorded by now are done (found by a hunt:
+    # each of two sweeps sharing a study said it was not complete)
+    recorded_since = sum(_identity(record_path(results, spec.id)) != plan.seen[spec.id] for spec in left)
+    return SweepOutcome(finished=finished, skipped=plan.recorded + skipped + recorded_since, failed=failed, failed_before=plan.failed,
+                        elsewhere=len(left) - recorded_since, corrupt=tuple(str(exc) for exc in plan.corrupt), changed_before=plan.changed)
 
 
 def records_dataframe(results: Path):
