@@ -189,6 +189,11 @@ def test_an_interrupted_tilt_keeps_its_checkpoint_and_resumes_from_it(tmp_path, 
     assert "collapse angle" not in again.output and (out / "summary.json").read_bytes() == summary
     frames = CliRunner().invoke(main, ["tilt", "perforated_wall", "--out", str(out), "--resume", "--vtk"])
     assert frames.exit_code == 1 and "holds a finished run without a VTK series: --vtk and --video need it run again" in frames.output
+    # found by a hunt: a finished run whose pushover.csv was cut short was said finished and kept
+    (out / "pushover.csv").write_text("".join(csv.read_text().splitlines(keepends=True)[:3]))
+    cut = CliRunner().invoke(main, ["tilt", "perforated_wall", "--out", str(out), "--resume"])
+    assert cut.exit_code == 1 and f"{out / 'pushover.csv'}: 2 rows, where summary.json records" in cut.output
+    assert f"the finished run in {out} is damaged: --overwrite runs it again" in cut.output
 
 
 def test_designs_lists_the_seven_walls_with_their_brief_check():

@@ -134,6 +134,7 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     if resume and (folder / "summary.json").is_file():
+        _check_finished(folder)
         if (vtk or video) and not (folder / "vtk").is_dir():
             raise click.ClickException(f"{folder} holds a finished run without a VTK series: --vtk and --video need it run again "
                                        "(--overwrite instead of --resume)")
@@ -342,6 +343,19 @@ def animate(result_dir: Path, out: Path | None, fps: float, overwrite: bool) -> 
         raise click.ClickException(str(exc)) from None
     folder = result_dir / "vtk" if (result_dir / "vtk").is_dir() else result_dir
     _render(folder, out or _default_video(result_dir, folder), fps=fps, overwrite=overwrite)
+
+
+def _check_finished(folder: Path) -> None:
+    """ClickException if the finished run in ``folder`` is damaged: its summary.json or
+    pushover.csv unreadable or not what the run wrote
+    (:func:`~drydem.parametric.records.run_folder_record`; found by a hunt: a --resume said a
+    run whose pushover.csv was cut short was finished and kept)."""
+    from drydem.parametric.records import RecordError, run_folder_record
+
+    try:
+        run_folder_record(folder)
+    except RecordError as exc:
+        raise click.ClickException(f"{exc}; the finished run in {folder} is damaged: --overwrite runs it again") from None
 
 
 def _default_video(result_dir: Path, series: Path) -> Path:
