@@ -346,7 +346,9 @@ def test_an_unreadable_checkpoint_is_named(tmp_path, content):
     out = tmp_path / "run"
     out.mkdir()
     (out / "checkpoint.npz").write_bytes(content)
-    assert refused(run("tilt", model_file(tmp_path), "--out", out, "--resume"), "checkpoint.npz: not a readable drydem checkpoint")
+    # found by a hunt: the advice was "without --resume", which a run's folder refuses without --overwrite
+    assert refused(run("tilt", model_file(tmp_path), "--out", out, "--resume"), "checkpoint.npz: not a readable drydem checkpoint",
+                   "(on the command line: --overwrite instead of --resume)")
 
 
 def _pair_to_a_missing_block(arrays):

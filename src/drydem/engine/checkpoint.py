@@ -95,4 +95,4 @@ def load_checkpoint(path: Path) -> tuple[Snapshot, dict]:
 def unreadable(path: Path, reason: Exception) -> DrydemError:
     """The error for a checkpoint at ``path`` that cannot be read or resumed, saying why (``reason``) and what to do."""
     return DrydemError(f"{path}: not a readable drydem checkpoint ({type(reason).__name__}: {reason}); "
-                       "start the analysis again without --resume")
+                       "start the analysis again from the beginning (on the command line: --overwrite instead of --resume)")

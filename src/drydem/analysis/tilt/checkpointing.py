@@ -39,7 +39,8 @@ def check_fingerprint(checkpoint: Path, saved: dict, fingerprint: dict[str, str]
     except (KeyError, ValueError):
         before = None
     if not isinstance(before, dict):
-        raise ModelError(f"{checkpoint}: written by another version of drydem (no settings to compare); start again without --resume")
+        raise ModelError(f"{checkpoint}: written by another version of drydem (no settings to compare); start again from the "
+                         "beginning (--overwrite instead of --resume)")
     differ = [f"{k}: {before.get(k, 'absent')} in the checkpoint, {v} now" for k, v in fingerprint.items()
               if before.get(k) != v and not (k == "model" and _same_file(before.get(k), v))]
     if differ:
