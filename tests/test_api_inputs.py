@@ -92,6 +92,24 @@ def test_a_quaternion_that_is_no_rotation_is_refused(model, quaternion, words):
     refused(dd.ModelError, words, call=lambda: dd.Simulation(model, state=state_with(model, quaternion=quaternion)))
 
 
+@pytest.mark.parametrize("state", ["garbage", None, (1, 2, 3, 4)])
+def test_a_state_assigned_to_a_simulation_is_checked(model, state):
+    """Found by a hunt: a text assigned to Simulation.state was a numba TypingError at the next cycle."""
+    sim = dd.Simulation(model)
+    refused(dd.ModelError, "Simulation state = ", "must be a State", call=lambda: setattr(sim, "state", state))
+
+
+def test_a_state_changed_in_place_is_checked_again_before_the_cycles():
+    """Found by a hunt: a zero quaternion written into Simulation.state cycled "to equilibrium"
+    (converged, the state handed back still holding it)."""
+    sim = dd.Simulation(stack_model([BRICK[2]]))
+    sim.state.quaternion[1] = 0.0
+    for call, name in ((sim.cycle_to_equilibrium, "cycle_to_equilibrium"), (lambda: sim.cycle(10), "cycle")):
+        refused(dd.ModelError, f"{name} state.quaternion[1] = [0.0, 0.0, 0.0, 0.0]: must be a unit quaternion", call=call)
+    sim.state.quaternion[1] = [1.0, 0.0, 0.0, 0.0]
+    assert sim.cycle_to_equilibrium().converged
+
+
 def test_a_quaternion_a_little_off_unit_is_normalised_and_one_off_by_round_off_kept():
     model = stack_model([BRICK[2]])
     quaternion = np.array([[1.0 + 1e-14, 0.0, 0.0, 0.0], [0.6 * (1 + 1e-8), 0.8 * (1 + 1e-8), 0.0, 0.0]])

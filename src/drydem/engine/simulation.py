@@ -142,7 +142,7 @@ class Simulation:
         self.damping = Damping(model.solver.damping) if damping is None else _checked(damping, model)
         self.run_cycles = _cycle_function(model, engine)
         self._planar = _planar(model, engine)
-        self.state = State.at_rest(model.block_centroid) if state is None else self.fit_state(state)
+        self.state = State.at_rest(model.block_centroid) if state is None else state
         self.tracker = ContactTracker(model, self.state)
         #: (nb, 3) m: the centroids the cycling started from, the divergence test's origin: a block
         #: released above its base has fallen that far when it lands (:func:`drydem.engine.loop.cycle_loop`)
@@ -218,6 +218,18 @@ class Simulation:
             return None
         return (*closing_motion(self.tracker.contacts, self.state, matrices(self.state.quaternion)), self.timestep)
 
+    @property
+    def state(self) -> State:
+        """The blocks' :class:`~drydem.model.state.State`, which the cycles change in place. One
+        assigned is checked and copied (:meth:`fit_state`; found by a hunt: a text assigned was a
+        numba TypingError); one changed in place is checked again as each :meth:`cycle` and
+        :meth:`cycle_to_equilibrium` starts (a zero quaternion had cycled "to equilibrium")."""
+        return self._state
+
+    @state.setter
+    def state(self, state: State) -> None:
+        self._state = self.fit_state(state)
+
     def fit_state(self, state: State, where: str | None = None) -> State:
         """A checked copy of ``state`` (:func:`~drydem.model.state.checked_state`); for the planar
         kernel, which reads a quaternion as a turn about y (:mod:`drydem.engine.cycle_planar`),
@@ -271,7 +283,7 @@ class Simulation:
             raise ModelError(f"{where} {problem}")
         # every part checked before any is taken: a refused snapshot leaves the simulation as it was
         state, broad_state = self.fit_state(snapshot.state), self.fit_state(snapshot.broad_state, f"{where} broad")
-        self.state = state
+        self._state = state
         t = self.tracker
         t.contacts, t.neighbours = snapshot.contacts.copy(), snapshot.neighbours.copy()
         t.broad_state, t.active = broad_state, snapshot.active.copy()
@@ -335,6 +347,7 @@ class Simulation:
         :data:`CYCLE_COUNT`, and for each other argument of the wrong kind (``gravity``:
         :meth:`_gravity`; ``stop``: None or a function)."""
         where = f"{self.model.source}: cycle"
+        self.fit_state(self._state, where)
         CYCLE_COUNT.check(n, f"{where} n")
         n = int(n)  # a NumPy integer (np.uint64) does not mix with Python's ints in the slices below
         gravity = self._gravity(gravity, "cycle")
@@ -359,6 +372,7 @@ class Simulation:
         """
         solver = self.model.solver
         where = f"{self.model.source}: cycle_to_equilibrium"
+        self.fit_state(self._state, where)
         if max_cycles is None:
             max_cycles = solver.max_cycles
         MAX_CYCLES.check(max_cycles, f"{where} max_cycles")
