@@ -461,7 +461,8 @@ def test_the_histogram_of_a_run_without_a_collapse_angle_leaks_no_matplotlib_war
     ({"folder": 5}, "monte_carlo folder = 5: must be a file path"),
     ({"target": object()}, "monte_carlo target = <object"),
     ({"settings": "overrides"}, "Model.overridden: unknown key(s) ['foo']"),
-], ids=["in-flight", "wall", "executor", "folder", "target", "override"])
+    ({"settings": "imperfections"}, "imperfections height_sd_mm = 1e+308: must be at most"),
+], ids=["in-flight", "wall", "executor", "folder", "target", "override", "imperfections"])
 def test_monte_carlo_refuses_each_argument_of_the_wrong_kind_before_any_sample(tall_brick, tmp_path, change, words):
     """Found by a hunt: in_flight = -1 ran no sample and said one was finished; None for the
     wall or executor was an AttributeError; an unknown override failed every sample, one by one."""
@@ -469,6 +470,8 @@ def test_monte_carlo_refuses_each_argument_of_the_wrong_kind_before_any_sample(t
     if change.get("settings") == "overrides":
         change = {"settings": MonteCarloSettings(samples=1, seed=3, imperfections=Imperfections(height_sd_mm=HEIGHT_SD_MM),
                                                  tilt=TiltSettings(), model_overrides={"foo": 1})}
+    if change.get("settings") == "imperfections":  # found by a hunt: every sample failed, one by one
+        change = {"settings": MonteCarloSettings(samples=1, seed=3, imperfections=Imperfections(height_sd_mm=1e308), tilt=TiltSettings())}
     with ThreadPoolExecutor(1) as pool, pytest.raises(DrydemError, match=re.escape(words)):
         monte_carlo(**({**arguments, "executor": pool} | change))
     assert not (tmp_path / "mc").exists()

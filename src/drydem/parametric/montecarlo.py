@@ -394,12 +394,14 @@ def monte_carlo(wall: Wall, settings: MonteCarloSettings, folder: Path, executor
     (:func:`check_samples_kept`), or the executor loses a sample (the samples finished are
     recorded), or its samples folder is a link (it would mix this run's samples with those of
     the run it leads to). Every argument is checked first (ModelError naming it), and the
-    overrides on the wall's model (which would otherwise fail every sample)."""
+    overrides on the wall's model and the imperfections for its brick (which would otherwise
+    fail every sample; found by a hunt: height_sd_mm = 1e308 did)."""
     check_arguments("monte_carlo", {"wall": InstanceOf(Wall), "settings": InstanceOf(MonteCarloSettings), "folder": FILE_PATH,
                                     "executor": InstanceOf(Executor), "target": InstanceOf(dict), "in_flight": IN_FLIGHT,
                                     "on_sample": CALLBACK, "on_plan": CALLBACK}, optional=("in_flight",), wall=wall, settings=settings,
                     folder=folder, executor=executor, target=target, in_flight=in_flight, on_sample=on_sample, on_plan=on_plan)
     wall.model().overridden(**settings.model_overrides)
+    settings.imperfections.check_for(wall.brick, wall.source)
     folder = Path(folder)
     if (folder / SAMPLES_FOLDER).is_symlink():
         raise MonteCarloError(f"{folder / SAMPLES_FOLDER}: is a link; a run writes its samples in a folder of its own")
