@@ -12,6 +12,7 @@ from click.testing import CliRunner
 
 from drydem.analysis.tilt import TiltSettings, monitored_block, tilt_analysis
 from drydem.cli import main
+from drydem.errors import ModelError
 from drydem.io.model_file import load_model, save_model
 from drydem.io.target import load_target
 from drydem.io.vtk import VtkSeries
@@ -108,6 +109,18 @@ def test_building_large_joints_are_stiff_enough_for_its_walls_to_stand():
     critical = buckling_joint_stiffness(height, LARGE.brick_height_m, LARGE.brick_width_m)
     assert critical == pytest.approx(2.08e10, rel=0.01)  # 12 rho g L^3 / (1.986^3 h t^2), by hand
     assert BUILDINGS["building-large"].joint == FULL_SCALE_JOINT and FULL_SCALE_JOINT.kn >= 2 * critical > 2 * BUILDING_JOINT.kn
+
+@pytest.mark.parametrize("arguments, words", [
+    ((True, 0.06, 0.12), "buckling_joint_stiffness height_m = True: must be a number in (0, 1000] m"),
+    ((9.6, -1.0, 0.12), "buckling_joint_stiffness course_m = -1.0: must be"),
+    ((9.6, 0.06, float("nan")), "buckling_joint_stiffness thickness_m = nan: must be"),
+    ((9.6, 0.06, 0.12, "1800"), "buckling_joint_stiffness density = '1800': must be"),
+])
+def test_the_buckling_stiffness_refuses_what_is_no_length_or_density(arguments, words):
+    """Found by a hunt: True, -1 and NaN gave numbers (-3.1e7 for a negative course), a text a TypeError."""
+    with pytest.raises(ModelError, match=re.escape(words)):
+        buckling_joint_stiffness(*arguments)
+
 
 def test_a_building_exported_is_read_back_the_same(tmp_path):
     model = building_model(TINY)

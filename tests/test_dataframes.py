@@ -5,6 +5,7 @@ how to install it."""
 
 from __future__ import annotations
 
+import re
 import sys
 from dataclasses import asdict
 
@@ -90,7 +91,16 @@ def test_a_results_folder_is_a_table_of_its_runs_with_the_corrupt_ones_named(tmp
 def test_a_results_folder_that_is_not_one_is_refused_by_name(tmp_path):
     with pytest.raises(DrydemError, match=f"{tmp_path / 'missing'}: no such results folder"):
         records_dataframe(tmp_path / "missing")
-    assert records_dataframe(tmp_path).empty  # a folder without runs yet
+    # found by a hunt: a tilt run's folder was an empty table, a file "no such folder", None a TypeError
+    with pytest.raises(DrydemError, match=re.escape(f"{tmp_path}: no runs/ folder, so no sweep's results")):
+        records_dataframe(tmp_path)
+    (tmp_path / "summary.json").write_text("{}")
+    with pytest.raises(DrydemError, match=re.escape(f"{tmp_path / 'summary.json'}: not a folder")):
+        records_dataframe(tmp_path / "summary.json")
+    with pytest.raises(DrydemError, match=re.escape("records_dataframe results = None: must be")):
+        records_dataframe(None)
+    (tmp_path / "runs").mkdir()
+    assert records_dataframe(tmp_path).empty  # a sweep's folder without runs yet
 
 
 def test_a_monte_carlo_run_is_a_table_of_its_samples_with_the_statistics_in_attrs():

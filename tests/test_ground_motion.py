@@ -132,6 +132,12 @@ def test_a_binary_file_named_csv_is_refused(tmp_path):
     refused(lambda: read_motion(path), f"{path}: not a text file")
 
 
+@pytest.mark.parametrize("path", [None, 5])
+def test_a_motion_path_that_is_no_path_is_refused(path):
+    """Found by a hunt: None and 5 were TypeErrors of pathlib's."""
+    refused(lambda: read_motion(path), f"read_motion path = {path}: must be")
+
+
 def test_a_binary_at2_record_is_refused_as_binary(tmp_path):
     """Found by a hunt: Latin-1 decodes any byte, so a binary .AT2 was refused at "line 3: ''"."""
     path = tmp_path / "binary.AT2"

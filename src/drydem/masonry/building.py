@@ -64,8 +64,8 @@ from drydem.errors import ModelError
 from drydem.masonry.layout import BRICK_SIZE, BrickSize
 from drydem.model.assembly import MAX_BLOCKS, Block, Model, build_model
 from drydem.model.geometry import box
-from drydem.model.parameters import (G, ContactSettings, InstanceOf, JointMaterial, Range, SolverSettings, check_arguments, check_fields,
-                                     refuse)
+from drydem.model.parameters import (DENSITY, G, ContactSettings, InstanceOf, JointMaterial, Range, SolverSettings, check_arguments,
+                                     check_fields, refuse)
 
 #: the narrowest pier, in bricks: room for a lintel's bearing and a bonded brick beside it
 MIN_PIER_BRICKS = 2
@@ -352,7 +352,12 @@ def buckling_joint_stiffness(height_m: float, course_m: float, thickness_m: floa
     stiffness per breadth EI = kn h t^3 / 12 (each joint's rotational stiffness kn t^3 / 12
     smeared over a course h) and its weight q = rho g t, solved for kn:
     kn = 12 rho g L^3 / (1.986^3 h t^2). Returns and piers braced by cross walls stand at less
-    (building-small stands at 0.6 times its full height's value)."""
+    (building-small stands at 0.6 times its full height's value). ModelError naming an argument
+    that is no length in :data:`PLAN_LENGTH` or no density in DENSITY (found by a hunt: True,
+    -1 and NaN gave numbers, a text a TypeError)."""
+    check_arguments("buckling_joint_stiffness", {"height_m": PLAN_LENGTH, "course_m": PLAN_LENGTH, "thickness_m": PLAN_LENGTH,
+                                                 "density": DENSITY},
+                    height_m=height_m, course_m=course_m, thickness_m=thickness_m, density=density)
     return 12.0 * density * G * height_m**3 / (1.986**3 * course_m * thickness_m**2)
 
 

@@ -23,6 +23,7 @@ from pathlib import Path
 
 from drydem.errors import DrydemError
 from drydem.files import lock_exclusively, unlock
+from drydem.model.parameters import FILE_PATH, check_arguments
 from drydem.parametric.records import RecordError, load_records, read_record, record_path, write_record
 from drydem.parametric.study import PULSE_PREFIX, RunSpec, ground_motion
 
@@ -277,11 +278,17 @@ def records_dataframe(results: Path):
     (``collapse_angle_deg``, ``ended_by``, ``max_rotation_rad``, ...; a column holds None or
     NaN where a run's analysis has no such value) and a tilting run's drift-limit angles as
     ``drift_LIMIT_angle_deg``; ``attrs``: ``corrupt``, the corrupt records' errors, left out.
-    DrydemError if ``results`` is not a folder."""
+    ModelError if ``results`` is no path; DrydemError if it is no folder with a runs/ folder
+    (found by a hunt: a tilt run's folder gave an empty table, and a file "no such folder")."""
     from drydem.analysis.dataframes import data_frame
 
-    if not Path(results).is_dir():
-        raise DrydemError(f"{results}: no such results folder (a sweep's --out, which holds runs/ID.json)")
+    check_arguments("records_dataframe", {"results": FILE_PATH}, results=results)
+    results = Path(results)
+    expected = "a sweep's results folder, its --out, holds runs/ID.json"
+    if not results.is_dir():
+        raise DrydemError(f"{results}: {'not a folder' if results.exists() else 'no such results folder'} ({expected})")
+    if not (results / "runs").is_dir():
+        raise DrydemError(f"{results}: no runs/ folder, so no sweep's results ({expected})")
     loaded = load_records(results)
     units = {"kn": "kn_Pa_m", "ks": "ks_Pa_m"}
     rows = []

@@ -26,7 +26,7 @@ from drydem.errors import ModelError
 from drydem.files import PLAIN_NUMBER, read_text
 from drydem.model.geometry import given, real_array
 from drydem.model.parameters import (
-    MAX_ACCELERATION_M_S2, TEXT, G, OneOf, Range, Rule, check_arguments, field_problems, is_number, refuse, shown,
+    FILE_PATH, MAX_ACCELERATION_M_S2, TEXT, G, OneOf, Range, Rule, check_arguments, field_problems, is_number, refuse, shown,
 )
 
 #: the analytic pulses of :func:`pulse`
@@ -608,7 +608,9 @@ def read_motion(path: str | Path, direction: str | None = None) -> GroundMotion:
     """A motion from a file, by its suffix (either case): ``.csv`` (:func:`read_csv_motion`,
     whose columns say the directions) or ``.at2`` (:func:`read_at2`, along ``direction``,
     default "x"). A ModelError names the file if it is missing or a folder, if the suffix is
-    another, or if a direction is given for a CSV file."""
+    another, or if a direction is given for a CSV file, and ``path`` if it is no path (found by
+    a hunt: None was a TypeError)."""
+    check_arguments("read_motion", {"path": FILE_PATH}, path=path)
     path = Path(path)
     _check_file(path, "motion")
     suffix = path.suffix.lower()
