@@ -8,6 +8,7 @@ moves theta_c by less than 0.01 deg (stated discretisation error: 0).
 """
 
 import math
+import re
 import time
 
 import numpy as np
@@ -227,6 +228,19 @@ def test_drift_limit_angles_are_interpolated_on_the_pushover_curve():
     assert angles[0.0075] == pytest.approx(6.5)
     assert angles[0.01] == pytest.approx(6 + 4 / 3)
     assert drift_limit_angles(theta, drift / 100)[0.01] is None
+
+
+@pytest.mark.parametrize("angles, drift, limits, words", [
+    ([0.0, 1.0], [0.0, 0.02, 0.03], (0.01,), "must be 1-D arrays of finite numbers of one length"),
+    ([0.0, math.nan], [0.0, 0.02], (0.01,), "must be 1-D arrays of finite numbers of one length"),
+    ("ab", [0.0, 0.02], (0.01,), "must be 1-D arrays of finite numbers of one length"),
+    ([1.0, 0.0], [0.0, 0.02], (0.01,), "the angles of the states must not decrease"),
+    ([0.0, 1.0], [0.0, 0.02], (True,), "drift_limit_angles limit = True: must be a number in (0, 1]"),
+])
+def test_drift_limit_angles_refuse_what_is_no_pushover_curve(angles, drift, limits, words):
+    """Found by a hunt: arrays of two lengths, NaN, decreasing angles and a limit True gave answers."""
+    with pytest.raises(dd.ModelError, match=re.escape(words)):
+        drift_limit_angles(angles, drift, limits)
 
 
 def test_monitored_block_is_the_top_block_nearest_the_middle(benchmark_wall):

@@ -12,6 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from drydem.errors import ModelError
+from drydem.model.geometry import given, real_array
+from drydem.model.parameters import Range
+
 #: EN 1998-1 4.4.3.2 drift limits (the paper's Section 5)
 EC8_DRIFT_LIMITS = (0.005, 0.0075, 0.01)
 #: what each of :data:`EC8_DRIFT_LIMITS` is for, EN 1998-1 4.4.3.2 (1) a) to c): the buildings whose
@@ -24,14 +28,26 @@ EC8_DRIFT_MEANINGS = {
 #: the drift whose angle is the DLS angle (Savalle et al. 2022, Section 5); summary.json's key for
 #: it is ``repr(DLS_DRIFT)``, "0.01"
 DLS_DRIFT = 0.01
+#: a drift limit: a fraction of the height, at most all of it
+DRIFT_LIMIT = Range(0.0, 1.0, low_open=True)
 
 
 def drift_limit_angles(angle_deg, drift, limits=EC8_DRIFT_LIMITS) -> dict[float, float | None]:
     """Angle at which ``drift`` first reaches each limit, linearly interpolated between the
     recorded equilibrium states (``angle_deg`` increasing); None where it never does.
     Keys are the limits as numbers (0.005, 0.0075, 0.01); the summary file, JSON, writes them
-    as the strings "0.005", "0.0075", "0.01"."""
-    angle, d = np.asarray(angle_deg, float), np.asarray(drift, float)
+    as the strings "0.005", "0.0075", "0.01". ModelError unless ``angle_deg`` and ``drift`` are
+    1-D arrays of finite numbers of one length, the angles never decreasing, and each limit a
+    number in (0, 1] (found by a hunt: NaN, decreasing angles and a limit True gave answers)."""
+    angle, d = real_array(angle_deg), real_array(drift)
+    finite = angle is not None and d is not None and np.isfinite(angle).all() and np.isfinite(d).all()
+    if not finite or angle.ndim != 1 or angle.shape != d.shape:
+        raise ModelError(f"drift_limit_angles angle_deg = {given(angle_deg)}, drift = {given(drift)}: must be 1-D arrays of finite "
+                         "numbers of one length")
+    if (np.diff(angle) < 0).any():
+        raise ModelError(f"drift_limit_angles angle_deg = {given(angle_deg)}: the angles of the states must not decrease")
+    for limit in limits:
+        DRIFT_LIMIT.check(limit, "drift_limit_angles limit")
     result: dict[float, float | None] = {}
     for limit in limits:
         reached = np.flatnonzero(d >= limit)
