@@ -115,6 +115,10 @@ def test_a_monte_carlo_run_is_a_table_of_its_samples_with_the_statistics_in_attr
     assert frame["collapse_angle_deg"].iloc[0] == 18.0 and np.isnan(frame["collapse_angle_deg"].iloc[1])
     assert frame["error"].isna().tolist() == [True, False] and frame["error"].iloc[1] == "ModelError: made up"
     assert frame.attrs["collapse_angle_deg"]["mean"] == 18.0 and frame.attrs["target"] == {"name": "WD3"}
+    # found by a hunt: an angle True went into the frame
+    summary["samples"][1]["dls_angle_deg"] = True
+    with pytest.raises(DrydemError, match=re.escape("samples[1] dls_angle_deg = True: must be a number in [0, 90] deg, or None")):
+        MonteCarloOutcome(finished=2, skipped=0, corrupt=(), summary=summary).to_dataframe()
 
 
 def test_without_pandas_a_dataframe_is_a_drydem_error_saying_how_to_install_it(monkeypatch):

@@ -54,7 +54,7 @@ from drydem.masonry.walls import Wall
 from drydem.model.parameters import CALLBACK, FILE_PATH, InstanceOf, Range, check_arguments, field_problems, refuse, shown
 from drydem.parametric.calibrate import wall_angle
 from drydem.parametric.limits import SAMPLES
-from drydem.parametric.records import RecordError, collapse_problem, read_json, read_pushover
+from drydem.parametric.records import ANGLE, RecordError, collapse_problem, read_json, read_pushover
 
 #: the percentile reported as ``p05``
 PERCENTILE = 5.0
@@ -377,6 +377,10 @@ def samples_dataframe(summary: dict):
     samples = summary["samples"]
     columns = {name: [sample.get(name) for sample in samples] for name in SAMPLE_COLUMNS}
     for name in ("collapse_angle_deg", "dls_angle_deg"):
+        wrong = [k for k, angle in enumerate(columns[name]) if angle is not None and angle not in ANGLE]
+        if wrong:  # found by a hunt: True went into the frame as an angle
+            raise MonteCarloError(f"samples_dataframe summary samples[{wrong[0]}] {name} = {shown(columns[name][wrong[0]])}: "
+                                  f"{ANGLE}, or None")
         columns[name] = [np.nan if angle is None else angle for angle in columns[name]]
     return data_frame(columns, {name: summary[name] for name in ("collapse_angle_deg", "dls_angle_deg", "excluded", "settings", "target")})
 
