@@ -370,12 +370,18 @@ def _unknown_lost_block(arrays):
     arrays |= {"progress.lost_blocks": np.array(["nosuch"]), "progress.lost_tilt_deg": np.array([1.0])}
 
 
+def _records_out_of_order(arrays):
+    # found by a hunt: reversed records resumed, and every drift limit was said reached at 12.30 deg
+    arrays["progress.records"] = np.concatenate([arrays["progress.records"]] * 2)
+
+
 @pytest.mark.parametrize("spoil, message", [
     # block 10**9 in the checkpoint's contacts: the compiled cycle read out of bounds and the
     # interpreter died of a segmentation fault on --resume
     (_pair_to_a_missing_block, "snapshot contacts.pairs: block numbers 0 to 1000000000, not within 0 to 1"),
     (_negative_step, "its next step of -1.0 deg: must be in (0, 0.1] deg (the first step)"),
     (_unknown_lost_block, "its lost blocks ['nosuch']: not blocks of the model"),
+    (_records_out_of_order, "its records: must be rows of finite numbers (tilt, ux, uz, drift, cycles), the tilts increasing"),
     # a remembered equilibrium (the predictor's) turned about x: the in-plane model's planar
     # cycle reads a quaternion as a turn about y, and would have gone on from a wrong state
     (_remembered_equilibrium_turned_about_x,

@@ -111,8 +111,13 @@ def _restored(run: TiltRun, snapshot, saved: dict, records: list[Record]) -> tup
     if unknown:
         raise ModelError(f"its lost blocks {unknown}: not blocks of the model")
     run.sim.restore(snapshot)
-    rows = saved["records"].tolist()  # the drift from ux, as Record defines it (a checkpoint before it measured it from as drawn)
-    records += [Record(tilt, ux, uz, (ux - rows[0][1]) / run.height, int(cycles)) for tilt, ux, uz, _, cycles in rows]
+    rows = np.asarray(saved["records"], dtype=float).reshape(-1, 5)
+    if not np.isfinite(rows).all() or (np.diff(rows[:, 0]) <= 0).any() or (rows[:, 4] < 0).any() or (rows[:, 4] % 1).any() \
+            or (rows.size and abs(rows[-1, 0] - theta) > 1e-9):  # found by a hunt: reversed records resumed to wrong drift angles
+        raise ModelError("its records: must be rows of finite numbers (tilt, ux, uz, drift, cycles), the tilts increasing to its last "
+                         "equilibrium's, the cycles whole, none or more")
+    # the drift from ux, as Record defines it (a checkpoint before it measured it from as drawn)
+    records += [Record(tilt, ux, uz, (ux - rows[0, 1]) / run.height, int(cycles)) for tilt, ux, uz, _, cycles in rows.tolist()]
     run.lost = lost
     rest = np.zeros((run.model.n_blocks, 3))
     for th, x, q in zip(saved["previous_theta_deg"], saved["previous_position"], saved["previous_quaternion"]):
