@@ -184,3 +184,19 @@ def test_a_montecarlo_runs_own_out_folder_is_reported_too(tmp_path):
     (results / "mc-WD3" / "samples").mkdir()
     table = section(build_report(results).markdown.read_text(), "Monte Carlo scatter of the collapse angle")
     assert f"| WD3 | mc-WD3 | 3 | {made['mean']:.2f} |" in table
+
+
+def test_a_monte_carlo_run_without_an_experiment_has_its_cov_bar_alone_on_its_tick():
+    """Found by a hunt: a user's wall's bar sat beside its tick, and the legend named an
+    "experiment" with no bar."""
+    from drydem.report.plots import new_figure
+    from drydem.report.study import MonteCarloRun, _cov_bars
+
+    runs = [MonteCarloRun("wd3", "WD3", {"cov": 0.05}, ""), MonteCarloRun("tall", "tall", {"cov": 0.03}, "")]
+    ax = new_figure().add_subplot()
+    assert _cov_bars(ax, runs, {"cov_percent": {"WD3": 5.5}})
+    centres = [patch.get_x() + patch.get_width() / 2 for patch in ax.patches]
+    assert centres == pytest.approx([-0.2, 1.0, 0.2])  # WD3's two bars about tick 0, tall's alone on tick 1
+    ax = new_figure().add_subplot()
+    _cov_bars(ax, runs[1:], {"cov_percent": {"WD3": 5.5}})
+    assert [text.get_text() for text in ax.get_legend().get_texts()] == ["drydem (imperfections)"]

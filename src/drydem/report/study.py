@@ -609,14 +609,19 @@ def _montecarlo(found: list[MonteCarloRun], unreadable: list[str], figures: Path
 
 
 def _cov_bars(ax, found: list[MonteCarloRun], experiment: dict) -> bool:
-    """Bars: each Monte Carlo run's CoV of the collapse angle beside its wall's experimental CoV (%)."""
+    """Bars: each Monte Carlo run's CoV of the collapse angle beside its wall's experimental CoV
+    (%); a run of a wall without an experiment (a user's) has its bar alone, centred on its tick,
+    and the experiment is in the legend only if one is drawn (found by a hunt: such a run's tick
+    sat at its bar's edge, beside an "experiment" entry with no bar)."""
     walls = [run.wall for run in found]
     labels = [run.wall if walls.count(run.wall) == 1 else f"{run.wall}\n{run.name}" for run in found]
-    computed = [np.nan if run.collapse["cov"] is None else 100 * run.collapse["cov"] for run in found]
-    measured = [experiment["cov_percent"].get(run.wall, np.nan) for run in found]
+    computed = np.array([np.nan if run.collapse["cov"] is None else 100 * run.collapse["cov"] for run in found])
+    measured = np.array([experiment["cov_percent"].get(run.wall, np.nan) for run in found])
     x = np.arange(len(found))
-    ax.bar(x - 0.2, computed, 0.4, label="drydem (imperfections)")
-    ax.bar(x + 0.2, measured, 0.4, label="experiment")
+    paired = ~np.isnan(measured)
+    ax.bar(x - 0.2 * paired, computed, np.where(paired, 0.4, 0.6), label="drydem (imperfections)")
+    if paired.any():
+        ax.bar(x[paired] + 0.2, measured[paired], 0.4, label="experiment")
     ax.set(xticks=x, ylabel="CoV of the collapse angle (%)")
     ax.set_xticklabels(labels, fontsize="small")
     _legend(ax)
