@@ -86,10 +86,13 @@ def test_saving_frames_does_not_change_the_analysis(run, wall):
     np.testing.assert_array_equal(plain.final_state.position, result.final_state.position)
 
 
-def test_save_every_keeps_every_other_equilibrium(wall, tmp_path):
+def test_save_every_keeps_every_other_equilibrium_and_the_last(wall, tmp_path):
+    """The last equilibrium, at the collapse angle (25 deg), is kept before the states past
+    collapse whatever N (found by a hunt: the series jumped from 20 deg to past collapse)."""
     series = VtkSeries(tmp_path, wall, every=2)
-    tilt_analysis(wall, SETTINGS, on_frame=series)
-    assert [float(r["tilt_deg"]) for r in frames(tmp_path) if r["kind"] == "equilibrium"] == [0, 10, 20]
+    result = tilt_analysis(wall, SETTINGS, on_frame=series)
+    assert [float(r["tilt_deg"]) for r in frames(tmp_path) if r["kind"] == "equilibrium"] == [0, 10, 20, 25]
+    assert result.collapse_angle_deg == 25.0 and frames(tmp_path)[4]["kind"] == "past collapse"
 
 
 @pytest.mark.slow

@@ -122,7 +122,8 @@ class VtkSeries:
     displacement along the load, the load's direction ``load_direction``: 0, "x", or 1, "y",
     which a video is seen from) and ``series.json`` (``{"every": N}``). Each frame is written as
     it comes, and the indexes rewritten atomically, so a crash keeps what was written.
-    Equilibrium frames are kept every ``every``-th; the states past collapse all. Use an
+    Equilibrium frames are kept every ``every``-th, and the last before the states past collapse,
+    which are all kept. Use an
     instance as ``tilt_analysis(..., on_frame=series)``.
 
     ``resume_after``: None for a new series; n for the series of a run resumed from a
@@ -143,6 +144,7 @@ class VtkSeries:
         self.folder.mkdir(parents=True, exist_ok=True)
         self.rows: list[tuple[int, str, float, float]] = []
         self.equilibria = 0
+        self._skipped = None  # the last equilibrium frame, when ``every`` left it out
         if resume_after is not None:
             _check_series_every(self.folder, every)
             self.rows = _equilibrium_rows(self.folder / "frames.csv")[:-(-resume_after // every)]
@@ -152,8 +154,15 @@ class VtkSeries:
     def __call__(self, frame) -> None:
         if frame.kind == "equilibrium":
             self.equilibria += 1
-            if (self.equilibria - 1) % self.every:
+            self._skipped = frame if (self.equilibria - 1) % self.every else None
+            if self._skipped is not None:
                 return
+        elif self._skipped is not None:  # the last equilibrium, kept whatever ``every`` (found by a hunt: it was dropped)
+            skipped, self._skipped = self._skipped, None
+            self._write(skipped)
+        self._write(frame)
+
+    def _write(self, frame) -> None:
         k = len(self.rows)
         _write_frame(self.model, self.folder, k, frame)
         self.rows.append((k, frame.kind, frame.tilt_deg, frame.ux_m))
