@@ -3,9 +3,9 @@
 The drift of a wall is the horizontal displacement of its monitored point since the tilt began
 (from its equilibrium under its own weight, at 0 deg) divided by the wall's height
 (:class:`drydem.analysis.tilt.Record`). EN 1998-1 (4.4.3.2) limits the interstorey drift at
-the damage limitation state to 0.5 %, 0.75 % or 1 % depending on the non-structural elements; Savalle et al.
-(2022, Section 5) read the tilt angles at which each is first reached, the 1 % one being
-their DLS angle.
+the damage limitation state to 0.5 %, 0.75 % or 1 % depending on the non-structural elements;
+Savalle et al. (2022, Section 5) read the tilt angles at which each is first reached, the 1 %
+one being their DLS angle.
 """
 
 from __future__ import annotations

@@ -123,8 +123,7 @@ class VtkSeries:
     which a video is seen from) and ``series.json`` (``{"every": N}``). Each frame is written as
     it comes, and the indexes rewritten atomically, so a crash keeps what was written.
     Equilibrium frames are kept every ``every``-th, and the last before the states past collapse,
-    which are all kept. Use an
-    instance as ``tilt_analysis(..., on_frame=series)``.
+    which are all kept. Use an instance as ``tilt_analysis(..., on_frame=series)``.
 
     ``resume_after``: None for a new series; n for the series of a run resumed from a
     checkpoint that holds n equilibrium states (``len(saved["records"])`` of

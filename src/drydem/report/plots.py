@@ -102,8 +102,9 @@ def pushover_drawing(result: TiltResult, *, title: str = ""):
     """The pushover curve, a Figure: tilt angle against the monitored horizontal displacement
     since the tilt began (from the first record's, as the drift:
     :class:`~drydem.analysis.tilt.Record`), mm; the EN 1998-1 4.4.3.2 drift limits (lines at
-    limit x wall height) named by the buildings they are for (:data:`~drydem.analysis.drift.EC8_DRIFT_MEANINGS`), each with the
-    angle at which the curve first reaches it, marked on the curve, or "not reached"; the
+    limit x wall height) named by the buildings they are for
+    (:data:`~drydem.analysis.drift.EC8_DRIFT_MEANINGS`), each with the angle at which the curve
+    first reaches it, marked on the curve, or "not reached"; the
     blocks lost on the way (:func:`draw_lost_blocks`), so that a plateau where bricks fell is
     not read as ductility; the collapse angle."""
     fig = new_figure(figsize=(7.2, 6.4), layout="constrained")
