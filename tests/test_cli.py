@@ -417,3 +417,23 @@ def test_check_settle_notes_joints_closed_by_a_large_fraction_of_a_block(tmp_pat
         result = CliRunner().invoke(main, ["check", str(path), "--settle"])
         assert result.exit_code == 0, result.output
         assert ("note: a joint of 'b0' closes by" in result.output and "of the block's thickness" in result.output) == noted
+
+
+@pytest.mark.parametrize("turn_deg, noted", [(44.0, True), (0.0, False)])
+def test_check_settle_notes_a_block_that_toppled_under_its_own_weight(tmp_path, turn_deg, noted):
+    """Found by a hunt: a 0.1 m cube drawn on its edge, turned 44 deg about y, fell onto its face
+    (its centre of mass is outside the edge), and check --settle called the 49.5 mm move a
+    settlement of 20.7 mm. The same cube drawn on its face settles by micrometres, unnoted."""
+    import numpy as np
+
+    corners = np.array([[x, y, z] for x in (-0.05, 0.05) for y in (-0.05, 0.05) for z in (-0.05, 0.05)])
+    t = np.radians(turn_deg)
+    turned = corners @ np.array([[np.cos(t), 0.0, -np.sin(t)], [0.0, 1.0, 0.0], [np.sin(t), 0.0, np.cos(t)]])
+    turned[:, 2] -= turned[:, 2].min()
+    path = tmp_path / "cube.toml"
+    path.write_text('[joint]\nkn = 1e9\nks = 1e9\nfriction = 0.5\n[[block]]\nname = "base"\nfixed = true\n'
+                    'box = { min = [-0.5, -0.5, -0.1], max = [0.5, 0.5, 0.0] }\n'
+                    f'[[block]]\nname = "cube"\nvertices = {turned.tolist()}\n')
+    result = CliRunner().invoke(main, ["check", str(path), "--settle"])
+    assert result.exit_code == 0, result.output
+    assert ("note: block 'cube' turned" in result.output and "the model does not stand as drawn" in result.output) == noted

@@ -372,6 +372,21 @@ def test_a_run_claimed_by_another_sweep_is_left_to_it_and_a_dead_claim_is_taken_
     assert not list((tmp_path / "runs").glob("*.lock"))
 
 
+def test_a_run_another_sweep_recorded_as_failed_meanwhile_counts_as_failed_not_done(tmp_path, monkeypatch):
+    """Found by a review: it counted as done, so the study was called complete (exit 0)."""
+    monkeypatch.setattr(sweep_module, "run_one", made_up_run)
+    (tmp_path / "runs").mkdir()
+    held = claim(tmp_path, SPEC.id)
+
+    def the_other_sweep_fails_it(spec):
+        write_record(tmp_path, {"id": spec.id, "spec": asdict(spec), "status": "failed", "error": "ModelError: made up"})
+        release(tmp_path, spec.id, held)
+
+    with ThreadPoolExecutor(2) as executor:
+        outcome = sweep([SPEC, OTHER], tmp_path, executor, on_other=the_other_sweep_fails_it)
+    assert (outcome.finished, outcome.skipped, outcome.failed_before, outcome.elsewhere) == (1, 1, 1, 0)
+
+
 def test_a_run_recorded_by_another_sweep_after_this_one_looked_is_not_run_again(tmp_path, monkeypatch):
     monkeypatch.setattr(sweep_module, "run_one", made_up_run)
 

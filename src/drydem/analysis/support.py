@@ -24,7 +24,7 @@ from drydem import compiled_cache
 from drydem.engine.contacts import SubContacts, world_points
 from drydem.engine.joints import StressJoint, kernel_joint, normal_closures
 from drydem.model.parameters import G
-from drydem.model.rotation import matrices
+from drydem.model.rotation import matrices, turn_angles
 
 #: a contact carries its upper block when its normal is within 60 deg of the vertical
 SUPPORT_COSINE = 0.5
@@ -120,6 +120,25 @@ def joint_closures(model, stress: np.ndarray) -> np.ndarray:
 #: closures the zero-thickness joint stands for (found by a hunt: five 0.2 m blocks on kn = 1e5
 #: settled "converged" 19 % below the sum of W / (kn A), the bottom joint closed 196 of 200 mm)
 LARGE_CLOSURE_FRACTION = 0.1
+
+
+#: a turn (rad) and a sideways move (fraction of the block's radius) under the model's own weight
+#: beyond any joint's elastic give: the block toppled or slid into another position
+RIGID_TURN_RAD = np.radians(5.0)
+RIGID_MOVE_FRACTION = 0.1
+
+
+def moved_rigidly(model, state) -> tuple[int, float, float]:
+    """The movable block that turned or moved sideways the most, relative to :data:`RIGID_TURN_RAD`
+    and :data:`RIGID_MOVE_FRACTION` of its radius, from where it was drawn to ``state``, with its
+    turn (rad) and horizontal move (m); block -1 where none went past either (found by a hunt: a
+    cube drawn on its edge toppled 44 deg onto its face under its own weight, and check --settle
+    called that a settlement of 20.7 mm)."""
+    turn = turn_angles(np.tile([1.0, 0.0, 0.0, 0.0], (model.n_blocks, 1)), state.quaternion)
+    move = np.hypot(*(state.position[:, :2] - model.block_centroid[:, :2]).T)
+    excess = np.maximum(turn / RIGID_TURN_RAD, move / (RIGID_MOVE_FRACTION * model.block_radius)) * model.block_movable
+    k = int(np.argmax(excess)) if excess.size else -1
+    return (k, float(turn[k]), float(move[k])) if k >= 0 and excess[k] > 1.0 else (-1, 0.0, 0.0)
 
 
 def largest_closure(model, contacts: SubContacts) -> tuple[float, int]:

@@ -113,7 +113,7 @@ def _settle(sim: Simulation) -> None:
     import numpy as np
     from tqdm import tqdm
 
-    from drydem.analysis.support import LARGE_CLOSURE_FRACTION, dropped_out, largest_closure, lost_drops, too_soft_joints
+    from drydem.analysis.support import LARGE_CLOSURE_FRACTION, dropped_out, largest_closure, lost_drops, moved_rigidly, too_soft_joints
     from drydem.analysis.tilt import TiltSettings
 
     model = sim.model
@@ -146,6 +146,11 @@ def _settle(sim: Simulation) -> None:
                    + more_cycles_advice(model, "raise max_cycles (or check damping) and run again"), err=True)
     top = int(np.argmax(model.block_centroid[:, 2]))
     click.echo(f"settlement      {drop.max() * 1e3:.4g} mm max, top block {model.block_name[top]!r} {drop[top] * 1e3:.4g} mm")
+    moved, turn, move = moved_rigidly(model, sim.state)
+    if moved >= 0 and not fallen:
+        click.echo(f"note: block {model.block_name[moved]!r} turned {np.degrees(turn):.1f} deg and moved {move * 1e3:.4g} mm sideways "
+                   "under its own weight: more than joints give, so it toppled or slid; the model does not stand as drawn, "
+                   "and the equilibrium reached is another", err=True)
     fraction, block = largest_closure(model, sim.contacts)
     if fraction > LARGE_CLOSURE_FRACTION:
         click.echo(f"note: a joint of {model.block_name[block]!r} closes by {fraction:.0%} of the block's thickness: beyond the small "

@@ -196,8 +196,8 @@ def release(results: Path, run_id: str, fd: int) -> None:
 class SweepOutcome:
     """How a sweep went: runs ``finished`` now (``failed`` of them failed), ``skipped`` (validly
     recorded, before the sweep or by another sweep since; ``failed_before`` of them recorded as
-    failed before the sweep and not retried; ``changed_before``: {id: files} of them run on
-    input files that changed since, not retried), ``elsewhere`` (left to another sweep on the
+    failed, before the sweep and not retried or by another sweep since; ``changed_before``: {id:
+    files} of them run on input files that changed since, not retried), ``elsewhere`` (left to another sweep on the
     same folder, which had not recorded them when this one ended), ``corrupt`` (the errors of
     the records found corrupt, each naming its file: run again, unless left to another sweep)."""
 
@@ -229,8 +229,9 @@ def sweep(runs: Iterable[RunSpec], results: Path, executor: Executor, *, retry_f
     queue = iter(plan.todo)
     window = in_flight or max(len(plan.todo), 1)
     claims: dict[Future, tuple[RunSpec, int]] = {}
-    finished = failed = skipped = 0
-    left: list[RunSpec] = []
+    finished = failed = 0
+    left: list[RunSpec] = []  # claimed by another sweep
+    others: list[RunSpec] = []  # recorded by another sweep since pending() looked
     try:
         while True:
             while len(claims) < window and (spec := next(queue, None)) is not None:
@@ -240,9 +241,9 @@ def sweep(runs: Iterable[RunSpec], results: Path, executor: Executor, *, retry_f
                     continue
                 if fd is None:
                     left.append(spec)
-                else:  # recorded by another sweep since pending() looked
+                else:
                     release(results, spec.id, fd)
-                    skipped += 1
+                    others.append(spec)
                 if on_other is not None:
                     on_other(spec)
             if not claims:
@@ -262,11 +263,25 @@ def sweep(runs: Iterable[RunSpec], results: Path, executor: Executor, *, retry_f
     finally:
         for spec, fd in claims.values():
             release(results, spec.id, fd)
-    # the runs left to another sweep that it has recorded by now are done (found by a hunt:
-    # each of two sweeps sharing a study said it was not complete)
-    recorded_since = sum(_identity(record_path(results, spec.id)) != plan.seen[spec.id] for spec in left)
-    return SweepOutcome(finished=finished, skipped=plan.recorded + skipped + recorded_since, failed=failed, failed_before=plan.failed,
-                        elsewhere=len(left) - recorded_since, corrupt=tuple(str(exc) for exc in plan.corrupt), changed_before=plan.changed)
+    # the runs left to another sweep that it has recorded by now count as its records say (found
+    # by a hunt: each of two sweeps sharing a study said it was not complete; by a review: one
+    # the other recorded as failed counted as done)
+    recorded = [*others, *(spec for spec in left if _identity(record_path(results, spec.id)) != plan.seen[spec.id])]
+    statuses = [_recorded_status(results, spec) for spec in recorded]
+    done, failed_there = statuses.count("ok"), statuses.count("failed")
+    return SweepOutcome(finished=finished, skipped=plan.recorded + done + failed_there, failed=failed,
+                        failed_before=plan.failed + failed_there,
+                        elsewhere=len(left) + len(others) - done - failed_there, corrupt=tuple(str(exc) for exc in plan.corrupt),
+                        changed_before=plan.changed)
+
+
+def _recorded_status(results: Path, spec: RunSpec) -> str | None:
+    """The status, "ok" or "failed", of the record another sweep wrote for ``spec``; None if it
+    cannot be read (the run is then not taken as done)."""
+    try:
+        return read_record(record_path(results, spec.id))["status"]
+    except RecordError:
+        return None
 
 
 def records_dataframe(results: Path):
