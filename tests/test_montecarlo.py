@@ -216,6 +216,10 @@ def test_a_sample_whose_curve_is_cut_short_is_corrupt_and_a_file_in_a_sample_s_p
     with ThreadPoolExecutor(1) as pool:
         again = monte_carlo(wall, settings(2), tmp_path, pool, target={"name": "tall"}, on_sample=lambda e: computed.append(e["index"]))
     assert computed == [1] and len(again.corrupt) == 1 and len(curve.read_text().splitlines()) > 2
+    summary_path = tmp_path / "samples" / "0001" / "summary.json"  # found by a review: an AttributeError
+    summary_path.write_text(json.dumps(json.loads(summary_path.read_text()) | {"analysis": "tilt"}))
+    with pytest.raises(MonteCarloError, match=re.escape(f"{summary_path}: ")):
+        read_sample(tmp_path, settings(2), 1)
     shutil.rmtree(tmp_path / "samples" / "0001")
     (tmp_path / "samples" / "0001").write_text("mine")
     with pytest.raises(MonteCarloError, match=re.escape(f"{tmp_path / 'samples' / '0001'}: is not a folder but where sample 1 goes; "

@@ -88,7 +88,8 @@ def test_saving_frames_does_not_change_the_analysis(run, wall):
 
 def test_save_every_keeps_every_other_equilibrium_and_the_last(wall, tmp_path):
     """The last equilibrium, at the collapse angle (25 deg), is kept before the states past
-    collapse whatever N (found by a hunt: the series jumped from 20 deg to past collapse)."""
+    collapse whatever N (found by a hunt: the series jumped from 20 deg to past collapse); a run
+    that ends at its maximum angle has no states past collapse, and keeps every N-th only."""
     series = VtkSeries(tmp_path, wall, every=2)
     result = tilt_analysis(wall, SETTINGS, on_frame=series)
     assert [float(r["tilt_deg"]) for r in frames(tmp_path) if r["kind"] == "equilibrium"] == [0, 10, 20, 25]

@@ -377,7 +377,8 @@ def _rows_problem(summary: dict, curve: list) -> str | None:
     if isinstance(states, int) and not isinstance(states, bool) and states != len(curve):
         return (f"{len(curve)} rows, where summary.json records {states} equilibrium states (one row each): cut short or "
                 "edited by hand?")
-    stop = summary["analysis"].get("stop_displacement_m")
+    analysis = summary.get("analysis")  # a dict in a summary drydem wrote (found by a review: a text was an AttributeError)
+    stop = analysis.get("stop_displacement_m") if isinstance(analysis, dict) else None
     past = [k for k, row in enumerate(curve) if _numeric(stop) and abs(row[1]) >= stop]
     if past:  # the run ends at the stop displacement, equilibrium or not (drydem.analysis.tilt.run)
         return (f"pushover row {past[0]}: ux {curve[past[0]][1]:g} m, at or past the run's stop displacement {stop:g} m, where "
