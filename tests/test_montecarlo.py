@@ -208,6 +208,13 @@ def test_a_sample_whose_curve_is_cut_short_is_corrupt_and_a_file_in_a_sample_s_p
     wall = load_wall(tall_brick)
     with ThreadPoolExecutor(1) as pool:
         monte_carlo(wall, settings(2), tmp_path, pool, target={"name": "tall"})
+    # found by a review: a sample of a drydem that measured the drift from as drawn was resumed with its angles
+    first = tmp_path / "samples" / "0000" / "summary.json"
+    record = json.loads(first.read_text())
+    first.write_text(json.dumps(record | {"drift_limit_angles_deg": dict.fromkeys(record["drift_limit_angles_deg"], 1.5)}))
+    with pytest.raises(MonteCarloError, match=re.escape(f"{first}: summary drift_limit_angles_deg 0.005 = 1.5: its pushover curve gives")):
+        read_sample(tmp_path, settings(2), 0)
+    first.write_text(json.dumps(record))
     curve = tmp_path / "samples" / "0001" / "pushover.csv"
     curve.write_text("".join(curve.read_text().splitlines(keepends=True)[:2]))
     with pytest.raises(MonteCarloError, match=re.escape(f"{curve}: 1 rows, where summary.json records")):

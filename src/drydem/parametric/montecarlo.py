@@ -54,7 +54,7 @@ from drydem.masonry.walls import Wall
 from drydem.model.parameters import CALLBACK, FILE_PATH, InstanceOf, Range, check_arguments, field_problems, refuse, shown
 from drydem.parametric.calibrate import wall_angle
 from drydem.parametric.limits import SAMPLES
-from drydem.parametric.records import ANGLE, RecordError, collapse_problem, read_json, read_pushover
+from drydem.parametric.records import ANGLE, RecordError, collapse_problem, drift_problem, read_json, read_pushover
 
 #: the percentile reported as ``p05``
 PERCENTILE = 5.0
@@ -184,9 +184,8 @@ def read_sample(folder: Path, settings: MonteCarloSettings, index: int) -> dict:
         wrong = [key for key, value in expected.items() if sample[key] != json.loads(json.dumps(value))]
         if wrong:
             raise MonteCarloError(f"{path}: its {', '.join(wrong)} are not sample {index}'s")
-        if sample["status"] == "ok":  # found by a hunt: a pushover.csv cut to 2 rows was kept
-            read_pushover(path.parent, summary)
-        problem = collapse_problem("tilt", summary) if sample["status"] == "ok" else None
+        curve = read_pushover(path.parent, summary) if sample["status"] == "ok" else []  # found by a hunt: one cut to 2 rows was kept
+        problem = (collapse_problem("tilt", summary) or drift_problem(summary, curve)) if sample["status"] == "ok" else None
         if problem is not None:  # an angle of -40 deg was averaged in
             raise MonteCarloError(f"{path}: {problem}")
         return sample_entry(summary)

@@ -22,6 +22,9 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from types import SimpleNamespace
 
+import numpy as np
+
+from drydem.analysis.drift import drift_limit_angles
 from drydem.analysis.tilt.settings import LOADINGS, TILT_AXES
 from drydem.errors import DrydemError, ModelError
 from drydem.files import regular_file
@@ -208,6 +211,35 @@ def _result_problem(spec: RunSpec, summary, curve) -> str | None:
     if problem is not None:
         return problem
     return _curve_problem(curve)
+
+
+#: deg: how far a summary's drift-limit angle may lie from the one its pushover curve gives (the
+#: curve's rows in pushover.csv keep 8 digits; a drift measured from as drawn moved WD1's by 0.46 deg)
+DRIFT_ANGLE_SLACK_DEG = 1e-3
+
+
+def drift_problem(summary: dict, curve: list) -> str | None:
+    """What is wrong with a tilt summary's drift-limit angles, or None: each must be the angle its
+    pushover ``curve`` (rows tilt, ux, ...) gives, within :data:`DRIFT_ANGLE_SLACK_DEG`, the drift
+    measured from the curve's first row, the equilibrium under the wall's own weight
+    (:class:`drydem.analysis.tilt.Record`; found by a review: a Monte Carlo run resumed on samples
+    of a drydem that measured it from as drawn mixed the two in its statistics). A summary
+    without a height, or a limit that is no number, is left to the other checks."""
+    angles, height = summary.get("drift_limit_angles_deg"), summary.get("wall_height_m")
+    if not curve or not isinstance(angles, dict) or not (_numeric(height) and height > 0):
+        return None
+    ux = np.array([row[1] for row in curve])
+    try:
+        limits = [float(limit) for limit in angles]
+        found = drift_limit_angles([row[0] for row in curve], (ux - ux[0]) / height, tuple(limits))
+    except (ValueError, ModelError):
+        return None
+    for (limit, given), expected in zip(angles.items(), (found[value] for value in limits)):
+        if (given is None) != (expected is None) or (expected is not None and abs(given - expected) > DRIFT_ANGLE_SLACK_DEG):
+            shown = "not reached" if expected is None else f"{expected:.4f} deg"
+            return (f"summary drift_limit_angles_deg {limit} = {given}: its pushover curve gives {shown}, the drift measured "
+                    "from the equilibrium at 0 deg (written by a drydem that measured it from as drawn, or edited): run it again")
+    return None
 
 
 def _curve_problem(curve) -> str | None:
