@@ -184,7 +184,8 @@ def read_sample(folder: Path, settings: MonteCarloSettings, index: int) -> dict:
         wrong = [key for key, value in expected.items() if sample[key] != json.loads(json.dumps(value))]
         if wrong:
             raise MonteCarloError(f"{path}: its {', '.join(wrong)} are not sample {index}'s")
-        curve = read_pushover(path.parent, summary) if sample["status"] == "ok" else []  # found by a hunt: one cut to 2 rows was kept
+        # the curve checked against its summary (found by a hunt: one cut to 2 rows was kept)
+        curve = read_pushover(path.parent, summary) if sample["status"] == "ok" else []
         problem = (collapse_problem("tilt", summary) or drift_problem(summary, curve)) if sample["status"] == "ok" else None
         if problem is not None:  # an angle of -40 deg was averaged in
             raise MonteCarloError(f"{path}: {problem}")

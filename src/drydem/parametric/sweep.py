@@ -197,9 +197,10 @@ class SweepOutcome:
     """How a sweep went: runs ``finished`` now (``failed`` of them failed), ``skipped`` (validly
     recorded, before the sweep or by another sweep since; ``failed_before`` of them recorded as
     failed, before the sweep and not retried or by another sweep since; ``changed_before``: {id:
-    files} of them run on input files that changed since, not retried), ``elsewhere`` (left to another sweep on the
-    same folder, which had not recorded them when this one ended), ``corrupt`` (the errors of
-    the records found corrupt, each naming its file: run again, unless left to another sweep)."""
+    files} of them run on input files that changed since, not retried), ``elsewhere`` (left to
+    another sweep on the same folder, which had not recorded them when this one ended),
+    ``corrupt`` (the errors of the records found corrupt, each naming its file: run again,
+    unless left to another sweep)."""
 
     finished: int
     skipped: int
