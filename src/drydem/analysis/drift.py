@@ -32,6 +32,14 @@ DLS_DRIFT = 0.01
 DRIFT_LIMIT = Range(0.0, 1.0, low_open=True)
 
 
+def drifts(ux_m, height_m: float) -> np.ndarray:
+    """The drift of each equilibrium state of a pushover curve, (ux - ux_0) / height: its
+    monitored displacements ``ux_m`` (m, from as drawn) since the first, the equilibrium under
+    the wall's own weight, over the wall's ``height_m`` (m)."""
+    ux = np.asarray(ux_m, dtype=float)
+    return (ux - ux[0]) / height_m if ux.size else ux
+
+
 def drift_limit_angles(angle_deg, drift, limits=EC8_DRIFT_LIMITS) -> dict[float, float | None]:
     """Angle at which ``drift`` first reaches each limit, linearly interpolated between the
     recorded equilibrium states (``angle_deg`` increasing); None where it never does.

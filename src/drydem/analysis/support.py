@@ -24,7 +24,7 @@ from drydem import compiled_cache
 from drydem.engine.contacts import SubContacts, world_points
 from drydem.engine.joints import StressJoint, kernel_joint, normal_closures
 from drydem.model.parameters import G
-from drydem.model.rotation import matrices, turn_angles
+from drydem.model.rotation import matrices, turns_from_drawn
 
 #: a contact carries its upper block when its normal is within 60 deg of the vertical
 SUPPORT_COSINE = 0.5
@@ -134,7 +134,7 @@ def moved_rigidly(model, state) -> tuple[int, float, float]:
     turn (rad) and horizontal move (m); block -1 where none went past either (found by a hunt: a
     cube drawn on its edge toppled 44 deg onto its face under its own weight, and check --settle
     called that a settlement of 20.7 mm)."""
-    turn = turn_angles(np.tile([1.0, 0.0, 0.0, 0.0], (model.n_blocks, 1)), state.quaternion)
+    turn = turns_from_drawn(state.quaternion)
     move = np.hypot(*(state.position[:, :2] - model.block_centroid[:, :2]).T)
     excess = np.maximum(turn / RIGID_TURN_RAD, move / (RIGID_MOVE_FRACTION * model.block_radius)) * model.block_movable
     k = int(np.argmax(excess)) if excess.size else -1

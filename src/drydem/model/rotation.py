@@ -125,4 +125,10 @@ def turn_angles(q_from: np.ndarray, q_to: np.ndarray) -> np.ndarray:
     return 2.0 * np.arccos(np.minimum(np.abs(np.einsum("ni,ni->n", q_from, q_to)), 1.0))
 
 
+def turns_from_drawn(quaternion: np.ndarray) -> np.ndarray:
+    """(n,) angles (rad) of the rotations (n, 4) ``quaternion`` from the blocks' orientation as
+    drawn, the identity: :func:`turn_angles` from it, 2 arccos |w|."""
+    return turn_angles(np.broadcast_to([1.0, 0.0, 0.0, 0.0], quaternion.shape), quaternion)
+
+
 compiled_cache.check(__name__)  # last: none of the functions above is loaded from a stale cache

@@ -22,9 +22,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from types import SimpleNamespace
 
-import numpy as np
-
-from drydem.analysis.drift import drift_limit_angles
+from drydem.analysis.drift import drift_limit_angles, drifts
 from drydem.analysis.tilt.settings import LOADINGS, TILT_AXES
 from drydem.errors import DrydemError, ModelError
 from drydem.files import regular_file
@@ -228,10 +226,9 @@ def drift_problem(summary: dict, curve: list) -> str | None:
     angles, height = summary.get("drift_limit_angles_deg"), summary.get("wall_height_m")
     if not curve or not isinstance(angles, dict) or not (_numeric(height) and height > 0):
         return None
-    ux = np.array([row[1] for row in curve])
     try:
         limits = [float(limit) for limit in angles]
-        found = drift_limit_angles([row[0] for row in curve], (ux - ux[0]) / height, tuple(limits))
+        found = drift_limit_angles([row[0] for row in curve], drifts([row[1] for row in curve], height), tuple(limits))
     except (ValueError, ModelError):
         return None
     for (limit, given), expected in zip(angles.items(), (found[value] for value in limits)):

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from drydem.analysis.drift import drifts
 from drydem.analysis.tilt.run import TiltRun
 from drydem.analysis.tilt.settings import Record, TiltSettings
 from drydem.engine.checkpoint import load_checkpoint, save_checkpoint, unreadable
@@ -116,8 +117,8 @@ def _restored(run: TiltRun, snapshot, saved: dict, records: list[Record]) -> tup
             or (rows.size and abs(rows[-1, 0] - theta) > 1e-9):  # found by a hunt: reversed records resumed to wrong drift angles
         raise ModelError("its records: must be rows of finite numbers (tilt, ux, uz, drift, cycles), the tilts increasing to its last "
                          "equilibrium's, the cycles whole, none or more")
-    # the drift from ux, as Record defines it (a checkpoint before it measured it from as drawn)
-    records += [Record(tilt, ux, uz, (ux - rows[0, 1]) / run.height, int(cycles)) for tilt, ux, uz, _, cycles in rows.tolist()]
+    rows[:, 3] = drifts(rows[:, 1], run.height)  # as Record defines it (a checkpoint before it measured it from as drawn)
+    records += [Record(tilt, ux, uz, drift, int(cycles)) for tilt, ux, uz, drift, cycles in rows.tolist()]
     run.lost = lost
     rest = np.zeros((run.model.n_blocks, 3))
     for th, x, q in zip(saved["previous_theta_deg"], saved["previous_position"], saved["previous_quaternion"]):

@@ -20,7 +20,7 @@ from drydem.engine.joints import kernel_joint
 from drydem.engine.simulation import Simulation, Snapshot
 from drydem.model.assembly import Model
 from drydem.model.parameters import G
-from drydem.model.rotation import rotation_vectors, turn_angles
+from drydem.model.rotation import rotation_vectors, turns_from_drawn
 from drydem.model.state import State
 
 #: what :meth:`TiltRun.restore` goes back to: the simulation and the blocks lost by then
@@ -185,9 +185,8 @@ class TiltRun:
 
     def toppled(self) -> bool:
         """Whether the monitored block has turned more than :data:`TOPPLED_RAD` from where it
-        was drawn (the identity quaternion: :func:`~drydem.model.rotation.turn_angles`)."""
-        drawn = np.array([[1.0, 0.0, 0.0, 0.0]])
-        return bool(turn_angles(drawn, self.sim.state.quaternion[self.monitor:self.monitor + 1])[0] > TOPPLED_RAD)
+        was drawn (:func:`~drydem.model.rotation.turns_from_drawn`)."""
+        return bool(turns_from_drawn(self.sim.state.quaternion[self.monitor:self.monitor + 1])[0] > TOPPLED_RAD)
 
     def _dropped(self) -> np.ndarray:
         """(nb,) bool: the block, still in the analysis, has a rigid-body drop beyond its
