@@ -4,17 +4,19 @@ import itertools
 
 import numpy as np
 import pytest
-from scipy.spatial import cKDTree
+from scipy.spatial import ConvexHull, cKDTree
 from scipy.spatial.transform import Rotation
 
 import drydem as dd
 from drydem.engine import contacts
+from drydem.engine import narrow_phase as npm
 from drydem.engine.narrow_phase import SLIVER_FRACTION, narrow_phase
 from drydem.model.boxes import bounds, overlapping_pairs, pair_chunks
 from drydem.model.geometry import FlatGeometry
 from drydem.model.parameters import ContactDensity
 from oracles import contacts as oracle
-from conftest import BRICK, box_vertices, layout_blocks
+from oracles import polygon
+from conftest import BRICK, box_vertices, layout_blocks, prism_model
 
 
 def detect_boxes(boxes, *, points, tolerance, rotation=np.eye(3)):
@@ -292,7 +294,7 @@ def test_compiled_narrow_phase_matches_the_python_one_on_random_clouds(seed):
 @pytest.mark.parametrize("along, across", [(1, 1), (2, 2), (4, 2), (8, 8)])
 def test_compiled_narrow_phase_matches_on_a_wall_with_turned_and_rocked_bricks(along, across):
     # every brick of a small wall turned a little about random axes: contact polygons that are
-    # not rectangles (clipped grid), rocking gaps, points dropped beyond the tolerance
+    # not rectangles (lumped grid), rocking gaps, points dropped beyond the tolerance
     rng = np.random.default_rng(along * 10 + across)
     # 4 bricks x 6 courses, a 2 x 2 half-brick opening under a lintel
     blocks = layout_blocks("""
@@ -411,3 +413,48 @@ def test_skewed_quadrilateral_contact_gets_at_most_n_plus_one_points_per_directi
     assert fast.count == (along + 1) * along
     assert fast.area.sum() == pytest.approx(0.02 * 0.02 * 3.2, rel=1e-12)  # the section's area
     assert settled["converged"] and settled["normal_force"] == pytest.approx(model.block_mass[1] * dd.G, rel=1e-3)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_vertex_shares_give_the_polygon_s_area_and_first_moments_and_a_repeated_vertex_changes_nothing(seed):
+    rng = np.random.default_rng(seed)
+    cloud = 0.01 * rng.uniform(-1, 1, (12, 2))
+    poly = cloud[ConvexHull(cloud).vertices]  # counter-clockwise
+    shares = np.empty(len(poly))
+    npm._vertex_shares(poly, len(poly), shares)
+    area = polygon.signed_area(poly)
+    assert (shares > 0).all() and shares.sum() == pytest.approx(area, rel=1e-12)
+    # exact for a linear function: the first moments are the polygon's (to round-off of area x size)
+    np.testing.assert_allclose(shares @ poly, area * polygon.centroid(poly), rtol=0, atol=1e-12 * area * 0.01)
+    np.testing.assert_allclose(shares, polygon.vertex_shares(poly), rtol=0, atol=1e-12 * area)
+    # a vertex repeated (round-off of clipping): the two copies, merged into one point, carry what it did
+    repeated = np.insert(poly, 2, poly[2], axis=0)
+    twice = np.empty(len(repeated))
+    npm._vertex_shares(repeated, len(repeated), twice)
+    np.testing.assert_allclose(np.r_[twice[:2], twice[2] + twice[3], twice[4:]], shares, rtol=0, atol=1e-12 * area)
+    # each corner of a rectangle a quarter
+    rectangle = np.empty(4)
+    npm._vertex_shares(polygon.rectangle(0.0, 0.02, 0.0, 0.01), 4, rectangle)
+    np.testing.assert_allclose(rectangle, 0.25 * 0.02 * 0.01, rtol=1e-12)
+
+
+@pytest.mark.parametrize("points", [2, 4])
+@pytest.mark.parametrize("sides", [5, 40])
+def test_a_polygon_contact_has_a_point_at_each_corner_and_the_polygon_s_area_and_centroid(sides, points):
+    # a regular prism on a slab: the contact polygon is its base. A block rocks about the
+    # outermost points of its contact, so they must be the corners (the grid before the lumped
+    # one moved the points of cut cells to the cells' centroids, inside the corners: a 40-sided
+    # prism toppled at 14.5 deg instead of atan(1/3) = 18.43, tests/test_tilt.py)
+    model = prism_model(sides, 0.02, 0.12, points=points)
+    shapes = list(model.block_shape)
+    sub = compare_narrow_phases(shapes, np.array([[0, 1]]), model.contact_tolerance, model.contact_density)
+    position, rotation = at_rest(shapes)
+    x, gap, _ = contacts.world_points(sub, position, rotation)
+    corners = shapes[1].vertices[shapes[1].vertices[:, 2] < 0.06]
+    distance, _ = cKDTree(x).query(corners)
+    assert distance.max() <= 1e-9 * 0.02  # the geometric tolerance: 1e-9 of the block's size
+    area = 0.5 * sides * 0.02**2 * np.sin(2 * np.pi / sides)
+    assert sub.area.sum() == pytest.approx(area, rel=1e-12)
+    np.testing.assert_allclose(sub.area @ x[:, :2], 0.0, rtol=0, atol=1e-12 * area * 0.02)  # centred on the axis
+    np.testing.assert_allclose(gap, 0.0, rtol=0, atol=1e-12 * 0.02)
+

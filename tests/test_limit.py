@@ -11,7 +11,7 @@ from drydem.analysis import limit as la
 from drydem.analysis.limit import LimitAnalysisError, LimitSettings, limit_analysis
 from drydem.analysis.tilt import TiltSettings, tilt_analysis
 from drydem.io.target import load_target
-from conftest import layout_blocks, stack_model
+from conftest import layout_blocks, prism_model, stack_model
 
 NA = LimitSettings(non_associative=True)
 #: relative accuracy of lambda: in-plane models, HiGHS's vertex (crossover), ~1e-12; 3D models, Clarabel's interior
@@ -45,6 +45,15 @@ def test_a_squat_block_slides_at_lambda_mu(mu, supports):
     # the associative mechanism dilates: it slides up at the friction angle (normality)
     v = limit_analysis(model).velocity[1]
     assert v[2] / v[0] == pytest.approx(mu, rel=1e-6)
+
+
+@pytest.mark.parametrize("sides", [6, 40])
+def test_a_polygonal_prism_topples_about_its_outermost_corner_at_lambda_r_over_half_its_height(sides):
+    # the corner along the live load is the pivot: lambda = 0.02 / 0.06 (the contact grid before
+    # the lumped one gave 8.04 deg instead of atan(1/3) = 18.43 for 40 sides)
+    model = prism_model(sides, 0.02, 0.12)
+    for settings in (LimitSettings(), NA):
+        assert limit_analysis(model, settings).load_multiplier == pytest.approx(1 / 3, rel=IN_3D)
 
 
 @pytest.mark.parametrize("heights", [[0.04], [0.01] * 4], ids=["one block", "stack of four"])

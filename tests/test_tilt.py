@@ -17,7 +17,7 @@ import pytest
 import drydem as dd
 from drydem.analysis.drift import drift_limit_angles
 from drydem.analysis.tilt import TiltSettings, monitored_block, tilt_analysis, wall_height
-from conftest import BRICK, stack_model
+from conftest import BRICK, prism_model, stack_model
 
 STEP = 0.5
 
@@ -99,6 +99,18 @@ def test_stack_of_blocks_topples_as_one_body_of_the_full_height():
     # it rotated as one body: every block moved downhill, the top most
     moved = result.final_state.position[1:, 0] - slender([0.01] * 4).block_centroid[1:, 0]
     assert np.all(np.diff(moved) > 0)
+
+
+@pytest.mark.parametrize("sides", [6, 40])
+def test_a_polygonal_prism_topples_about_its_outermost_corner_at_atan_r_over_half_its_height(sides):
+    # circumradius 20 mm, 120 mm high, a corner downhill: tan = 0.02 / 0.06 = 1/3, 18.43 deg (a
+    # contact grid whose points stopped short of the corners gave 14.5 deg for 40 sides). Near
+    # tipping, the corner's point, of a small area, takes the weight and closes more than a face's
+    # edge row would: the block turns on it, and topples earlier the softer the joint (0.1 deg
+    # steps, 40 sides: 17.8 deg at kn = 1e10 Pa/m, 18.2 at 1e11, 18.3 at 1e12; measured)
+    angles = [tilt_analysis(prism_model(sides, 0.02, 0.12, kn=kn), TiltSettings(increment_deg=STEP)).collapse_angle_deg for kn in (1e10, 1e12)]
+    assert angles[0] <= angles[1]
+    assert within_one_step_below(angles[1], math.degrees(math.atan(1 / 3)))
 
 
 def test_multiplier_loading_gives_lambda_equal_to_mu():

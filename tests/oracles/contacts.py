@@ -20,6 +20,7 @@ blocks' body frames, so rocking opens or closes them as the blocks turn.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -110,20 +111,21 @@ def _grid(
     most n, see :func:`_intervals`), with nodes at both ends (trapezoid rule). A quadrilateral
     overlap (the usual face-on-face case, also when the blocks are turned or rocking) gets a
     bilinear grid between its corners, so the corners are always points and an affine image of
-    a face maps back to the same material points. Other polygons get an axis-aligned grid whose
-    cells are clipped to the polygon (nodes outside move to their cell's centroid). n = 1 in
-    both directions: one node at the polygon's centroid.
+    a face maps back to the same material points. Other polygons get an axis-aligned lumped grid
+    (:func:`_lumped_grid`): points where its lines cross inside the polygon, where they cross its
+    sides and at its corners, so that the points span the whole polygon (a block rocks on its
+    outermost corner) and give its area and first moments exactly. n = 1 in both directions: one
+    node at the polygon's centroid.
 
     A node of at most ``sliver`` m2 is a sliver (:data:`oracles.SLIVER_FRACTION`), which
-    :func:`face_contact` drops; a clipped cell that small is left out here already (it may have
-    no area to take a centroid of).
+    :func:`face_contact` drops; a piece of the lumped grid that small is left out here already.
     """
     if counts.along == 1 and counts.across == 1:
         return polygon.centroid(overlap)[None, :], np.array([polygon.signed_area(overlap)])
     corners = polygon.without_collinear(overlap, tol)
     if len(corners) == 4:
         return _bilinear_grid(corners, face_a, face_b, counts)
-    return _clipped_grid(overlap, face_a, face_b, counts, tol, sliver)
+    return _lumped_grid(overlap, face_a, face_b, counts, tol, sliver)
 
 
 def _intervals(length: float, direction: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, n: int) -> int:
@@ -169,36 +171,35 @@ def _bilinear_grid(quad: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, cou
     return nodes, areas * (polygon.signed_area(quad) / areas.sum())
 
 
-def _clipped_grid(
+def _lumped_grid(
     overlap: np.ndarray, face_a: np.ndarray, face_b: np.ndarray, counts: _PointCounts, tol: float, sliver: float
 ) -> tuple[np.ndarray, np.ndarray]:
+    """Grid lines through the trapezoid nodes of each axis cut the polygon into pieces; each
+    piece's area goes to its vertices (:func:`oracles.polygon.vertex_shares`); vertices within
+    ``tol`` of each other are one point. An axis of one point (n = 1) has its two ends as lines,
+    and its points move to the middle."""
     lo, hi = overlap.min(0), overlap.max(0)
-    axes = []
+    lines, middle = [], []
     for k in range(2):
         direction = np.eye(2)[k]
-        nodes, weights = _trapezoid(_intervals(hi[k] - lo[k], direction, face_a, face_b, counts(direction)))
-        nodes = lo[k] + nodes * (hi[k] - lo[k])
-        half = 0.5 * (hi[k] - lo[k]) / max(len(nodes) - 1, 0.5)
-        axes.append((nodes, np.clip(nodes - half, lo[k], hi[k]), np.clip(nodes + half, lo[k], hi[k])))
-    (un, u0, u1), (vn, v0, v1) = axes
-    nodes, areas = [], []
-    for i in range(len(un)):
-        for j in range(len(vn)):
-            cell = polygon.clip(overlap, polygon.rectangle(u0[i], u1[i], v0[j], v1[j]))
-            area = polygon.signed_area(cell)
-            if area <= sliver:
-                continue
-            node = np.array([un[i], vn[j]])
-            nodes.append(node if _inside(overlap, node, tol) else polygon.centroid(cell))
-            areas.append(area)
-    return np.array(nodes).reshape(-1, 2), np.array(areas)
-
-
-def _inside(poly: np.ndarray, point: np.ndarray, tol: float) -> bool:
-    """Whether ``point`` lies in the convex counter-clockwise ``poly`` (boundary included)."""
-    edge = np.roll(poly, -1, axis=0) - poly
-    rel = point - poly
-    return bool(np.all(edge[:, 0] * rel[:, 1] - edge[:, 1] * rel[:, 0] >= -tol * np.linalg.norm(edge, axis=1)))
+        intervals = _intervals(hi[k] - lo[k], direction, face_a, face_b, counts(direction))
+        nodes = _trapezoid(intervals)[0] if intervals else np.array([0.0, 1.0])
+        lines.append(np.r_[lo[k] + nodes[:-1] * (hi[k] - lo[k]), hi[k]])  # the outer lines on the polygon's extremes
+        middle.append(np.nan if intervals else 0.5 * (lo[k] + hi[k]))
+    points, areas = [], []
+    for i, j in itertools.product(range(len(lines[0]) - 1), range(len(lines[1]) - 1)):
+        piece = polygon.clip(overlap, polygon.rectangle(lines[0][i], lines[0][i + 1], lines[1][j], lines[1][j + 1]))
+        if polygon.signed_area(piece) <= sliver:
+            continue
+        for vertex, share in zip(piece, polygon.vertex_shares(piece)):
+            point = np.where(np.isnan(middle), vertex, middle)
+            near = [p for p, q in enumerate(points) if np.abs(q - point).max() <= tol]
+            if near:
+                areas[near[0]] += share
+            else:
+                points.append(point)
+                areas.append(share)
+    return np.array(points).reshape(-1, 2), np.array(areas)
 
 
 def narrow_phase(

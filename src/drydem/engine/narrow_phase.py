@@ -26,8 +26,11 @@ length of the smaller face, ends included, each point carrying its trapezoid sha
 (the areas sum to the polygon's area); in-plane models need only 1 point across the width. The
 algorithm (the tests hold it to a plain-Python oracle written one pair at a time): most opposed
 incident face, Sutherland-Hodgman overlap in the reference plane, sub-contact grid (bilinear on
-quadrilaterals, clipped cells otherwise, trapezoid areas), gaps along the normal, points beyond
-the tolerance or with a sliver's area (:data:`SLIVER_FRACTION`) dropped.
+quadrilaterals, trapezoid areas; a lumped grid on other polygons: the grid's lines cut the
+polygon into pieces whose areas go to their corners, :func:`_vertex_shares`, so every corner of
+the polygon is a point and a block rocks on its outermost one, as on a quadrilateral's), gaps
+along the normal, points beyond the tolerance or with a sliver's area (:data:`SLIVER_FRACTION`)
+dropped.
 
 **Edge-face and vertex-face.** Otherwise the incident vertices within the tolerance of the
 reference plane are the touching feature: one vertex (vertex-face: one point, where it projects
@@ -132,11 +135,13 @@ class Found(NamedTuple):
 
 
 @numba.njit(cache=True)
-def max_points(along, across):
-    """Upper bound on the points of one contact: at most n intervals, so n + 1 points, per
-    direction (:func:`_intervals`)."""
+def max_points(along, across, largest_face):
+    """Upper bound on the points of one contact between faces of at most ``largest_face``
+    vertices: at most n intervals, so n + 1 lines, per direction (:func:`_intervals`); a
+    lumped grid's points (:func:`_lumped`) are where the lines cross, where they cross the
+    contact polygon's sides (2 per line) and its corners (at most both faces' vertices)."""
     n = max(along, across) + 1
-    return n * n
+    return n * n + 4 * n + 2 * largest_face
 
 
 @numba.njit(cache=True)
@@ -369,45 +374,88 @@ def _inside(poly, count, x, y, tol):
 
 
 @numba.njit(cache=True)
-def _clipped(overlap, count, face_a, na, face_b, nb, along, across, au, av, tol, sliver, out_uv, out_area):
-    """As _clipped_grid of the plain-Python oracle (tests/oracles/contacts.py); returns the number of nodes written."""
-    lo = np.array([np.inf, np.inf])
-    hi = np.array([-np.inf, -np.inf])
+def _axis_lines(overlap, count, c, face_a, na, face_b, nb, along, across, au, av):
+    """The lumped grid's lines along in-plane axis ``c`` (0: u, 1: v) over the polygon's extent,
+    through the trapezoid nodes, and the coordinate its points collapse to: NaN, none; with no
+    interval (one point across) the two ends are the lines and the points go to the middle."""
+    lo, hi = np.inf, -np.inf
     for i in range(count):
-        for c in range(2):
-            lo[c], hi[c] = min(lo[c], overlap[i, c]), max(hi[c], overlap[i, c])
-    nodes = []
-    low = []
-    high = []
-    for c in range(2):
-        dx, dy = (1.0, 0.0) if c == 0 else (0.0, 1.0)
-        n = _count(dx, dy, au, av, along, across)
-        t, _ = _trapezoid(_intervals(hi[c] - lo[c], dx, dy, face_a, na, face_b, nb, n))
-        x = lo[c] + t * (hi[c] - lo[c])
-        half = 0.5 * (hi[c] - lo[c]) / max(x.shape[0] - 1, 0.5)
-        nodes.append(x)
-        low.append(np.minimum(np.maximum(x - half, lo[c]), hi[c]))
-        high.append(np.minimum(np.maximum(x + half, lo[c]), hi[c]))
+        lo, hi = min(lo, overlap[i, c]), max(hi, overlap[i, c])
+    dx, dy = (1.0, 0.0) if c == 0 else (0.0, 1.0)
+    intervals = _intervals(hi - lo, dx, dy, face_a, na, face_b, nb, _count(dx, dy, au, av, along, across))
+    if intervals == 0:
+        return np.array([lo, hi]), 0.5 * (lo + hi)
+    t, _ = _trapezoid(intervals)
+    lines = lo + t * (hi - lo)
+    lines[-1] = hi  # lo + (hi - lo) may round off it, and cut the polygon's side there at a point of round-off
+    return lines, np.nan
+
+
+@numba.njit(cache=True)
+def _vertex_shares(poly, count, out):
+    """Each vertex's share of the convex polygon's area into ``out``: the triangles (g, v_i,
+    v_(i+1)) from its area centroid g, of areas T_i, each half to each of its two corners,
+    share_i = (T_(i-1) + T_i) / 2.
+
+    Exact for a linear function: the shares sum to the area A, and their first moment is
+    sum_i T_i (v_i + v_(i+1)) / 2 = A g, since each triangle's centroid (g + v_i + v_(i+1)) / 3
+    averages to g. A vertex repeated by round-off, or on a side, takes a share from its
+    neighbours that vanishes with its distance to them (a rule through the vertices' mean would
+    jump), and each corner of a rectangle, or of a triangle, gets an equal share."""
+    gx, gy = _centroid(poly, count)
+    for i in range(count):
+        out[i] = 0.0
+    for i in range(count):
+        j = (i + 1) % count
+        half = 0.25 * ((poly[i, 0] - gx) * (poly[j, 1] - gy) - (poly[i, 1] - gy) * (poly[j, 0] - gx))
+        out[i] += half
+        out[j] += half
+
+
+@numba.njit(cache=True)
+def _add_point(uv, area, count, x, y, share, tol):
+    """``share`` m2 onto the point within ``tol`` of (x, y) in both coordinates, or onto a new
+    one; returns the buffers (grown when full) and the number of points."""
+    for p in range(count):
+        if abs(uv[p, 0] - x) <= tol and abs(uv[p, 1] - y) <= tol:
+            area[p] += share
+            return uv, area, count
+    uv = _append(uv, count, x, y)
+    if area.shape[0] < uv.shape[0]:
+        larger = np.empty(uv.shape[0])
+        larger[:count] = area[:count]
+        area = larger
+    area[count] = share
+    return uv, area, count + 1
+
+
+@numba.njit(cache=True)
+def _lumped(overlap, count, face_a, na, face_b, nb, along, across, au, av, tol, sliver, uv, area):
+    """As _lumped_grid of the plain-Python oracle (tests/oracles/contacts.py); returns the number
+    of points and the ``uv``, ``area`` buffers (grown if the points outgrew them)."""
+    xs, middle_x = _axis_lines(overlap, count, 0, face_a, na, face_b, nb, along, across, au, av)
+    ys, middle_y = _axis_lines(overlap, count, 1, face_a, na, face_b, nb, along, across, au, av)
     rect = np.empty((4, 2))
-    cell = np.empty((count + 4, 2))  # a rectangle adds 4 vertices at most
-    k = 0
-    for i in range(nodes[0].shape[0]):
-        for j in range(nodes[1].shape[0]):
-            rect[0, 0], rect[0, 1] = low[0][i], low[1][j]
-            rect[1, 0], rect[1, 1] = high[0][i], low[1][j]
-            rect[2, 0], rect[2, 1] = high[0][i], high[1][j]
-            rect[3, 0], rect[3, 1] = low[0][i], high[1][j]
-            cell, m = _clip(overlap, count, rect, 4, cell)
-            area = _area(cell, m)
-            if area <= sliver:
+    piece = np.empty((count + 4, 2))  # a rectangle adds 4 vertices at most
+    shares = np.empty(count + 4)
+    points = 0
+    for i in range(xs.shape[0] - 1):
+        for j in range(ys.shape[0] - 1):
+            rect[0, 0], rect[0, 1] = xs[i], ys[j]
+            rect[1, 0], rect[1, 1] = xs[i + 1], ys[j]
+            rect[2, 0], rect[2, 1] = xs[i + 1], ys[j + 1]
+            rect[3, 0], rect[3, 1] = xs[i], ys[j + 1]
+            piece, m = _clip(overlap, count, rect, 4, piece)
+            if _area(piece, m) <= sliver:
                 continue
-            x, y = nodes[0][i], nodes[1][j]
-            if not _inside(overlap, count, x, y, tol):
-                x, y = _centroid(cell, m)
-            out_uv[k, 0], out_uv[k, 1] = x, y
-            out_area[k] = area
-            k += 1
-    return k
+            if shares.shape[0] < m:
+                shares = np.empty(piece.shape[0])
+            _vertex_shares(piece, m, shares)
+            for p in range(m):
+                x = piece[p, 0] if np.isnan(middle_x) else middle_x
+                y = piece[p, 1] if np.isnan(middle_y) else middle_y
+                uv, area, points = _add_point(uv, area, points, x, y, shares[p], tol)
+    return points, uv, area
 
 
 @numba.njit(cache=True)
@@ -451,25 +499,27 @@ def _face_frame(geom, block, face, verts, n, u, v):
 @numba.njit(cache=True)
 def _grid(overlap, n_overlap, corners, face_a, na, face_b, nb, along, across, au, av, tol, sliver, uv, area):
     """The sub-contact nodes of the overlap polygon into ``uv`` and ``area`` (one at its centroid,
-    a bilinear grid on a quadrilateral, clipped cells otherwise); returns their number and the
-    ``corners`` buffer (grown if the overlap outgrew it)."""
+    a bilinear grid on a quadrilateral, the lumped grid otherwise); returns their number and the
+    ``corners``, ``uv`` and ``area`` buffers (grown if the polygon or its points outgrew them)."""
     if along == 1 and across == 1:
         uv[0, 0], uv[0, 1] = _centroid(overlap, n_overlap)
         area[0] = _area(overlap, n_overlap)
-        return 1, corners
+        return 1, corners, uv, area
     if corners.shape[0] < n_overlap:
         corners = np.empty((overlap.shape[0], 2))
     corners[:n_overlap] = overlap[:n_overlap]
     if _without_collinear(corners, n_overlap, tol) == 4:
-        return _bilinear(corners, face_a, na, face_b, nb, along, across, au, av, uv, area), corners
-    return _clipped(overlap, n_overlap, face_a, na, face_b, nb, along, across, au, av, tol, sliver, uv, area), corners
+        return _bilinear(corners, face_a, na, face_b, nb, along, across, au, av, uv, area), corners, uv, area
+    nodes, uv, area = _lumped(overlap, n_overlap, face_a, na, face_b, nb, along, across, au, av, tol, sliver, uv, area)
+    return nodes, corners, uv, area
 
 
 @numba.njit(cache=True)
 def _keep_points(found, k, nodes, uv, area, origin, u, v, n_inc, plane, cos_ni, tolerance, sliver):
     """The nodes in world coordinates with their gaps along the reference normal to the incident
     face's plane (n_inc . x = plane), those within ``tolerance`` and above a sliver's area into
-    ``found``'s row ``k``; returns how many."""
+    ``found``'s row ``k``; returns how many, or -1 when they outgrow the row (:func:`find` retries
+    with a wider one)."""
     kept = 0
     for i in range(nodes):
         p0 = origin[0] + uv[i, 0] * u[0] + uv[i, 1] * v[0]
@@ -477,6 +527,8 @@ def _keep_points(found, k, nodes, uv, area, origin, u, v, n_inc, plane, cos_ni, 
         p2 = origin[2] + uv[i, 0] * u[2] + uv[i, 1] * v[2]
         gap = (plane - (n_inc[0] * p0 + n_inc[1] * p1 + n_inc[2] * p2)) / cos_ni
         if gap <= tolerance and area[i] > sliver:
+            if kept == found.points.shape[1]:
+                return -1
             found.points[k, kept, 0], found.points[k, kept, 1], found.points[k, kept, 2] = p0, p1, p2
             found.gaps[k, kept] = gap
             found.areas[k, kept] = area[i]
@@ -743,8 +795,9 @@ def _features(found, k, geom, ref, f_ref, vr, n, vi, nvi, touching, tolerance, n
 def _pair(geom, position, rotation, k, ia, ib, tolerance, along, across, across_axis, found, uv, area, face_a, face_b, overlap, corners,
           va, vb, na, nb, ea, eb, touching, u, v, axis):
     """The contact of candidate pair ``k`` (blocks ia, ib) into row ``k`` of ``found`` (module
-    docstring); the scratch buffers are the caller's. Returns the ``overlap`` and ``corners``
-    buffers (grown if a polygon outgrew them)."""
+    docstring; a count of -1: its points outgrew the row); the scratch buffers are the caller's.
+    Returns the ``overlap``, ``corners``, ``uv`` and ``area`` buffers (grown if a polygon or its
+    points outgrew them)."""
     found.count[k] = 0
     found.kind[k] = FACE_FACE
     nva, nfa = _world(geom, ia, position, rotation, va, na)
@@ -758,7 +811,7 @@ def _pair(geom, position, rotation, k, ia, ib, tolerance, along, across, across_
         ref, inc, vr, nr, vi, ni, nvi, nfi, f_ref, separation = ib, ia, vb, nb, va, na, nva, nfa, fb, sb
     found.separation[k] = separation
     if separation > tolerance:
-        return overlap, corners
+        return overlap, corners, uv, area
     n = nr[f_ref]
     f_inc, cos_ni = _most_opposed(ni, nfi, n)
     # crossed edges: the edge-pair axes of the separating-axis test. Not needed for nearly
@@ -781,7 +834,7 @@ def _pair(geom, position, rotation, k, ia, ib, tolerance, along, across, across_
             found.ref[k], found.inc[k] = ia, ib
             for c in range(3):
                 found.normal[k, c] = axis[c]
-        return overlap, corners
+        return overlap, corners, uv, area
     if not parallel_faces:
         kept, kind = _features(found, k, geom, ref, f_ref, vr, n, vi, nvi, touching, tolerance, nominal, along, across, across_axis, u, v, face_a, small)
         if kind != FACE_FACE:
@@ -789,27 +842,27 @@ def _pair(geom, position, rotation, k, ia, ib, tolerance, along, across, across_
             found.count[k] = kept
             found.ref[k], found.inc[k] = ref, inc
             found.normal[k] = n
-            return overlap, corners
+            return overlap, corners, uv, area
     # face-face
     if cos_ni >= -1e-6:
-        return overlap, corners
+        return overlap, corners, uv, area
     origin = _face_frame(geom, ref, f_ref, vr, n, u, v)
     n_ref_2d = _face_2d(geom, ref, f_ref, vr, origin, u, v, face_a)
     n_inc_2d = _face_2d(geom, inc, f_inc, vi, origin, u, v, face_b)
     overlap, n_overlap = _clip(face_b, n_inc_2d, face_a, n_ref_2d, overlap)
     if n_overlap < 3 or _area(overlap, n_overlap) <= 1e-8 * small * small:
-        return overlap, corners
+        return overlap, corners, uv, area
     sliver = SLIVER_FRACTION * min(_area(face_a, n_ref_2d), _area(face_b, n_inc_2d))
     au = across_axis[0] * u[0] + across_axis[1] * u[1] + across_axis[2] * u[2]
     av = across_axis[0] * v[0] + across_axis[1] * v[1] + across_axis[2] * v[2]
-    nodes, corners = _grid(overlap, n_overlap, corners, face_a, n_ref_2d, face_b, n_inc_2d, along, across, au, av, 1e-9 * small, sliver, uv, area)
+    nodes, corners, uv, area = _grid(overlap, n_overlap, corners, face_a, n_ref_2d, face_b, n_inc_2d, along, across, au, av, 1e-9 * small, sliver, uv, area)
     n_inc = ni[f_inc]
     inc_first = vi[geom.face_vertex[geom.face_start[geom.block_face_start[inc] + f_inc]]]
     plane = n_inc[0] * inc_first[0] + n_inc[1] * inc_first[1] + n_inc[2] * inc_first[2]
     found.count[k] = _keep_points(found, k, nodes, uv, area, origin, u, v, n_inc, plane, cos_ni, tolerance, sliver)
     found.ref[k], found.inc[k] = ref, inc
     found.normal[k] = n
-    return overlap, corners
+    return overlap, corners, uv, area
 
 
 #: candidate pairs per parallel chunk of :func:`find_sub_contacts` (each chunk allocates its own scratch buffers once)
@@ -820,12 +873,13 @@ CHUNK = 64
 def find_sub_contacts(geom, position, rotation, candidates, tolerance, along, across, across_axis, found):
     """Fill ``found`` (a :class:`Found` with room for the candidates and :func:`max_points`
     points each) for every candidate pair (i < j), in parallel over chunks of :data:`CHUNK`
-    pairs; each pair writes only its own row, so the result is the same for any thread count."""
-    m = found.gaps.shape[1]
-    if found.count.shape[0] < candidates.shape[0] or m < max_points(along, across):
-        raise ValueError("found has too little room for the candidates' points")
+    pairs; each pair writes only its own row, so the result is the same for any thread count.
+    A pair whose points outgrew the row (round-off can add a polygon's corner) has count -1."""
     # polygons: a face as large as the largest, an overlap of two (at most both faces' vertices)
     largest = _largest(geom.face_start)
+    m = found.gaps.shape[1]
+    if found.count.shape[0] < candidates.shape[0] or m < max_points(along, across, largest):
+        raise ValueError("found has too little room for the candidates' points")
     # the two blocks' world geometry, in buffers for the largest block (no allocation per pair)
     largest_v, largest_f = _largest(geom.vertex_start), _largest(geom.block_face_start)
     largest_e = 0  # face-loop entries of the block with most: at least twice its edges
@@ -842,7 +896,7 @@ def find_sub_contacts(geom, position, rotation, candidates, tolerance, along, ac
         touching = np.empty(largest_v, np.int64)
         u, v, axis = np.empty(3), np.empty(3), np.empty(3)
         for k in range(chunk * CHUNK, min(n, (chunk + 1) * CHUNK)):
-            overlap, corners = _pair(geom, position, rotation, k, candidates[k, 0], candidates[k, 1], tolerance, along, across, across_axis, found,
+            overlap, corners, uv, area = _pair(geom, position, rotation, k, candidates[k, 0], candidates[k, 1], tolerance, along, across, across_axis, found,
                                      uv, area, face_a, face_b, overlap, corners, va, vb, na, nb, ea, eb, touching, u, v, axis)
 
 
@@ -894,14 +948,19 @@ def find(
     density: ContactDensity,
 ) -> Found:
     """The :class:`Found` of the candidate block pairs (k, 2) at centroids ``position`` (nb, 3) m
-    and rotations (nb, 3, 3): one compiled call (:func:`find_sub_contacts`)."""
-    found = Found.empty(len(candidates), max_points(density.along, density.across))
-    find_sub_contacts(
-        geometry, np.ascontiguousarray(position, dtype=float), np.ascontiguousarray(rotation, dtype=float),
-        np.ascontiguousarray(candidates, dtype=np.int64).reshape(-1, 2), tolerance, density.along, density.across,
-        np.asarray(density.across_axis, dtype=float), found,
-    )
-    return found
+    and rotations (nb, 3, 3): one compiled call (:func:`find_sub_contacts`), again with rows twice
+    as wide where a contact's points outgrew :func:`max_points` (round-off; not seen)."""
+    width = max_points(density.along, density.across, _largest(geometry.face_start))
+    while True:
+        found = Found.empty(len(candidates), width)
+        find_sub_contacts(
+            geometry, np.ascontiguousarray(position, dtype=float), np.ascontiguousarray(rotation, dtype=float),
+            np.ascontiguousarray(candidates, dtype=np.int64).reshape(-1, 2), tolerance, density.along, density.across,
+            np.asarray(density.across_axis, dtype=float), found,
+        )
+        if (found.count >= 0).all():
+            return found
+        width *= 2
 
 
 def contact_kinds(found: Found) -> np.ndarray:
