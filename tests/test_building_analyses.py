@@ -64,16 +64,20 @@ def test_the_monitored_block_is_on_the_leeward_wall_loaded_out_of_plane(tiny):
 def test_tilted_about_x_the_building_collapses_out_of_plane(tiny, tilted):
     result, _, _ = tilted
     assert result.stable_under_gravity and result.ended_by in ("stop displacement", "monitored block fell")
-    # physically plausible: above 0, below the sliding bound atan(mu); measured 5.5 deg at 0.5 deg
-    # steps with these soft joints (kn = 3e7 Pa/m), below the 7.1 deg of a rigid free-standing
-    # leaf 50 mm thick and 0.4 m tall (atan(t / h)): the window and the joints' flexibility
-    # weaken it more than the bonded returns hold it
+    # physically plausible: above 0, below the sliding bound atan(mu); measured 6.0 deg at 0.5 deg
+    # steps with these soft joints (kn = 3e7 Pa/m; 5.5 deg before the contact polygons' corners
+    # were points), below the 7.1 deg of a rigid free-standing leaf 50 mm thick and 0.4 m tall
+    # (atan(t / h)): the window and the joints' flexibility weaken it more than the bonded
+    # returns hold it
     mu = tiny.joint.friction
     assert 0.0 < result.collapse_angle_deg < math.degrees(math.atan(mu))
-    # the blocks that moved most, along the load (y), are in the long walls loaded out of plane
+    # the blocks that moved most, along the load (y), are in the north wall, pushed out of its
+    # plane, or are the returns' bricks bonded to it at its corners, which it drags along
+    # (measured: the two top corner bricks among the 20, 10 mm beside its top's 21 mm)
     moved = result.final_state.position[:, 1] - tiny.block_centroid[:, 1]
     most = np.argsort(-np.abs(moved))[:20]
-    assert all(wall_of(tiny.block_name[b]) in (0, 2) for b in most)
+    by_the_north_wall = tiny.block_centroid[:, 1] > TINY.width_m - TINY.brick_length_m
+    assert all(wall_of(tiny.block_name[b]) == 2 or by_the_north_wall[b] for b in most)
     # the monitored displacement is the one along y, and it is what stopped the run
     monitor = tiny.block_index(result.monitored_block)
     assert result.records[-1].ux_m == pytest.approx(result.collapse_state.position[monitor, 1] - tiny.block_centroid[monitor, 1])
