@@ -412,14 +412,30 @@ def _vertex_shares(poly, count, out):
         out[j] += half
 
 
-@numba.njit(cache=True)
-def _add_point(uv, area, count, x, y, share, tol):
-    """``share`` m2 onto the point within ``tol`` of (x, y) in both coordinates, or onto a new
-    one; returns the buffers (grown when full) and the number of points."""
-    for p in range(count):
+@numba.njit(cache=True, inline="always")
+def _near(uv, start, end, x, y, tol):
+    """The first of points [start, end) within ``tol`` of (x, y) in both coordinates; -1 for none."""
+    for p in range(start, end):
         if abs(uv[p, 0] - x) <= tol and abs(uv[p, 1] - y) <= tol:
-            area[p] += share
-            return uv, area, count
+            return p
+    return -1
+
+
+@numba.njit(cache=True)
+def _add_point(uv, area, count, x, y, share, tol, first, i, j, ny):
+    """``share`` m2 onto the point within ``tol`` of (x, y), a vertex of piece (i, j) of the lumped
+    grid, or onto a new one. A point it shares is one of pieces (i - 1, j - 1 ... j + 1), (i, j - 1)
+    or its own (``first``: each piece's first point, pieces in order (0, 0), (0, 1), ..., ``ny``
+    a column), so only theirs are looked at. Returns the buffers (grown when full) and the
+    number of points."""
+    p = -1
+    if i > 0:
+        p = _near(uv, first[(i - 1) * ny + max(j - 1, 0)], first[(i - 1) * ny + min(j + 1, ny - 1) + 1], x, y, tol)
+    if p < 0:
+        p = _near(uv, first[i * ny + max(j - 1, 0)], count, x, y, tol)
+    if p >= 0:
+        area[p] += share
+        return uv, area, count
     uv = _append(uv, count, x, y)
     if area.shape[0] < uv.shape[0]:
         larger = np.empty(uv.shape[0])
@@ -438,9 +454,12 @@ def _lumped(overlap, count, face_a, na, face_b, nb, along, across, au, av, tol, 
     rect = np.empty((4, 2))
     piece = np.empty((count + 4, 2))  # a rectangle adds 4 vertices at most
     shares = np.empty(count + 4)
+    ny = ys.shape[0] - 1
+    first = np.zeros((xs.shape[0] - 1) * ny + 1, np.int64)  # each piece's first point
     points = 0
     for i in range(xs.shape[0] - 1):
-        for j in range(ys.shape[0] - 1):
+        for j in range(ny):
+            first[i * ny + j] = points
             rect[0, 0], rect[0, 1] = xs[i], ys[j]
             rect[1, 0], rect[1, 1] = xs[i + 1], ys[j]
             rect[2, 0], rect[2, 1] = xs[i + 1], ys[j + 1]
@@ -454,7 +473,7 @@ def _lumped(overlap, count, face_a, na, face_b, nb, along, across, au, av, tol, 
             for p in range(m):
                 x = piece[p, 0] if np.isnan(middle_x) else middle_x
                 y = piece[p, 1] if np.isnan(middle_y) else middle_y
-                uv, area, points = _add_point(uv, area, points, x, y, shares[p], tol)
+                uv, area, points = _add_point(uv, area, points, x, y, shares[p], tol, first, i, j, ny)
     return points, uv, area
 
 
