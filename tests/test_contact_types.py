@@ -312,6 +312,20 @@ def test_a_prism_resting_edge_on_edge_on_a_crossed_one_carries_its_weight_with_t
     assert sink < model.contact_tolerance
 
 
+def test_check_counts_the_contacts_by_kind(tmp_path):
+    # the crossed prisms touch apex edge on apex edge: one contact, of crossed edges (check
+    # called every contact a face contact)
+    from click.testing import CliRunner
+
+    from drydem.cli import main
+    from drydem.io.model_file import save_model
+
+    save_model(dd.build_model(prisms(), density=2400.0), tmp_path / "crossed.toml")
+    run = CliRunner().invoke(main, ["check", str(tmp_path / "crossed.toml")])
+    assert run.exit_code == 0, run.output
+    assert "contacts        1 (1 edge-edge), 1 sub-contacts" in run.output
+
+
 def test_a_cube_falling_off_its_edge_lands_with_the_rigid_bodys_angular_velocity():
     """An a = 0.2 m cube on a fixed slab, on its edge with its face tilted 43 deg (2 deg past the
     balance point of 45 deg), released undamped: it pivots about the edge (friction 1, no slip)

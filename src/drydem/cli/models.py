@@ -34,7 +34,9 @@ def check(target: str, settle: bool, strict: bool, unit: str) -> None:
     a model with no fixed block, which fall under gravity."""
     from drydem.masonry.brief import brief_violations
     from drydem.analysis.support import unsupported
+    from drydem.engine.narrow_phase import kind_counts
     from drydem.engine.simulation import Simulation
+    from drydem.model.rotation import matrices
 
     found = resolve_target(target, unit)
     _strict_needs_a_wall(strict, found)
@@ -54,7 +56,11 @@ def check(target: str, settle: bool, strict: bool, unit: str) -> None:
     click.echo(f"blocks          {model.n_blocks} ({int(movable.sum())} movable, {int((~movable).sum())} fixed)")
     click.echo(f"mass            {model.total_mass:.6g} kg (movable blocks)")
     density = model.contact_density
-    click.echo(f"contacts        {len(c.pairs)} face contacts, {c.count} sub-contacts ({density.along} points per length, {density.across} across y)")
+    kinds = kind_counts(model.geometry, c.pairs, sim.state.position, matrices(sim.state.quaternion), tolerance=model.contact_tolerance,
+                        density=density)
+    of_kinds = ", ".join(f"{count} {name}" for name, count in kinds.items() if count)
+    click.echo(f"contacts        {len(c.pairs)}{f' ({of_kinds})' if of_kinds else ''}, {c.count} sub-contacts "
+               f"({density.along} points per length, {density.across} across y)")
     click.echo(f"contact area    {c.area.sum():.6g} m2, tolerance {model.contact_tolerance:.3g} m")
     click.echo(f"joint           {model.joint.stiffness_text}, friction {model.joint.friction:g}")
     mass_note = " (mass scaled)" if model.solver.mass_scaling else ""

@@ -987,6 +987,16 @@ def contact_kinds(found: Found) -> np.ndarray:
     return found.kind[found.count > 0].copy()
 
 
+def kind_counts(
+    geometry: FlatGeometry, pairs: np.ndarray, position: np.ndarray, rotation: np.ndarray, *, tolerance: float,
+    density: ContactDensity,
+) -> dict[str, int]:
+    """How many of the contacts of block ``pairs`` (k, 2) at centroids ``position`` (nb, 3) m and
+    rotations (nb, 3, 3) are of each kind, by :data:`KIND_NAMES`."""
+    kinds = contact_kinds(find(geometry, pairs, position, rotation, tolerance=tolerance, density=density))
+    return {name: int((kinds == kind).sum()) for kind, name in enumerate(KIND_NAMES)}
+
+
 def narrow_phase(
     geometry: FlatGeometry, candidates: np.ndarray, position: np.ndarray, rotation: np.ndarray, *, tolerance: float,
     density: ContactDensity,
