@@ -433,6 +433,13 @@ def test_vertex_shares_give_the_polygon_s_area_and_first_moments_and_a_repeated_
     twice = np.empty(len(repeated))
     npm._vertex_shares(repeated, len(repeated), twice)
     np.testing.assert_allclose(np.r_[twice[:2], twice[2] + twice[3], twice[4:]], shares, rtol=0, atol=1e-12 * area)
+    # a thin piece 10 m from the frame's origin (a large slab's face, its first vertex far away):
+    # a third to each corner still, to the digits its coordinates have there (1e-15 m of 1e-9 m;
+    # computed from the origin, the shares were +-1e4 times the area)
+    thin = np.array([[0.0, 0.0], [0.05, 0.0], [0.05, 1e-9]]) + 10.0
+    thirds = np.empty(3)
+    npm._vertex_shares(thin, 3, thirds)
+    np.testing.assert_allclose(thirds, 0.5 * 0.05 * 1e-9 / 3, rtol=1e-5)
     # each corner of a rectangle a quarter
     rectangle = np.empty(4)
     npm._vertex_shares(polygon.rectangle(0.0, 0.02, 0.0, 0.01), 4, rectangle)
@@ -458,4 +465,18 @@ def test_a_polygon_contact_has_a_point_at_each_corner_and_the_polygon_s_area_and
     assert sub.area.sum() == pytest.approx(area, rel=1e-12)
     np.testing.assert_allclose(sub.area @ x[:, :2], 0.0, rtol=0, atol=1e-12 * area * 0.02)  # centred on the axis
     np.testing.assert_allclose(gap, 0.0, rtol=0, atol=1e-12 * 0.02)
+
+
+def test_a_contact_whose_points_outgrow_its_row_is_flagged_and_found_again_in_a_wider_one():
+    # a 40-sided base at 4 points per length has 52 points (its 40 corners, 12 grid points): more
+    # than a row sized for a bilinear grid (45); find sizes rows for the pairs' largest face
+    model = prism_model(40, 0.02, 0.12)
+    position, rotation = at_rest(list(model.block_shape))
+    pairs, density = np.array([[0, 1]]), model.contact_density
+    narrow = npm.Found.empty(1, npm.max_points(density.along, density.across, 0))
+    npm.find_sub_contacts(model.geometry, position, rotation, pairs, model.contact_tolerance, density.along, density.across,
+                          np.asarray(density.across_axis, dtype=float), narrow)
+    assert narrow.count[0] == -1  # flagged, not cut short
+    found = npm.find(model.geometry, pairs, position, rotation, tolerance=model.contact_tolerance, density=density)
+    assert found.count[0] == 52 and found.areas[0, :52].sum() == pytest.approx(0.5 * 40 * 0.02**2 * np.sin(2 * np.pi / 40), rel=1e-12)
 

@@ -12,7 +12,7 @@ def signed_area(poly: np.ndarray) -> float:
     Plain Python: contact polygons have 3 to 8 vertices, where NumPy's call overhead dominates."""
     if len(poly) < 3:
         return 0.0
-    pts = poly.tolist()
+    pts = (np.asarray(poly) - poly[0]).tolist()  # relative to a vertex: a small polygon far from the origin keeps its digits
     total = 0.0
     x0, y0 = pts[-1]
     for x1, y1 in pts:
@@ -22,12 +22,12 @@ def signed_area(poly: np.ndarray) -> float:
 
 
 def centroid(poly: np.ndarray) -> np.ndarray:
-    """Area centroid of a polygon with non-zero area, m."""
-    x, y = poly[:, 0], poly[:, 1]
+    """Area centroid of a polygon with non-zero area, m (computed relative to a vertex)."""
+    x, y = (np.asarray(poly) - poly[0]).T
     xn, yn = np.roll(x, -1), np.roll(y, -1)
     cross = x * yn - xn * y
     a = 3.0 * cross.sum()
-    return np.array([((x + xn) * cross).sum() / a, ((y + yn) * cross).sum() / a])
+    return poly[0] + np.array([((x + xn) * cross).sum() / a, ((y + yn) * cross).sum() / a])
 
 
 def counter_clockwise(poly: np.ndarray) -> np.ndarray:

@@ -22,8 +22,9 @@ parallel to the reference face (a face contact stays one while its blocks rock a
 its open part simply beyond the tolerance), or when the incident vertices within the tolerance of
 the reference plane span an area: the contact polygon is discretised into sub-contacts as 3DEC's
 contact points: a tensor grid whose spacing puts ``points_per_length`` points along the full
-length of the smaller face, ends included, each point carrying its trapezoid share of the area
-(the areas sum to the polygon's area); in-plane models need only 1 point across the width. The
+length of the smaller face, ends included, each point carrying its share of the area (trapezoid
+on a quadrilateral; the areas sum to the polygon's area, less dropped slivers); in-plane models
+need only 1 point across the width. The
 algorithm (the tests hold it to a plain-Python oracle written one pair at a time): most opposed
 incident face, Sutherland-Hodgman overlap in the reference plane, sub-contact grid (bilinear on
 quadrilaterals, trapezoid areas; a lumped grid on other polygons: the grid's lines cut the
@@ -199,23 +200,31 @@ def _face_2d(geom, block, face, verts, origin, u, v, out):
 
 @numba.njit(cache=True)
 def _area(poly, count):
+    """The shoelace formula, relative to the first vertex (a small polygon far from the frame's
+    origin keeps its digits)."""
+    if count < 3:
+        return 0.0
+    ox, oy = poly[0, 0], poly[0, 1]
     total = 0.0
     for i in range(count):
         j = (i + 1) % count
-        total += poly[i, 0] * poly[j, 1] - poly[j, 0] * poly[i, 1]
-    return 0.5 * total if count >= 3 else 0.0
+        total += (poly[i, 0] - ox) * (poly[j, 1] - oy) - (poly[j, 0] - ox) * (poly[i, 1] - oy)
+    return 0.5 * total
 
 
 @numba.njit(cache=True)
 def _centroid(poly, count):
+    """The area centroid, relative to the first vertex as :func:`_area`."""
+    ox, oy = poly[0, 0], poly[0, 1]
     a, cx, cy = 0.0, 0.0, 0.0
     for i in range(count):
         j = (i + 1) % count
-        cross = poly[i, 0] * poly[j, 1] - poly[j, 0] * poly[i, 1]
+        xi, yi, xj, yj = poly[i, 0] - ox, poly[i, 1] - oy, poly[j, 0] - ox, poly[j, 1] - oy
+        cross = xi * yj - xj * yi
         a += cross
-        cx += (poly[i, 0] + poly[j, 0]) * cross
-        cy += (poly[i, 1] + poly[j, 1]) * cross
-    return cx / (3.0 * a), cy / (3.0 * a)
+        cx += (xi + xj) * cross
+        cy += (yi + yj) * cross
+    return ox + cx / (3.0 * a), oy + cy / (3.0 * a)
 
 
 @numba.njit(cache=True, inline="always")
@@ -422,16 +431,16 @@ def _near(uv, start, end, x, y, tol):
 
 
 @numba.njit(cache=True)
-def _add_point(uv, area, count, x, y, share, tol, first, i, j, ny):
+def _add_point(uv, area, count, x, y, share, tol, first, i, j, ny, apart):
     """``share`` m2 onto the point within ``tol`` of (x, y), a vertex of piece (i, j) of the lumped
-    grid, or onto a new one. A point it shares is one of pieces (i - 1, j - 1 ... j + 1), (i, j - 1)
-    or its own (``first``: each piece's first point, pieces in order (0, 0), (0, 1), ..., ``ny``
-    a column), so only theirs are looked at. Returns the buffers (grown when full) and the
-    number of points."""
-    p = -1
-    if i > 0:
+    grid, or onto a new one. Where the grid's lines are ``apart`` by more than twice ``tol``, a
+    point it shares is one of pieces (i - 1, j - 1 ... j + 1), (i, j - 1) or its own (``first``:
+    each piece's first point, pieces in order (0, 0), (0, 1), ..., ``ny`` a column), and only
+    theirs are looked at; else all. Returns the buffers (grown when full) and the number of points."""
+    p = -1 if apart else _near(uv, 0, count, x, y, tol)
+    if apart and i > 0:
         p = _near(uv, first[(i - 1) * ny + max(j - 1, 0)], first[(i - 1) * ny + min(j + 1, ny - 1) + 1], x, y, tol)
-    if p < 0:
+    if apart and p < 0:
         p = _near(uv, first[i * ny + max(j - 1, 0)], count, x, y, tol)
     if p >= 0:
         area[p] += share
@@ -447,10 +456,12 @@ def _add_point(uv, area, count, x, y, share, tol, first, i, j, ny):
 
 @numba.njit(cache=True)
 def _lumped(overlap, count, face_a, na, face_b, nb, along, across, au, av, tol, sliver, uv, area):
-    """As _lumped_grid of the plain-Python oracle (tests/oracles/contacts.py); returns the number
-    of points and the ``uv``, ``area`` buffers (grown if the points outgrew them)."""
+    """As _lumped_grid of the plain-Python oracle (tests/oracles/contacts.py), which looks for a
+    vertex's point among all (here among the neighbouring pieces', :func:`_add_point`); returns
+    the number of points and the ``uv``, ``area`` buffers (grown if the points outgrew them)."""
     xs, middle_x = _axis_lines(overlap, count, 0, face_a, na, face_b, nb, along, across, au, av)
     ys, middle_y = _axis_lines(overlap, count, 1, face_a, na, face_b, nb, along, across, au, av)
+    apart = min(xs[1] - xs[0], ys[1] - ys[0]) > 2.0 * tol  # the lines equally spaced
     rect = np.empty((4, 2))
     piece = np.empty((count + 4, 2))  # a rectangle adds 4 vertices at most
     shares = np.empty(count + 4)
@@ -473,7 +484,7 @@ def _lumped(overlap, count, face_a, na, face_b, nb, along, across, au, av, tol, 
             for p in range(m):
                 x = piece[p, 0] if np.isnan(middle_x) else middle_x
                 y = piece[p, 1] if np.isnan(middle_y) else middle_y
-                uv, area, points = _add_point(uv, area, points, x, y, shares[p], tol, first, i, j, ny)
+                uv, area, points = _add_point(uv, area, points, x, y, shares[p], tol, first, i, j, ny, apart)
     return points, uv, area
 
 
@@ -893,11 +904,12 @@ def find_sub_contacts(geom, position, rotation, candidates, tolerance, along, ac
     """Fill ``found`` (a :class:`Found` with room for the candidates and :func:`max_points`
     points each) for every candidate pair (i < j), in parallel over chunks of :data:`CHUNK`
     pairs; each pair writes only its own row, so the result is the same for any thread count.
-    A pair whose points outgrew the row (round-off can add a polygon's corner) has count -1."""
+    Rows of at least ``max_points(along, across, 0)`` (a bilinear grid's points); a pair whose
+    points outgrew its row (a lumped grid's, :func:`find` sizes the rows for them) has count -1."""
     # polygons: a face as large as the largest, an overlap of two (at most both faces' vertices)
     largest = _largest(geom.face_start)
     m = found.gaps.shape[1]
-    if found.count.shape[0] < candidates.shape[0] or m < max_points(along, across, largest):
+    if found.count.shape[0] < candidates.shape[0] or m < max_points(along, across, 0):
         raise ValueError("found has too little room for the candidates' points")
     # the two blocks' world geometry, in buffers for the largest block (no allocation per pair)
     largest_v, largest_f = _largest(geom.vertex_start), _largest(geom.block_face_start)
@@ -941,7 +953,7 @@ def assemble(found, position, rotation):
     c = 0
     s = 0
     for k in range(found.count.shape[0]):
-        if found.count[k] == 0:
+        if found.count[k] <= 0:
             continue
         ref, inc = found.ref[k], found.inc[k]
         pairs[c, 0], pairs[c, 1] = ref, inc
@@ -969,17 +981,26 @@ def find(
     """The :class:`Found` of the candidate block pairs (k, 2) at centroids ``position`` (nb, 3) m
     and rotations (nb, 3, 3): one compiled call (:func:`find_sub_contacts`), again with rows twice
     as wide where a contact's points outgrew :func:`max_points` (round-off; not seen)."""
-    width = max_points(density.along, density.across, _largest(geometry.face_start))
+    pairs = np.ascontiguousarray(candidates, dtype=np.int64).reshape(-1, 2)
+    width = max_points(density.along, density.across, _largest_face(geometry, pairs))
     while True:
         found = Found.empty(len(candidates), width)
         find_sub_contacts(
             geometry, np.ascontiguousarray(position, dtype=float), np.ascontiguousarray(rotation, dtype=float),
-            np.ascontiguousarray(candidates, dtype=np.int64).reshape(-1, 2), tolerance, density.along, density.across,
-            np.asarray(density.across_axis, dtype=float), found,
+            pairs, tolerance, density.along, density.across, np.asarray(density.across_axis, dtype=float), found,
         )
         if (found.count >= 0).all():
             return found
         width *= 2
+
+
+def _largest_face(geometry: FlatGeometry, pairs: np.ndarray) -> int:
+    """The most vertices of a face of the blocks of ``pairs`` (k, 2); 0 for none (the rows of a
+    re-detection of bricks stay narrow in a model with one many-sided drum)."""
+    if not len(pairs):
+        return 0
+    per_block = np.maximum.reduceat(np.diff(geometry.face_start), geometry.block_face_start[:-1])
+    return int(per_block[pairs].max())
 
 
 def contact_kinds(found: Found) -> np.ndarray:
