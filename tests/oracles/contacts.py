@@ -114,8 +114,9 @@ def _grid(
     a face maps back to the same material points. Other polygons get an axis-aligned lumped grid
     (:func:`_lumped_grid`): points where its lines cross inside the polygon, where they cross its
     sides and at its corners, so that the points span the whole polygon (a block rocks on its
-    outermost corner) and give its area and first moments exactly. n = 1 in both directions: one
-    node at the polygon's centroid.
+    outermost corner) and give its area and first moments (less dropped slivers; across an axis
+    of one point, its points lie on the middle line). n = 1 in both directions: one node at the
+    polygon's centroid.
 
     A node of at most ``sliver`` m2 is a sliver (:data:`oracles.SLIVER_FRACTION`), which
     :func:`face_contact` drops; a piece of the lumped grid that small is left out here already.

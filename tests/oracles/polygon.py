@@ -97,7 +97,7 @@ def vertex_shares(poly: np.ndarray) -> np.ndarray:
     """Each vertex's share of the convex polygon's area (m2): half of each of its two triangles
     with the polygon's area centroid, in NumPy (the oracle of the compiled loop
     :func:`drydem.engine.narrow_phase._vertex_shares`)."""
-    to_next = np.roll(poly, -1, axis=0) - centroid(poly)
     to_this = poly - centroid(poly)
+    to_next = np.roll(to_this, -1, axis=0)
     triangles = 0.5 * (to_this[:, 0] * to_next[:, 1] - to_this[:, 1] * to_next[:, 0])
     return 0.5 * (triangles + np.roll(triangles, 1))

@@ -927,8 +927,9 @@ def find_sub_contacts(geom, position, rotation, candidates, tolerance, along, ac
         touching = np.empty(largest_v, np.int64)
         u, v, axis = np.empty(3), np.empty(3), np.empty(3)
         for k in range(chunk * CHUNK, min(n, (chunk + 1) * CHUNK)):
-            overlap, corners, uv, area = _pair(geom, position, rotation, k, candidates[k, 0], candidates[k, 1], tolerance, along, across, across_axis, found,
-                                     uv, area, face_a, face_b, overlap, corners, va, vb, na, nb, ea, eb, touching, u, v, axis)
+            overlap, corners, uv, area = _pair(geom, position, rotation, k, candidates[k, 0], candidates[k, 1], tolerance, along, across,
+                                               across_axis, found, uv, area, face_a, face_b, overlap, corners, va, vb, na, nb, ea, eb,
+                                               touching, u, v, axis)
 
 
 @numba.njit(cache=True)
