@@ -52,10 +52,13 @@ area h(along) h(across) / 4, the quarter cell a face grid's corner point carries
 edge rows of half a cell's width). An edge-face contact is a grid's edge row: points at spacing
 h along the segment (``along``, or ``across`` along the model's across axis), each its trapezoid
 share of the segment's length times half a spacing, h / 2, the width the edge row of a face grid
-carries. So a block turning from its edge onto its face keeps, at the turn, the stiffness of the
-same row of points, and a cube on its edge carries its weight on points along the edge with a
-closure W / (kn L h / 2). (Itasca's documentation, searched, gives no published rule for the
-contact area of 3DEC's vertex-face and edge-edge contacts; this one is ours.)
+carries. So a cube turning from its edge onto its face keeps, at the turn, the stiffness of the
+same row of points, and carries its weight on points along the edge with a closure
+W / (kn L h / 2). A slender block does not: L is the whole block's, so its corner point carries
+several times its face grid's corner share (3.4 times for a hexagonal prism twice as high as
+wide, measured by a hunt), and the point's force jumps at the turn. (Itasca's documentation,
+searched, gives no published rule for the contact area of 3DEC's vertex-face and edge-edge
+contacts; this one is ours.)
 
 Geometry comes flattened (:class:`drydem.model.geometry.FlatGeometry`), so one call handles every
 stale pair of a re-detection, in parallel over chunks of candidates (each chunk with its own
