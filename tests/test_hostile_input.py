@@ -534,6 +534,18 @@ def test_no_equilibrium_under_gravity_exits_non_zero_without_a_verdict(tmp_path)
     assert "cannot stand" not in result.output and (tmp_path / "run" / "summary.json").is_file()
 
 
+def test_a_tilt_whose_step_diverges_exits_non_zero_without_a_verdict_and_keeps_its_results(tmp_path, monkeypatch):
+    from test_tilt import diverging_past
+
+    diverging_past(monkeypatch, 2.5)
+    result = run("tilt", model_file(tmp_path), "--increment", "1", "--out", tmp_path / "run")
+    assert refused(result, "last equilibrium 2.00 deg; the integration of the next step diverged", "no collapse angle",
+                   "reduce [solver] timestep_safety = 0.8")
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["ended_by"] == "integration diverged" and summary["collapse_angle_deg"] is None
+    assert (tmp_path / "run" / "pushover.csv").read_text().count("\n") == 4  # the header and 0, 1, 2 deg
+
+
 def test_check_names_a_block_that_touches_nothing(tmp_path):
     text = BRICK_ON_BASE + '[[block]]\nname = "floater"\nbox = { min = [0.0, 0.0, 0.5], max = [0.025, 0.012, 0.5055] }\n'
     result = run("check", model_file(tmp_path, text))

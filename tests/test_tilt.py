@@ -384,6 +384,43 @@ def test_a_step_without_equilibrium_nor_collapse_gives_no_collapse_angle():
     assert result.last_equilibrium_deg == 25.0 and result.collapse_angle_deg is None and result.load_multiplier is None
 
 
+#: cycles a step made to diverge runs before it does (:func:`diverging_past`)
+CYCLES_BEFORE_DIVERGING = 50
+
+
+def diverging_past(monkeypatch, angle_deg):
+    """Make every cycling at a tilt above ``angle_deg`` blow up after CYCLES_BEFORE_DIVERGING
+    cycles, its state ruined (NaN speeds) and DivergenceError raised, as the step an octagonal
+    prism toppled off its slab's edge in did at kn = 1e12 Pa/m (a hunt's)."""
+    real = dd.Simulation.cycle_to_equilibrium
+
+    def cycle_to_equilibrium(self, *args, gravity=(0.0, 0.0, -dd.G), **kwargs):
+        if math.degrees(math.atan2(abs(gravity[0]), -gravity[2])) > angle_deg:
+            self.cycle(CYCLES_BEFORE_DIVERGING, gravity=gravity)
+            self.state.velocity[:] = np.nan
+            raise dd.DivergenceError("the integration diverged (made to, by the test)")
+        return real(self, *args, gravity=gravity, **kwargs)
+
+    monkeypatch.setattr(dd.Simulation, "cycle_to_equilibrium", cycle_to_equilibrium)
+
+
+@pytest.mark.parametrize("refinements", [0, 2])
+def test_a_step_that_diverges_ends_the_tilt_without_a_verdict_and_keeps_its_equilibria(monkeypatch, refinements):
+    # a block sliding at atan 0.5 = 26.6 deg, made to diverge above 2.5 deg: no collapse, the
+    # equilibria up to 2 deg reported (the error stopped the analysis, and they were lost); an
+    # adaptive coarse step of 4 deg that diverges is undone and halved, as one that fails
+    diverging_past(monkeypatch, 2.5)
+    model = stack_model([0.0055], joint=dd.JointMaterial(kn=1e8, ks=1e8, friction=0.5))
+    result = tilt_analysis(model, TiltSettings(increment_deg=1.0, adaptive=refinements > 0, refinements=refinements))
+    assert result.ended_by == "integration diverged" and result.stable_under_gravity
+    assert result.last_equilibrium_deg == 2.0 and result.collapse_angle_deg is None
+    assert [r.tilt_deg for r in result.records][-1] == 2.0
+    # the diverged cycles counted; the state reported is the last equilibrium's, not the ruined one
+    assert result.cycles >= sum(r.cycles for r in result.records) + CYCLES_BEFORE_DIVERGING * (1 + (refinements > 0))
+    assert np.isfinite(result.final_state.velocity).all()
+    assert np.array_equal(result.final_state.position, result.collapse_state.position)
+
+
 # --- the table turned about x (TiltSettings.tilt_axis): the lateral load along y -----------------
 
 

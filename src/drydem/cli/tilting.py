@@ -124,9 +124,9 @@ def tilt_options(*, adaptive: bool):
 def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, video, unit) -> None:
     """Tilting-table analysis of TARGET (a built-in wall, a wall or model file, or a
     .wrl/.obj/.stl/.json): collapse angle, pushover curve, Eurocode 8 drift-limit angles, plots.
-    Exits 1 when equilibrium could not be reached within max_cycles (no verdict), 130 or 143
-    when interrupted (the last equilibrium is kept for --resume)."""
-    from drydem.analysis.tilt import NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY
+    Exits 1 when equilibrium could not be reached within max_cycles or a step diverged (no
+    verdict), 130 or 143 when interrupted (the last equilibrium is kept for --resume)."""
+    from drydem.analysis.tilt import DIVERGED, NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY
 
     found = resolve_target(target, unit)
     try:
@@ -146,7 +146,7 @@ def tilt(target, tilt: TiltOptions, out, resume, overwrite, vtk, save_every, vid
     result, series = _run_tilt(found, model, settings, folder, saved=saved, series=vtk or video, save_every=save_every, go_on=go_on)
     if video:
         _render(series.folder, folder / "collapse.mp4", fps=8.0)
-    if result.ended_by in (NO_EQUILIBRIUM_UNDER_GRAVITY, NO_EQUILIBRIUM):
+    if result.ended_by in (NO_EQUILIBRIUM_UNDER_GRAVITY, NO_EQUILIBRIUM, DIVERGED):
         raise SystemExit(1)
 
 
@@ -266,6 +266,7 @@ def _written(write: Callable[[], None], folder: Path, received, go_on: str) -> N
 def _tilt_outputs(found: Target, model: Model, result, folder: Path, series) -> None:
     """Write the figures and, last (a finished run's mark: :func:`_written`), summary.json of a
     tilting analysis, and print what it found."""
+    from drydem.analysis.tilt import DIVERGED
     from drydem.io.results import tilt_summary, write_summary
     from drydem.report.plots import mechanism_figure, pushover_figure
 
@@ -275,8 +276,9 @@ def _tilt_outputs(found: Target, model: Model, result, folder: Path, series) -> 
     states = [
         (f"last equilibrium ({last:.2f} deg)" if last is not None else "under gravity", result.collapse_state or result.final_state,
          lost_by_then),
-        (f"past collapse ({result.ended_by})", result.final_state, frozenset(name for name, _ in result.lost_blocks)),
     ]
+    if result.ended_by != DIVERGED:  # a diverged step's state is nothing to show
+        states.append((f"past collapse ({result.ended_by})", result.final_state, frozenset(name for name, _ in result.lost_blocks)))
     mechanism_figure(model, states, folder / "mechanism.png", monitored=result.monitored_block,
                      load_direction=result.settings.load_direction)
     write_summary(folder, {"target": found.recorded} | tilt_summary(result, model))
@@ -295,7 +297,7 @@ def _tilt_outputs(found: Target, model: Model, result, folder: Path, series) -> 
 def _tilt_verdict(result, model: Model) -> list[str]:
     """What the analysis found, in words that claim no more than it showed."""
     from drydem.analysis.support import too_soft_joints
-    from drydem.analysis.tilt import MAXIMUM_ANGLE, NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY
+    from drydem.analysis.tilt import DIVERGED, MAXIMUM_ANGLE, NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY
 
     fell = ", ".join(repr(name) for name, _ in result.lost_blocks[:5]) + (", ..." if len(result.lost_blocks) > 5 else "")
     if result.stable_under_gravity is False:
@@ -313,6 +315,10 @@ def _tilt_verdict(result, model: Model) -> list[str]:
         return [f"last equilibrium {result.last_equilibrium_deg:.2f} deg; the next step reached no equilibrium within [solver] "
                 f"max_cycles = {model.solver.max_cycles} and did not collapse either: no collapse angle "
                 f"({more_cycles_advice(model, 'raise max_cycles to decide')})"]
+    if result.ended_by == DIVERGED:
+        return [f"last equilibrium {result.last_equilibrium_deg:.2f} deg; the integration of the next step diverged (more "
+                f"kinetic energy than gravity can have supplied): no collapse angle; reduce [solver] timestep_safety = "
+                f"{model.solver.timestep_safety:g} or check the joint stiffness and block masses, and run again"]
     return [f"collapse angle  {result.collapse_angle_deg:.2f} deg (load multiplier {result.load_multiplier:.4f}; ended by {result.ended_by})"]
 
 

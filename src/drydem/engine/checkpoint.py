@@ -26,6 +26,8 @@ from drydem.files import regular_file, replaced_atomically, uninterrupted
 from drydem.model.state import State
 
 _PARTS = {"state": State, "contacts": SubContacts, "neighbours": NeighbourList, "broad_state": State}
+#: the Snapshot's timestep and velocity step, s (NaN for None): absent from an earlier drydem's checkpoint
+OPTIONAL_STEPS = ("timestep", "velocity_step_s")
 
 
 def save_checkpoint(path: Path, snapshot: Snapshot, progress: dict) -> None:
@@ -35,6 +37,7 @@ def save_checkpoint(path: Path, snapshot: Snapshot, progress: dict) -> None:
     arrays |= {"active": snapshot.active, "cycles": snapshot.cycles, "time_s": snapshot.time_s,
                "scaled_timestep": np.nan if snapshot.scaled_timestep is None else snapshot.scaled_timestep,
                "farthest_travel_kg_m": snapshot.farthest_travel_kg_m, "blocks_digest": snapshot.blocks_digest}
+    arrays |= {name: np.nan if getattr(snapshot, name) is None else getattr(snapshot, name) for name in OPTIONAL_STEPS}
     arrays = {name: np.asarray(value) for name, value in arrays.items()}
     arrays |= {f"progress.{name}": np.asarray(value) for name, value in progress.items()}
     arrays[DIGEST] = np.asarray(digest(arrays))
@@ -81,9 +84,10 @@ def load_checkpoint(path: Path) -> tuple[Snapshot, dict]:
             scaled, time_s, farthest = (float(data[key]) for key in ("scaled_timestep", "time_s", "farthest_travel_kg_m"))
             if not 0.0 <= farthest < np.inf:
                 raise ValueError(f"farthest_travel_kg_m = {farthest}: must be a finite number >= 0")
+            steps = {name: float(data[name]) for name in OPTIONAL_STEPS if name in data.files}
             snapshot = Snapshot(**parts, active=data["active"], cycles=int(data["cycles"]), time_s=time_s,
                                 scaled_timestep=None if np.isnan(scaled) else scaled, blocks_digest=str(data["blocks_digest"]),
-                                farthest_travel_kg_m=farthest)
+                                farthest_travel_kg_m=farthest, **{name: None if np.isnan(step) else step for name, step in steps.items()})
             progress = {key.removeprefix("progress."): data[key] for key in data.files if key.startswith("progress.")}
     except (OSError, ValueError, KeyError, EOFError, MemoryError, zipfile.BadZipFile, ModelError) as exc:
         # np.load raises each of these for a missing, empty, truncated or foreign file (MemoryError:

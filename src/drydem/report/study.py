@@ -73,8 +73,8 @@ YOURS_NOTE = (
     "displacement, maximum angle, loading, tilt axis, monitored block or lost-block rule): drydem's results alone, with no "
     "published values to compare them with. kn, ks, friction, points: the run's overrides, else its model's as recorded "
     "('-': not recorded). "
-    "Collapse angle: the last tilt in equilibrium; '>= X': no equilibrium within max_cycles after X deg, and no collapse "
-    "either (a lower bound); 'none up to X': no collapse up to the run's maximum angle, X deg (a lower bound); 'cannot "
+    "Collapse angle: the last tilt in equilibrium; '>= X': no equilibrium within max_cycles after X deg (or that step's "
+    "integration diverged), and no collapse either (a lower bound); 'none up to X': no collapse up to the run's maximum angle, X deg (a lower bound); 'cannot "
     "stand': the model falls under its own weight. DLS: the tilt at which the monitored "
     "drift first reaches 1 % (EN 1998-1 4.4.3.2, the paper's damage limit state); '-': never before the collapse.")
 NO_PAPER_RUNS = ("No run of the paper's walls (the built-in WD1-WD7 at its friction): its tables and figures are left out.")
@@ -130,15 +130,15 @@ def _same(value, default) -> bool:
 
 def angle_text(summary: dict) -> str:
     """A tilting run's collapse angle for a table: the angle (deg); ">= X" for a run that found
-    no equilibrium within max_cycles past its last one (X deg) and no collapse either (a lower
-    bound, no verdict); "none up to X" for a run that reached its maximum angle, X deg, standing
+    no equilibrium within max_cycles past its last one (X deg), or diverged there, and no
+    collapse either (a lower bound, no verdict); "none up to X" for a run that reached its maximum angle, X deg, standing
     (a lower bound too); "cannot stand" for a model that falls under its own weight; "-" else (a
     run without equilibrium that records no last one). The angles are checked when the record is
     read (:data:`drydem.parametric.records.SUMMARY_RULES`)."""
-    from drydem.analysis.tilt import MAXIMUM_ANGLE, NO_EQUILIBRIUM
+    from drydem.analysis.tilt import DIVERGED, MAXIMUM_ANGLE, NO_EQUILIBRIUM
 
     bound = summary.get("last_equilibrium_deg", summary["collapse_angle_deg"])  # earlier versions gave it as the collapse angle
-    if summary.get("ended_by") == NO_EQUILIBRIUM and bound is not None:
+    if summary.get("ended_by") in (NO_EQUILIBRIUM, DIVERGED) and bound is not None:
         return f">= {bound:.1f}"
     if summary.get("ended_by") == MAXIMUM_ANGLE and bound is not None:
         return f"none up to {bound:.1f}"
@@ -681,7 +681,8 @@ def _table2(runs: Runs, paper: dict) -> str:
         rows.append([d, _cell(exp)] + [f"{_cell(p)} / {o}" for p, o in zip((la_a, la_na, dem9, dem10), ours)])
     return _table("Table 2: collapse angles (deg), paper / drydem",
                   ["wall", "experiment", "LA-A", "LA-NA", "DEM kn = 1e9", "DEM kn = 1e10"], rows) + (
-        "\n\nA cell '>= X': no equilibrium within max_cycles at the step after X deg, and no collapse either: a lower bound; "
+        "\n\nA cell '>= X': no equilibrium within max_cycles at the step after X deg (or that step's integration diverged), "
+        "and no collapse either: a lower bound; "
         "'none up to X': no collapse up to the run's maximum angle, X deg.")
 
 

@@ -16,8 +16,10 @@ measured along the load direction.
 cycling to equilibrium at each step, until the monitored point has moved
 ``stop_displacement_m`` horizontally, the monitored block has fallen out of the model (below,
 a part of the wall that collapses onto the rubble of another may come to rest within the
-stop displacement), or equilibrium cannot be reached within the solver's ``max_cycles``.
-The collapse angle is the largest tilt at which the model was in equilibrium.
+stop displacement), or equilibrium cannot be reached within the solver's ``max_cycles``, or
+the step's integration blows up (:class:`~drydem.errors.DivergenceError`; an adaptive coarse
+step is undone and halved, as a failed one): the last two are no verdict, and the equilibria
+found before are reported. The collapse angle is the largest tilt at which the model was in equilibrium.
 
 Predictor: each step starts from the trend of the last two equilibria, extrapolated to the new
 tilt and applied as one cycle's rigid motion (:meth:`~drydem.engine.simulation.Simulation.move`; the joints
@@ -65,13 +67,13 @@ from drydem.analysis.tilt.protocol import (
 )
 from drydem.analysis.tilt.run import TiltRun, Trace, elastic_closure, trial_limit
 from drydem.analysis.tilt.settings import (
-    EQUILIBRIUM, FELL, GAVE_UP, LOADINGS, MAX_CYCLES, MAXIMUM_ANGLE, MONITOR_FELL, MONITOR_TOPPLED, NO_EQUILIBRIUM,
+    DIVERGED, EQUILIBRIUM, FELL, GAVE_UP, LOADINGS, MAX_CYCLES, MAXIMUM_ANGLE, MONITOR_FELL, MONITOR_TOPPLED, NO_EQUILIBRIUM,
     NO_EQUILIBRIUM_UNDER_GRAVITY, SETTING_RANGES, STOP_DISPLACEMENT, TILT_AXES, TOPPLED_RAD, UNSTABLE_UNDER_GRAVITY, Frame, Record,
     TiltResult, TiltSettings, check_loading, check_stop_displacement, monitor_index, monitored_block, wall_height,
 )
 
 __all__ = [
-    "CHECKPOINT_EVERY", "CHECKPOINT_EVERY_S", "EQUILIBRIUM", "FELL", "FRAME_SAMPLING", "GAVE_UP", "LOADINGS",
+    "CHECKPOINT_EVERY", "CHECKPOINT_EVERY_S", "DIVERGED", "EQUILIBRIUM", "FELL", "FRAME_SAMPLING", "GAVE_UP", "LOADINGS",
     "MAX_CYCLES", "MAXIMUM_ANGLE", "MONITOR_FELL", "MONITOR_TOPPLED",
     "NO_EQUILIBRIUM", "NO_EQUILIBRIUM_UNDER_GRAVITY", "SETTING_RANGES", "STOP_DISPLACEMENT", "TILT_AXES", "TOPPLED_RAD",
     "UNSTABLE_UNDER_GRAVITY",

@@ -16,9 +16,10 @@ from pathlib import Path
 from drydem.analysis.tilt import checkpointing
 from drydem.analysis.tilt.run import Saved, TiltRun, Trace, trial_limit
 from drydem.analysis.tilt.settings import (
-    EQUILIBRIUM, MAX_CYCLES, MAXIMUM_ANGLE, MONITOR_FELL, MONITOR_TOPPLED, NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY, STOP_DISPLACEMENT,
-    UNSTABLE_UNDER_GRAVITY, Frame, Record, TiltResult, TiltSettings,
+    DIVERGED, EQUILIBRIUM, MAX_CYCLES, MAXIMUM_ANGLE, MONITOR_FELL, MONITOR_TOPPLED, NO_EQUILIBRIUM, NO_EQUILIBRIUM_UNDER_GRAVITY,
+    STOP_DISPLACEMENT, UNSTABLE_UNDER_GRAVITY, Frame, Record, TiltResult, TiltSettings,
 )
+from drydem.errors import DivergenceError
 from drydem.model.assembly import Model
 from drydem.model.parameters import CALLBACK, FILE_PATH, FLAG, InstanceOf, Range, argument_problems, refuse
 
@@ -125,7 +126,7 @@ def stand_under_gravity(protocol: TiltProtocol) -> bool | None:
 def step_up(protocol: TiltProtocol) -> str:
     """Stage 2: tilt by ``protocol.step`` and cycle to equilibrium, step after step, up to the
     maximum angle; a failed coarse adaptive trial (given up early by
-    :func:`~drydem.analysis.tilt.run.trial_limit`) is undone and halved, and so is a coarse
+    :func:`~drydem.analysis.tilt.run.trial_limit`, or diverged) is undone and halved, and so is a coarse
     step that would pass the maximum angle (the angles below it are tried in increments, as
     anywhere else). Returns why it ended (TiltResult.ended_by)."""
     run, settings = protocol.run, protocol.run.settings
@@ -137,7 +138,10 @@ def step_up(protocol: TiltProtocol) -> str:
             protocol.step /= 2
             continue
         give_up = trial_limit(run, protocol.records, protocol.step, settings) if coarse else None
-        outcome, cycles = run.equilibrate(protocol.theta + protocol.step, give_up=give_up)
+        try:
+            outcome, cycles = run.equilibrate(protocol.theta + protocol.step, give_up=give_up)
+        except DivergenceError:
+            outcome = DIVERGED
         if outcome == EQUILIBRIUM:
             protocol.accept(round(protocol.theta + protocol.step, 9), cycles)
         elif coarse:
@@ -157,11 +161,12 @@ def tilt_result(protocol: TiltProtocol, stable: bool | None, ended_by: str, runt
         last_equilibrium_deg=protocol.theta if stable else None,
         collapse_angle_deg=protocol.theta if ended_by in (MONITOR_FELL, MONITOR_TOPPLED, STOP_DISPLACEMENT) else None,
         records=protocol.records,
-        lost_blocks=run.lost,
+        # a diverged step's falls are no more a result than its state
+        lost_blocks=[lost for lost in run.lost if lost[1] <= protocol.theta + 1e-9] if ended_by == DIVERGED else run.lost,
         cycles=run.sim.cycles,
         runtime_s=runtime_s,
         collapse_state=run.equilibria[-1][1] if run.equilibria else None,
-        final_state=run.sim.state.copy(),
+        final_state=run.equilibria[-1][1].copy() if ended_by == DIVERGED else run.sim.state.copy(),
         ended_by=ended_by,
     )
 
@@ -169,10 +174,14 @@ def tilt_result(protocol: TiltProtocol, stable: bool | None, ended_by: str, runt
 def replay_collapse(run: TiltRun, saved: Saved, theta_deg: float, *, vertical: bool = False) -> list[Frame]:
     """The frames past collapse: the step to ``theta_deg`` (stage 1 with ``vertical``) cycled
     again from ``saved``, the last equilibrium (or the model as drawn), a frame every
-    ``chunk_cycles / FRAME_SAMPLING`` cycles (:class:`~drydem.analysis.tilt.run.Trace`)."""
+    ``chunk_cycles / FRAME_SAMPLING`` cycles (:class:`~drydem.analysis.tilt.run.Trace`); the
+    frames up to a divergence, should the replay diverge (the result is the analysis's)."""
     run.restore(saved)
     trace = Trace()
-    run.equilibrate(theta_deg, vertical=vertical, chunk_cycles=max(1, run.settings.chunk_cycles // FRAME_SAMPLING), trace=trace)
+    try:
+        run.equilibrate(theta_deg, vertical=vertical, chunk_cycles=max(1, run.settings.chunk_cycles // FRAME_SAMPLING), trace=trace)
+    except DivergenceError:
+        pass
     return trace.frames
 
 
@@ -226,7 +235,7 @@ def tilt_analysis(
     else:
         ended_by = UNSTABLE_UNDER_GRAVITY if stable is False else NO_EQUILIBRIUM_UNDER_GRAVITY
     result = tilt_result(protocol, stable, ended_by, protocol.runtime_s())
-    if on_frame is not None and ended_by not in (MAXIMUM_ANGLE, NO_EQUILIBRIUM_UNDER_GRAVITY):
+    if on_frame is not None and ended_by not in (MAXIMUM_ANGLE, NO_EQUILIBRIUM_UNDER_GRAVITY, DIVERGED):
         theta = protocol.theta + protocol.step if stable else 0.0
         for frame in replay_collapse(run, protocol.last_good, theta, vertical=not stable):
             on_frame(frame)

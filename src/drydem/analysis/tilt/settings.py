@@ -35,6 +35,11 @@ UNSTABLE_UNDER_GRAVITY = "unstable under gravity"
 NO_EQUILIBRIUM_UNDER_GRAVITY = "no equilibrium under gravity within max_cycles"
 NO_EQUILIBRIUM = "no equilibrium within max_cycles"
 MAXIMUM_ANGLE = "maximum angle"
+#: a step after the last equilibrium blew up (:class:`~drydem.errors.DivergenceError`): no
+#: verdict, like NO_EQUILIBRIUM (found by a hunt: an octagonal prism overhanging its slab's edge
+#: at kn = 1e12 Pa/m diverged in the step it toppled in; the tilt stopped with the error, and the
+#: equilibria it had found were not reported)
+DIVERGED = "integration diverged"
 
 
 #: the allowed values of TiltSettings' numbers (a tilt of 90 deg or more is no tilting table)
@@ -188,7 +193,8 @@ class TiltResult:
     analysis stopped. ``last_equilibrium_deg``: the largest tilt in equilibrium;
     ``collapse_angle_deg`` is that tilt only when the next step collapsed (the monitored block
     fell or moved the stop displacement), else None (no collapse up to the maximum angle, or no
-    equilibrium within max_cycles, which is no verdict)."""
+    equilibrium within max_cycles, or a step that diverged, which are no verdict).
+    ``final_state``: where the cycling ended (the last equilibrium's state after a step that diverged)."""
 
     settings: TiltSettings
     monitored_block: str
