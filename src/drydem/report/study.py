@@ -74,8 +74,8 @@ YOURS_NOTE = (
     "published values to compare them with. kn, ks, friction, points: the run's overrides, else its model's as recorded "
     "('-': not recorded). "
     "Collapse angle: the last tilt in equilibrium; '>= X': no equilibrium within max_cycles after X deg (or that step's "
-    "integration diverged), and no collapse either (a lower bound); 'none up to X': no collapse up to the run's maximum angle, X deg (a lower bound); 'cannot "
-    "stand': the model falls under its own weight. DLS: the tilt at which the monitored "
+    "integration diverged), and no collapse either (a lower bound); 'none up to X': no collapse up to the run's maximum "
+    "angle, X deg (a lower bound); 'cannot stand': the model falls under its own weight. DLS: the tilt at which the monitored "
     "drift first reaches 1 % (EN 1998-1 4.4.3.2, the paper's damage limit state); '-': never before the collapse.")
 NO_PAPER_RUNS = ("No run of the paper's walls (the built-in WD1-WD7 at its friction): its tables and figures are left out.")
 NOTE = ("drydem's WD1-WD7 are reconstructions that obey the competition brief, not the original drawings "
@@ -131,10 +131,10 @@ def _same(value, default) -> bool:
 def angle_text(summary: dict) -> str:
     """A tilting run's collapse angle for a table: the angle (deg); ">= X" for a run that found
     no equilibrium within max_cycles past its last one (X deg), or diverged there, and no
-    collapse either (a lower bound, no verdict); "none up to X" for a run that reached its maximum angle, X deg, standing
-    (a lower bound too); "cannot stand" for a model that falls under its own weight; "-" else (a
-    run without equilibrium that records no last one). The angles are checked when the record is
-    read (:data:`drydem.parametric.records.SUMMARY_RULES`)."""
+    collapse either (a lower bound, no verdict); "none up to X" for a run that reached its
+    maximum angle, X deg, standing (a lower bound too); "cannot stand" for a model that falls
+    under its own weight; "-" else (a run without equilibrium that records no last one). The
+    angles are checked when the record is read (:data:`drydem.parametric.records.SUMMARY_RULES`)."""
     from drydem.analysis.tilt import DIVERGED, MAXIMUM_ANGLE, NO_EQUILIBRIUM
 
     bound = summary.get("last_equilibrium_deg", summary["collapse_angle_deg"])  # earlier versions gave it as the collapse angle
