@@ -50,7 +50,7 @@ def test_flat_drop_conserves_energy_to_second_order():
 def test_rocking_drop_in_3d_conserves_energy_to_first_order():
     # landing on a corner and rocking in 3D with ~150 contact re-detections: contact points that
     # switch on within a step cost O(dt) each, so the error halves with dt. Stated tolerance: 1 %
-    # of the drop energy at 1/20 of the critical timestep (measured 0.43 %; 1.2 % at 1/5; 3.9 % and
+    # of the drop energy at 1/20 of the critical timestep (measured 0.34 %; 1.2 % at 1/5; 3.9 % and
     # 15 % while the first velocity step after a change of timestep was the new step, not the mean)
     coarse, pressing, rotated = energy_error([3, 2], 0.2)
     fine, _, _ = energy_error([3, 2], 0.05)

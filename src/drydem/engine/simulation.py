@@ -533,8 +533,10 @@ class Simulation:
     # -- diagnostics ----------------------------------------------------------------------
     def energy(self, *, gravity=(0.0, 0.0, -G)) -> dict[str, float]:
         """Kinetic, gravitational and elastic energy, J (:func:`drydem.engine.diagnostics.energies`);
-        ``gravity`` as :meth:`cycle` takes it (:meth:`_gravity`)."""
-        return diagnostics.energies(self.model, self.state, self.contacts, self.timestep, self._gravity(gravity, "energy"))
+        ``gravity`` as :meth:`cycle` takes it (:meth:`_gravity`). The positions are rewound by
+        half their last step, dt_old = 2 velocity_step_s - dt right after a change of timestep."""
+        last_step = 2.0 * self._first_velocity_dt - self.timestep
+        return diagnostics.energies(self.model, self.state, self.contacts, last_step, self._gravity(gravity, "energy"))
 
     def reactions(self, block: int) -> np.ndarray:
         """Total contact force (N, world frame) that the other blocks exert on ``block`` (its
