@@ -74,19 +74,35 @@ def open_workers(workers: int | None = None, scheduler: str | None = None) -> It
 
 def connect(address: str, *, timeout_s: float = SCHEDULER_TIMEOUT_S):
     """A Dask client of the scheduler at ``address``; SweepError naming the address and what to
-    check when it is not an address or does not answer within ``timeout_s`` (Dask's own default
-    waits 30 s and then raises a bare OSError)."""
+    check when it is not an address (:func:`check_scheduler_address`, before any client is made)
+    or does not answer within ``timeout_s`` (Dask's own default waits 30 s and then raises a bare
+    OSError)."""
     from distributed import Client
 
+    check_scheduler_address(address)
     try:
         return Client(address, timeout=timeout_s)
-    except (ValueError, TypeError) as exc:
-        raise SweepError(f"scheduler {address!r} is not a scheduler address ({exc}): expected tcp://HOST:PORT, "
-                         "the address `dask scheduler` prints (port 8786 by default)") from None
     except OSError as exc:
         raise SweepError(f"cannot reach the Dask scheduler at {address} ({exc}): check that it is running "
                          "(`dask scheduler` prints its address), that the host and port are right, and that no firewall "
                          "blocks the port") from None
+
+
+def check_scheduler_address(address: str) -> None:
+    """SweepError unless ``address`` is a network address Dask can connect to: a known scheme
+    (tcp:// when none is given) and a HOST:PORT. Checked here rather than left to ``Client``: an
+    empty address there means "start a local cluster", and a half-made client that fails
+    leaves state behind in this process."""
+    from distributed.comm.addressing import parse_address, parse_host_port
+    from distributed.comm.registry import get_backend
+
+    try:
+        scheme, location = parse_address(address)
+        get_backend(scheme)
+        parse_host_port(location)
+    except (ValueError, TypeError) as exc:
+        raise SweepError(f"scheduler {address!r} is not a scheduler address ({exc}): expected tcp://HOST:PORT, "
+                         "the address `dask scheduler` prints (port 8786 by default)") from None
 
 
 def local_executor(workers: int) -> Executor:
