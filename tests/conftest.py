@@ -51,14 +51,16 @@ def stack_model(
     )
 
 
-def prism_model(sides: int, radius: float, height: float, *, points: int = 4, kn: float = 1e10) -> dd.Model:
+def prism_model(sides: int, radius: float, height: float, *, points: int = 4, kn: float = 1e10, turn_rad: float = 0.0,
+                slab_end_x: float | None = None) -> dd.Model:
     """A regular prism of ``sides`` sides (circumradius ``radius``, a vertex along +x, the
-    tilting table's downhill direction) standing on a fixed slab; stiff joints (kn = ks, Pa/m),
+    tilting table's downhill direction, unless turned ``turn_rad`` about its axis) standing on a
+    fixed slab (ending at x = ``slab_end_x`` if given, under the prism); stiff joints (kn = ks, Pa/m),
     mu = 1, so that it topples, at tan = radius / (height / 2), rather than slides (round columns, drums)."""
-    angle = 2 * np.pi * np.arange(sides) / sides
+    angle = turn_rad + 2 * np.pi * np.arange(sides) / sides
     ring = radius * np.stack([np.cos(angle), np.sin(angle)], axis=1)
     prism = dd.convex_hull(np.concatenate([np.c_[ring, np.zeros(sides)], np.c_[ring, np.full(sides, height)]]))
-    slab = dd.box([-2 * radius, -2 * radius, -0.01], [2 * radius, 2 * radius, 0.0])
+    slab = dd.box([-2 * radius, -2 * radius, -0.01], [2 * radius if slab_end_x is None else slab_end_x, 2 * radius, 0.0])
     return dd.build_model(
         [dd.Block(name="slab", shape=slab, fixed=True), dd.Block(name="prism", shape=prism)], density=1800.0,
         joint=dd.JointMaterial(kn=kn, ks=kn, friction=1.0), contacts=dd.ContactSettings(points_per_length=points),

@@ -312,6 +312,50 @@ def test_a_prism_resting_edge_on_edge_on_a_crossed_one_carries_its_weight_with_t
     assert sink < model.contact_tolerance
 
 
+def octagonal_prism_over_a_slab_edge(tilt, roll, depth=DEPTH):
+    """World vertices of a fixed slab (top z = 0, its top edge along y at x = 8 mm, 0.2 m long) and
+    of an octagonal prism (circumradius 20 mm, 60 mm high) whose bed face lies across that edge:
+    turned ``tilt`` rad about it (its overhang down) and ``roll`` rad about x, so the slab's
+    edge crosses the bed face, and runs past it on both sides, ``depth`` into it at y = 0; and the
+    bed face's outward normal."""
+    slab = dd.box([-0.1, -0.1, -0.01], [0.008, 0.1, 0.0]).vertices
+    angles = 0.2 + np.arange(8) * np.pi / 4
+    ring = 0.02 * np.c_[np.cos(angles), np.sin(angles)]
+    prism = np.r_[np.c_[ring, np.zeros(8)], np.c_[ring, np.full(8, 0.06)]]
+    edge = np.array([0.008, 0.0, 0.0])
+    turn = Rotation.from_rotvec([roll, 0.0, 0.0]) * Rotation.from_rotvec([0.0, tilt, 0.0])
+    prism = (prism - edge) @ turn.as_matrix().T + edge
+    normal = turn.apply([0.0, 0.0, -1.0])  # the bed face's outward normal
+    return slab, prism + depth * normal, normal
+
+
+@pytest.mark.parametrize("tilt", [0.25, 0.5])
+@pytest.mark.parametrize("roll", [1e-5, -1e-5])
+def test_a_slab_edge_running_under_a_tilted_bed_face_is_an_edge_face_contact_along_it(tilt, roll):
+    """The slab's top edge lies on the prism's bed face, tilted past the face-face limit and
+    rolled a little, so that the slab's far corners (0.1 m out) sink 1 um below the bed face's
+    plane: the face normals' separation is that deep one and the edge-pair axis wins. The contact
+    is still the edge on the face (Cundall 1988's edge-face kind): the slab's edge clipped to the
+    octagon, its points at both crossings, the chord of the octagon at x = 8 mm, each with its
+    gap to the bed face. (One crossed-edge point at one crossing, as before, let the other
+    crossing sink unseen; at its re-detection 32 um closed at kn = 1e12, a tilt diverged.)"""
+    slab, prism, normal = octagonal_prism_over_a_slab_edge(tilt, roll)
+    found = detect([(slab, prism, None)], density=ContactDensity(along=2, across=2))
+    assert found.kind[0] == npm.EDGE_FACE and found.count[0] == 2
+    assert found.ref[0] == 1 and np.dot(found.normal[0], normal) > math.cos(1e-9)
+    # the chord of the octagon at x = 8 mm, the prism's own frame: where the line crosses its sides
+    angles = 0.2 + np.arange(9) * np.pi / 4
+    ring = 0.02 * np.c_[np.cos(angles), np.sin(angles)]
+    crossings = [a[1] + (0.008 - a[0]) / (b[0] - a[0]) * (b[1] - a[1]) for a, b in zip(ring[:-1], ring[1:]) if (a[0] - 0.008) * (b[0] - 0.008) < 0]
+    points = found.points[0, :2]
+    # the roll moves the crossings by ~roll x 20 mm along the edge: 2e-7 m
+    np.testing.assert_allclose(np.sort(points[:, 1]), np.sort(crossings), rtol=0, atol=1e-6)
+    # each point's gap is the slab edge's distance to the bed face's plane there (x on the face's plane)
+    bed = prism[0]
+    on_edge = np.c_[np.full(2, 0.008), points[:, 1], np.zeros(2)]
+    np.testing.assert_allclose(found.gaps[0, :2], (on_edge - bed) @ normal, rtol=0, atol=1e-12)
+
+
 def test_check_counts_the_contacts_by_kind(tmp_path):
     # the crossed prisms touch apex edge on apex edge: one contact, of crossed edges (check
     # called every contact a face contact)

@@ -113,6 +113,18 @@ def test_a_polygonal_prism_topples_about_its_outermost_corner_at_atan_r_over_hal
     assert within_one_step_below(angles[1], math.degrees(math.atan(1 / 3)))
 
 
+def test_a_prism_overhanging_its_slabs_edge_topples_about_that_edge():
+    # an octagonal prism (circumradius 20 mm, 60 mm high, turned 0.2 rad) on a slab that ends
+    # under its bed face at x = 8 mm: it pivots on the slab's edge, tan = 8 / 30, 14.93 deg. Turning
+    # on it, the bed face lies on the edge, which runs past the face on both sides (an edge-face
+    # contact: tests/test_contact_types.py); taken for one crossed-edge point, its other crossing
+    # sank unseen, and the step to 15 deg diverged at kn = 1e12 Pa/m
+    model = prism_model(8, 0.02, 0.06, points=2, kn=1e12, turn_rad=0.2, slab_end_x=0.008)
+    result = tilt_analysis(model, TiltSettings(increment_deg=STEP))
+    assert result.ended_by == "monitored block toppled"
+    assert within_one_step_below(result.collapse_angle_deg, math.degrees(math.atan(8 / 30)))
+
+
 def test_multiplier_loading_gives_lambda_equal_to_mu():
     # horizontal lambda W against friction mu W: lambda = mu, i.e. the same tilt equivalent
     model = stack_model([0.0055], joint=dd.JointMaterial(kn=1e8, ks=1e8, friction=0.5))

@@ -39,7 +39,10 @@ inside the reference face) or an edge (edge-face: the segment, clipped to the re
 with points along it at the spacing of a face grid).
 
 **Crossed edges.** One point, at the closest point of the reference block's edge to the other's,
-the normal the edge-pair axis.
+the normal the edge-pair axis; unless one edge runs along a face of the other edge's (within
+0.2 rad, as :data:`FACE_COSINE`): that is an edge-face contact whose face normal lost to the edge
+axis only because the edge's block reaches past the face and below its plane (a slab's edge under
+a block's tilted bed face), and the edge clipped to that face is the contact (:func:`_edge_along_face`).
 
 **Nominal areas of point-like contacts.** A sub-contact's normal force is kn x area x closure, so
 the area given to a contact without one sets its stiffness. The rule: *a point-like contact
@@ -106,6 +109,8 @@ KIND_NAMES = ("face-face", "edge-face", "vertex-face", "edge-edge")
 #: point contacts); at 0.35 rad a cube falling off its edge landed with 55 % of the rigid body's
 #: angular velocity (tests/test_contact_types.py; not understood yet), at 0.2 rad within 0.5 %.
 FACE_COSINE = math.cos(0.2)
+#: an edge within this sine of a face's plane runs along it (the same 0.2 rad): :func:`_edge_along_face`
+FACE_SINE = math.sin(0.2)
 
 #: two edges whose directions are within this sine of parallel give no edge-pair axis (1e-3 rad):
 #: their cross product is the direction of round-off, and the face normals cover parallel edges
@@ -785,9 +790,25 @@ def _features(found, k, geom, ref, f_ref, vr, n, vi, nvi, touching, tolerance, n
         gap = n[0] * w[0] + n[1] * w[1] + n[2] * w[2] - plane
         kept = _put(found, k, 0, w[0] - gap * n[0], w[1] - gap * n[1], w[2] - gap * n[2], gap, _point_area(nominal, along, across))
         return kept, VERTEX_FACE
-    # an edge: the segment p + s (q - p), s in [s0, s1], clipped to the reference face (Cyrus-Beck)
+    kept = _segment_on_face(found, k, p, q, origin, u, v, n, plane, face_a, n_ref, tol2d, tolerance, nominal, along, across, across_axis)
+    return kept, EDGE_FACE
+
+
+@numba.njit(cache=True)
+def _segment_on_face(found, k, p, q, origin, u, v, n, plane, face_a, n_ref, tol2d, tolerance, nominal, along, across, across_axis):
+    """Edge-face points of the segment p-q on the reference face (``face_a``, its ``n_ref``
+    corners in the frame ``origin``, ``u``, ``v``; plane n . x = ``plane``): the segment clipped
+    to the face (Cyrus-Beck), points along it at the face grid's spacing, each its trapezoid
+    share of the clipped length times half a grid spacing, those within ``tolerance`` of the
+    plane kept; returns how many."""
+    p2u = (p[0] - origin[0]) * u[0] + (p[1] - origin[1]) * u[1] + (p[2] - origin[2]) * u[2]
+    p2v = (p[0] - origin[0]) * v[0] + (p[1] - origin[1]) * v[1] + (p[2] - origin[2]) * v[2]
+    du = (q[0] - p[0]) * u[0] + (q[1] - p[1]) * u[1] + (q[2] - p[2]) * u[2]
+    dv = (q[0] - p[0]) * v[0] + (q[1] - p[1]) * v[1] + (q[2] - p[2]) * v[2]
+    longest = math.sqrt(du * du + dv * dv)
+    if not longest > tol2d:  # a segment along the normal: no length on the face
+        return 0
     s0, s1 = 0.0, 1.0
-    du, dv = q2u - p2u, q2v - p2v
     for e in range(n_ref):
         ax, ay = face_a[e, 0], face_a[e, 1]
         ex, ey = face_a[(e + 1) % n_ref, 0] - ax, face_a[(e + 1) % n_ref, 1] - ay
@@ -795,14 +816,14 @@ def _features(found, k, geom, ref, f_ref, vr, n, vi, nvi, touching, tolerance, n
         c1 = ex * dv - ey * du
         if c1 == 0.0:
             if c0 < 0.0:
-                return 0, EDGE_FACE
+                return 0
         elif c1 > 0.0:
             s0 = max(s0, -c0 / c1)
         else:
             s1 = min(s1, -c0 / c1)
     length = (s1 - s0) * longest
     if not (tol2d < length < np.inf):  # nothing left of it (or not a number: no contact)
-        return 0, EDGE_FACE
+        return 0
     dx, dy = du / longest, dv / longest
     axis_u = across_axis[0] * u[0] + across_axis[1] * u[1] + across_axis[2] * u[2]
     axis_v = across_axis[0] * v[0] + across_axis[1] * v[1] + across_axis[2] * v[2]
@@ -821,7 +842,47 @@ def _features(found, k, geom, ref, f_ref, vr, n, vi, nvi, touching, tolerance, n
         gap = n[0] * x0 + n[1] * x1 + n[2] * x2 - plane
         if gap <= tolerance:
             kept = _put(found, k, kept, x0 - gap * n[0], x1 - gap * n[1], x2 - gap * n[2], gap, weights[i] * length * width)
-    return kept, EDGE_FACE
+    return kept
+
+
+@numba.njit(cache=True)
+def _edge_along_face(found, k, geom, ia, ib, va, vb, na, nb, ea, eb, edge_a, edge_b, tolerance, nominal, along, across, across_axis,
+                     u, v, face_a, small):
+    """Crossed edges (``edge_a`` of A, ``edge_b`` of B) where one edge runs along a face of the
+    other's (within :data:`FACE_SINE` of its plane) are an edge-face contact: that face the
+    reference, the edge clipped to it (:func:`_segment_on_face`). E.g. a slab's top edge under a
+    block's tilted bed face, running past it on both sides: the face normals' separation is the
+    deep one of the slab's far corners, the edge axis wins, and one crossed-edge point would
+    leave the edge's other crossing of the face unseen. The edge and face most nearly parallel;
+    written into row ``k`` (kind, reference, normal, points); returns whether it was one."""
+    best_sine, best_side, best_face = FACE_SINE, -1, -1
+    for side in range(2):
+        verts, edges, edge = (va, ea, edge_a) if side == 0 else (vb, eb, edge_b)
+        normals, other_edges, other_edge = (nb, eb, edge_b) if side == 0 else (na, ea, edge_a)
+        p, q = verts[edges[edge, 0]], verts[edges[edge, 1]]
+        length = math.sqrt((q[0] - p[0]) ** 2 + (q[1] - p[1]) ** 2 + (q[2] - p[2]) ** 2)
+        for j in range(2, 4):
+            f = other_edges[other_edge, j]
+            m = normals[f]
+            sine = abs(m[0] * (q[0] - p[0]) + m[1] * (q[1] - p[1]) + m[2] * (q[2] - p[2])) / length
+            if sine <= best_sine:
+                best_sine, best_side, best_face = sine, side, f
+    if best_side < 0:
+        return False
+    if best_side == 0:
+        ref, inc, vr, n, p, q = ib, ia, vb, nb[best_face], va[ea[edge_a, 0]], va[ea[edge_a, 1]]
+    else:
+        ref, inc, vr, n, p, q = ia, ib, va, na[best_face], vb[eb[edge_b, 0]], vb[eb[edge_b, 1]]
+    origin = _face_frame(geom, ref, best_face, vr, n, u, v)
+    plane = n[0] * origin[0] + n[1] * origin[1] + n[2] * origin[2]
+    n_ref = _face_2d(geom, ref, best_face, vr, origin, u, v, face_a)
+    kept = _segment_on_face(found, k, p, q, origin, u, v, n, plane, face_a, n_ref, 1e-9 * small, tolerance, nominal, along, across, across_axis)
+    if kept == 0:
+        return False
+    found.count[k], found.kind[k] = kept, EDGE_FACE
+    found.ref[k], found.inc[k] = ref, inc
+    found.normal[k] = n
+    return True
 
 
 @numba.njit(cache=True)
@@ -862,11 +923,14 @@ def _pair(geom, position, rotation, k, ia, ib, tolerance, along, across, across_
     if not parallel_faces and edge_wins:
         found.separation[k] = s_edge
         found.kind[k] = EDGE_EDGE
-        if s_edge <= tolerance:
-            found.count[k] = _crossed_edges(found, k, va, ea, edge_a, vb, eb, edge_b, axis, tolerance, _point_area(nominal, along, across))
-            found.ref[k], found.inc[k] = ia, ib
-            for c in range(3):
-                found.normal[k, c] = axis[c]
+        if s_edge > tolerance:
+            return overlap, corners, uv, area
+        if _edge_along_face(found, k, geom, ia, ib, va, vb, na, nb, ea, eb, edge_a, edge_b, tolerance, nominal, along, across, across_axis, u, v, face_a, small):
+            return overlap, corners, uv, area
+        found.count[k] = _crossed_edges(found, k, va, ea, edge_a, vb, eb, edge_b, axis, tolerance, _point_area(nominal, along, across))
+        found.ref[k], found.inc[k] = ia, ib
+        for c in range(3):
+            found.normal[k, c] = axis[c]
         return overlap, corners, uv, area
     if not parallel_faces:
         kept, kind = _features(found, k, geom, ref, f_ref, vr, n, vi, nvi, touching, tolerance, nominal, along, across, across_axis, u, v, face_a, small)

@@ -38,7 +38,8 @@ MAXIMUM_ANGLE = "maximum angle"
 #: a step after the last equilibrium blew up (:class:`~drydem.errors.DivergenceError`): no
 #: verdict, like NO_EQUILIBRIUM (found by a hunt: an octagonal prism overhanging its slab's edge
 #: at kn = 1e12 Pa/m diverged in the step it toppled in; the tilt stopped with the error, and the
-#: equilibria it had found were not reported)
+#: equilibria it had found were not reported. That divergence's cause, an edge-face contact taken
+#: for crossed edges, is fixed: :func:`drydem.engine.narrow_phase._edge_along_face`)
 DIVERGED = "integration diverged"
 
 
