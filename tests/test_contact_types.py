@@ -356,6 +356,34 @@ def test_a_slab_edge_running_under_a_tilted_bed_face_is_an_edge_face_contact_alo
     np.testing.assert_allclose(found.gaps[0, :2], (on_edge - bed) @ normal, rtol=0, atol=1e-12)
 
 
+def crossed_ridges(slope_rad, crossing_rad, depth=DEPTH):
+    """World vertices of two triangular prisms 0.4 m long, roofs of ``slope_rad`` either side of
+    their ridge, 0.1 m half-wide: the lower ridge up along x at z = 0, the upper one down, turned
+    ``crossing_rad`` from it about z, ``depth`` into the lower one where they cross at the origin."""
+    rise = 0.1 * math.tan(slope_rad)
+    lower = np.array([[x, y, z] for x in (-0.2, 0.2) for y, z in ((-0.1, -rise), (0.1, -rise), (0.0, 0.0))])
+    upper = lower * [1.0, 1.0, -1.0] @ Rotation.from_rotvec([0.0, 0.0, crossing_rad]).as_matrix().T - [0.0, 0.0, depth]
+    return lower, upper
+
+
+@pytest.mark.parametrize("slope, crossing", [(math.pi / 4, 0.1), (math.pi / 4, 0.05), (0.1, math.pi / 2), (0.19, math.pi / 2)])
+def test_crossed_ridges_stay_crossed_edges_however_shallow_or_nearly_parallel(slope, crossing):
+    """Two ridges crossing nearly parallel (each edge then lies within 0.2 rad of either face of
+    the other), or shallow roofs crossing square (an edge along both faces of the other ridge):
+    one crossed-edge point, normal along z (the oracle's), gap the overlap. Taken for an edge on
+    one of those faces, as the first version of the edge-along-face rule did (found by a review),
+    the normal was 45 deg off for the nearly parallel ridges, and tilted by the roof's slope, to
+    a side round-off picked, for the shallow ones."""
+    lower, upper = crossed_ridges(slope, crossing)
+    exact = polyhedra.contact(lower, upper, DEPTH)
+    assert exact.touching and np.dot(exact.normal, [0.0, 0.0, 1.0]) > math.cos(1e-6)
+    found = detect([(lower, upper, None)])
+    assert found.kind[0] == npm.EDGE_EDGE and found.count[0] == 1
+    normal = found.normal[0] if found.ref[0] == 0 else -found.normal[0]
+    assert np.dot(normal, exact.normal) > math.cos(1e-6)
+    assert found.gaps[0, 0] == pytest.approx(-DEPTH, rel=0, abs=1e-12)
+
+
 def test_check_counts_the_contacts_by_kind(tmp_path):
     # the crossed prisms touch apex edge on apex edge: one contact, of crossed edges (check
     # called every contact a face contact)

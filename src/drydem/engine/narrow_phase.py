@@ -39,10 +39,11 @@ inside the reference face) or an edge (edge-face: the segment, clipped to the re
 with points along it at the spacing of a face grid).
 
 **Crossed edges.** One point, at the closest point of the reference block's edge to the other's,
-the normal the edge-pair axis; unless one edge runs along a face of the other edge's (within
-0.2 rad, as :data:`FACE_COSINE`): that is an edge-face contact whose face normal lost to the edge
-axis only because the edge's block reaches past the face and below its plane (a slab's edge under
-a block's tilted bed face), and the edge clipped to that face is the contact (:func:`_edge_along_face`).
+the normal the edge-pair axis; unless one edge runs along one face of the other edge's (within
+0.2 rad of its plane, the face's normal within 0.2 rad of the axis, as :data:`FACE_COSINE`): that
+is an edge-face contact whose face normal lost to the edge axis only because the edge's block
+reaches past the face and below its plane (a slab's edge under a block's tilted bed face), and
+the edge clipped to that face is the contact (:func:`_edge_along_face`).
 
 **Nominal areas of point-like contacts.** A sub-contact's normal force is kn x area x closure, so
 the area given to a contact without one sets its stiffness. The rule: *a point-like contact
@@ -846,27 +847,39 @@ def _segment_on_face(found, k, p, q, origin, u, v, n, plane, face_a, n_ref, tol2
 
 
 @numba.njit(cache=True)
-def _edge_along_face(found, k, geom, ia, ib, va, vb, na, nb, ea, eb, edge_a, edge_b, tolerance, nominal, along, across, across_axis,
-                     u, v, face_a, small):
-    """Crossed edges (``edge_a`` of A, ``edge_b`` of B) where one edge runs along a face of the
-    other's (within :data:`FACE_SINE` of its plane) are an edge-face contact: that face the
-    reference, the edge clipped to it (:func:`_segment_on_face`). E.g. a slab's top edge under a
-    block's tilted bed face, running past it on both sides: the face normals' separation is the
-    deep one of the slab's far corners, the edge axis wins, and one crossed-edge point would
-    leave the edge's other crossing of the face unseen. The edge and face most nearly parallel;
-    written into row ``k`` (kind, reference, normal, points); returns whether it was one."""
+def _edge_along_face(found, k, geom, ia, ib, va, vb, na, nb, ea, eb, edge_a, edge_b, axis, tolerance, nominal, along, across,
+                     across_axis, u, v, face_a, small):
+    """Crossed edges (``edge_a`` of A, ``edge_b`` of B, edge-pair ``axis`` from A to B) where one
+    edge runs along a face of the other's are an edge-face contact: that face the reference, the
+    edge clipped to it (:func:`_segment_on_face`). E.g. a slab's top edge under a block's tilted
+    bed face, running past it on both sides: the face normals' separation is the deep one of the
+    slab's far corners, the edge axis wins, and one crossed-edge point would leave the edge's
+    other crossing of the face unseen. Along a face: the edge within :data:`FACE_SINE` of its
+    plane and the face's outward normal within 0.2 rad (:data:`FACE_COSINE`) of the axis (two
+    nearly parallel ridges crossing would otherwise pass with any face, and a normal 45 deg off).
+    An edge along both faces of the other edge crosses a shallow ridge: crossed edges (either
+    face would tilt the normal by the ridge's slope, to a side round-off picks). The edge and
+    face most nearly parallel; written into row ``k`` (kind, reference, normal, points); returns
+    whether it was one."""
     best_sine, best_side, best_face = FACE_SINE, -1, -1
     for side in range(2):
         verts, edges, edge = (va, ea, edge_a) if side == 0 else (vb, eb, edge_b)
         normals, other_edges, other_edge = (nb, eb, edge_b) if side == 0 else (na, ea, edge_a)
+        outward = -1.0 if side == 0 else 1.0  # the reference face's outward normal is along -axis on B, +axis on A
         p, q = verts[edges[edge, 0]], verts[edges[edge, 1]]
         length = math.sqrt((q[0] - p[0]) ** 2 + (q[1] - p[1]) ** 2 + (q[2] - p[2]) ** 2)
+        along_faces = 0
         for j in range(2, 4):
             f = other_edges[other_edge, j]
             m = normals[f]
             sine = abs(m[0] * (q[0] - p[0]) + m[1] * (q[1] - p[1]) + m[2] * (q[2] - p[2])) / length
-            if sine <= best_sine:
-                best_sine, best_side, best_face = sine, side, f
+            facing = outward * (m[0] * axis[0] + m[1] * axis[1] + m[2] * axis[2])
+            if sine <= FACE_SINE and facing >= FACE_COSINE:
+                along_faces += 1
+                if sine <= best_sine:
+                    best_sine, best_side, best_face = sine, side, f
+        if along_faces == 2:
+            return False
     if best_side < 0:
         return False
     if best_side == 0:
@@ -925,7 +938,8 @@ def _pair(geom, position, rotation, k, ia, ib, tolerance, along, across, across_
         found.kind[k] = EDGE_EDGE
         if s_edge > tolerance:
             return overlap, corners, uv, area
-        if _edge_along_face(found, k, geom, ia, ib, va, vb, na, nb, ea, eb, edge_a, edge_b, tolerance, nominal, along, across, across_axis, u, v, face_a, small):
+        if _edge_along_face(found, k, geom, ia, ib, va, vb, na, nb, ea, eb, edge_a, edge_b, axis, tolerance, nominal, along, across, across_axis,
+                            u, v, face_a, small):
             return overlap, corners, uv, area
         found.count[k] = _crossed_edges(found, k, va, ea, edge_a, vb, eb, edge_b, axis, tolerance, _point_area(nominal, along, across))
         found.ref[k], found.inc[k] = ia, ib
