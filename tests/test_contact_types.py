@@ -243,6 +243,26 @@ def test_point_contacts_carry_a_corner_cells_area_and_edge_contacts_an_edge_rows
     assert found.count[1] == 1 and found.areas[1, 0] == pytest.approx(h * h / 4, rel=1e-12)
 
 
+@pytest.mark.parametrize("size", [(0.1, 0.1, 0.4), (0.2, 0.1, 0.05), (0.05, 0.3, 0.1)])
+def test_a_block_on_its_edge_or_vertex_carries_its_bed_face_grids_edge_row_or_corner(size):
+    """A slender column, a brick and a flat slab of bed a x b (x, y), 4 points per length, turned
+    0.3 rad about y onto the bed's edge along y, and onto a corner: the edge contact's areas sum
+    to the edge row of the bed face's grid, b x (a / 3) / 2, and the corner's is its corner cell,
+    (a / 3)(b / 3) / 4, whatever the block's height (the nominal length was the circumradius',
+    which gave the 0.1 x 0.1 x 0.4 column 2.4 times its bed's edge row, so a force that jumped as
+    the column turned off its bed onto its edge)."""
+    a, b, c = size
+    ground = dd.box([-1, -1, -0.2], [1, 1, 0])
+    block = dd.box([-a / 2, -b / 2, -c / 2], [a / 2, b / 2, c / 2])
+    on_edge = block.vertices @ Rotation.from_euler("y", 0.3).as_matrix().T
+    on_corner = block.vertices @ Rotation.from_euler("yx", [0.3, 0.3]).as_matrix().T
+    placed = [(ground.vertices, v - [0, 0, v[:, 2].min() + DEPTH], None) for v in (on_edge, on_corner)]
+    found = detect(placed)
+    assert [found.kind[0], found.kind[1]] == [npm.EDGE_FACE, npm.VERTEX_FACE]
+    assert found.areas[0, :found.count[0]].sum() == pytest.approx(b * a / 3 / 2, rel=1e-12)
+    assert found.count[1] == 1 and found.areas[1, 0] == pytest.approx(a / 3 * b / 3 / 4, rel=1e-12)
+
+
 def cube_on_ground(tilt_deg, a=0.2):
     """FlatGeometry of a fixed ground slab and an a-cube (body frame axis-aligned), and the cube's
     position and rotation resting on its edge along y at x = 0, its face turned ``tilt_deg``."""
@@ -287,8 +307,9 @@ def prisms(lift=0.0):
 def test_a_prism_resting_edge_on_edge_on_a_crossed_one_carries_its_weight_with_the_elastic_closure():
     """The upper prism, apex edge down across the lower one's apex edge at 90 deg, balanced: one
     crossed-edge contact (normal z), carrying the weight W at rest with the closure
-    W / (kn A), A the nominal point area h^2 / 4 (h = L / 3, L = 2 R / sqrt(3), R the prisms'
-    circumradius). Built touching (the model's overlap check finds the crossed edges' depth 0:
+    W / (kn A), A the nominal point area h^2 / 4 of the corner of the roof faces' grid (h = L / 3,
+    L = 0.1 sqrt(2) m, the slant of the 0.4 m long roof faces, the smaller extent along and across
+    whichever way the grid runs). Built touching (the model's overlap check finds the crossed edges' depth 0:
     tests/test_geometry.py)."""
     kn = 1e9
     model = dd.build_model(prisms(lift=0.0), density=2400.0, joint=dd.JointMaterial(kn=kn, ks=kn, friction=0.8))
@@ -298,8 +319,7 @@ def test_a_prism_resting_edge_on_edge_on_a_crossed_one_carries_its_weight_with_t
     np.testing.assert_allclose(np.abs(sim.contacts.normal_body[0]), [0, 0, 1], atol=1e-12)
     result = sim.cycle_to_equilibrium()
     weight = model.block_mass[1] * dd.G
-    radius = np.linalg.norm(model.block_shape[1].vertices - model.block_shape[1].centroid, axis=1).max()
-    h = 2 * radius / math.sqrt(3) / (model.contact_density.along - 1)
+    h = 0.1 * math.sqrt(2) / (model.contact_density.along - 1)
     closure = weight / (kn * h * h / 4)
     assert result.converged
     assert sim.contacts.count == 1

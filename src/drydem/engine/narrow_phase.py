@@ -47,22 +47,24 @@ the edge clipped to that face is the contact (:func:`_edge_along_face`).
 
 **Nominal areas of point-like contacts.** A sub-contact's normal force is kn x area x closure, so
 the area given to a contact without one sets its stiffness. The rule: *a point-like contact
-carries what the same point would carry in a face grid of the smaller block*. The nominal length
-is L = 2 R / sqrt(3), R the smaller block's circumradius about its centroid (a cube's edge for a
-cube, whatever its orientation), and a
-grid of n points per length has spacing h(n) = L / (n - 1) (L for n = 1, where the one point
-stands for the whole length). A vertex-face or crossed-edge contact is a grid's corner point:
-area h(along) h(across) / 4, the quarter cell a face grid's corner point carries (two crossed
-edge rows of half a cell's width). An edge-face contact is a grid's edge row: points at spacing
-h along the segment (``along``, or ``across`` along the model's across axis), each its trapezoid
-share of the segment's length times half a spacing, h / 2, the width the edge row of a face grid
-carries. So a cube turning from its edge onto its face keeps, at the turn, the stiffness of the
-same row of points, and carries its weight on points along the edge with a closure
-W / (kn L h / 2). A slender block does not: L is the whole block's, so its corner point carries
-several times its face grid's corner share (3.4 times for a hexagonal prism twice as high as
-wide, measured by a hunt), and the point's force jumps at the turn. (Itasca's documentation,
-searched, gives no published rule for the contact area of 3DEC's vertex-face and edge-edge
-contacts; this one is ours.)
+carries what the same point would carry in the face grid it would get had it landed*: the grid of
+the reference face and the incident block's landing face (its face most opposed to the reference
+normal, the one it turns onto), whose spacing puts n points per length over the smaller face's
+extent, h(n) = extent / (n - 1) (the extent for n = 1, where the one point stands for the whole
+length; :func:`_grid_lengths`: the landing face's extents in its own plane, along an edge of it
+and across, the reference face's along their projections). A vertex-face contact is a grid's
+corner point: area h(along) h(across) / 4 (the landing face's longest edge giving the grid's
+direction), the quarter cell a face grid's corner point carries. Crossed edges are the corner of
+the grid of their faces most along and most opposed to the edge-pair axis. An edge-face contact
+is a grid's edge row: points at spacing h(along) along the segment (``along``, or ``across``
+along the model's across axis), each its trapezoid share of the segment's length times half the
+spacing across it, the width the edge row of a face grid carries. So a block turning off its bed
+face onto its edge keeps, at the turn, the stiffness of the same row of points, whatever its
+height: a column of bed a x b (edge b) carries its weight on its edge with a closure
+W / (kn b h / 2), h = a / (n - 1). (The nominal length was first the smaller block's
+circumradius', 2 R / sqrt(3): a slender block's edge row then carried 2.4 to 3.4 times its bed
+face's, and the force jumped at the turn. Itasca's documentation, searched, gives no
+published rule for the contact area of 3DEC's vertex-face and edge-edge contacts; this one is ours.)
 
 Geometry comes flattened (:class:`drydem.model.geometry.FlatGeometry`), so one call handles every
 stale pair of a re-detection, in parallel over chunks of candidates (each chunk with its own
@@ -518,21 +520,28 @@ def _most_opposed(normals, count, n):
 
 
 @numba.njit(cache=True)
-def _face_frame(geom, block, face, verts, n, u, v):
-    """The reference face's in-plane frame: ``u`` along its longest edge, ``v`` = n x u (written
-    into ``u``, ``v``); returns the origin, the face's first vertex."""
+def _longest_edge(geom, block, face, verts):
+    """The unit direction of the longest edge of face ``face`` of ``block`` (world vertices ``verts``), a 3-tuple."""
     g0 = geom.block_face_start[block] + face
     first, count = geom.face_start[g0], geom.face_start[g0 + 1] - geom.face_start[g0]
-    best = -1.0
+    best, direction = -1.0, (1.0, 0.0, 0.0)
     for i in range(count):
         p0, p1 = verts[geom.face_vertex[first + i]], verts[geom.face_vertex[first + (i + 1) % count]]
         e0, e1, e2 = p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]
         length = e0 * e0 + e1 * e1 + e2 * e2
         if length > best:
-            best, scale = length, 1.0 / math.sqrt(length)
-            u[0], u[1], u[2] = e0 * scale, e1 * scale, e2 * scale
+            scale = 1.0 / math.sqrt(length)
+            best, direction = length, (e0 * scale, e1 * scale, e2 * scale)
+    return direction
+
+
+@numba.njit(cache=True)
+def _face_frame(geom, block, face, verts, n, u, v):
+    """The reference face's in-plane frame: ``u`` along its longest edge, ``v`` = n x u (written
+    into ``u``, ``v``); returns the origin, the face's first vertex."""
+    u[0], u[1], u[2] = _longest_edge(geom, block, face, verts)
     v[0], v[1], v[2] = n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0]
-    return verts[geom.face_vertex[first]]
+    return verts[geom.face_vertex[geom.face_start[geom.block_face_start[block] + face]]]
 
 
 @numba.njit(cache=True)
@@ -675,27 +684,61 @@ def _edge_axes(va, nva, na, ea, nea, vb, nvb, nb, eb, neb, eps, best_axis):
     return best, best_i, best_j
 
 
-@numba.njit(cache=True)
-def _radius(geom, block):
-    """The block's circumradius about its centroid, m (orientation-free, unlike its bounding box)."""
-    largest = 0.0
-    for i in range(geom.vertex_start[block], geom.vertex_start[block + 1]):
-        p = geom.vertex[i]
-        largest = max(largest, p[0] * p[0] + p[1] * p[1] + p[2] * p[2])
-    return math.sqrt(largest)
+@numba.njit(cache=True, inline="always")
+def _dot(a, b):
+    """a . b of two 3-vectors (arrays or tuples)."""
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
 @numba.njit(cache=True)
-def _spacing(nominal, n):
-    """Grid spacing of ``n`` points along ``nominal`` length, ends included (the whole length for 1)."""
-    return nominal / (n - 1) if n > 1 else nominal
+def _extent(geom, block, face, verts, x, y, z):
+    """The extent of face ``face`` of ``block`` (world vertices ``verts``) along the unit direction (x, y, z), m."""
+    g0 = geom.block_face_start[block] + face
+    lo, hi = np.inf, -np.inf
+    for i in range(geom.face_start[g0], geom.face_start[g0 + 1]):
+        w = verts[geom.face_vertex[i]]
+        s = x * w[0] + y * w[1] + z * w[2]
+        lo, hi = min(lo, s), max(hi, s)
+    return hi - lo
 
 
 @numba.njit(cache=True)
-def _point_area(nominal, along, across):
-    """Nominal area of a point-like contact (vertex-face, crossed edges): a corner sub-contact's
-    of a face grid of spacings _spacing(nominal, along) x _spacing(nominal, across)."""
-    return 0.25 * _spacing(nominal, along) * _spacing(nominal, across)
+def _grid_lengths(geom, ref, f_ref, vr, n, inc, f_inc, vi, m, d):
+    """The lengths the face grid of the reference face ``f_ref`` (normal ``n``) and the incident
+    block's landing face ``f_inc`` (normal ``m``) would span along ``d``, a unit direction of the
+    landing face (an edge of it), and across it, m, had the landing face landed: each the smaller
+    face's extent, the landing face's in its own plane (d, and m x d), the reference face's along
+    their projections on its plane. A direction nearly along ``n`` counts the landing face only."""
+    along = _extent(geom, inc, f_inc, vi, d[0], d[1], d[2])
+    across = _extent(geom, inc, f_inc, vi, m[1] * d[2] - m[2] * d[1], m[2] * d[0] - m[0] * d[2], m[0] * d[1] - m[1] * d[0])
+    dn = _dot(d, n)
+    px, py, pz = d[0] - dn * n[0], d[1] - dn * n[1], d[2] - dn * n[2]
+    norm = math.sqrt(px * px + py * py + pz * pz)
+    if norm > 1e-6:
+        px, py, pz = px / norm, py / norm, pz / norm
+        along = min(along, _extent(geom, ref, f_ref, vr, px, py, pz))
+        across = min(across, _extent(geom, ref, f_ref, vr, n[1] * pz - n[2] * py, n[2] * px - n[0] * pz, n[0] * py - n[1] * px))
+    return along, across
+
+
+@numba.njit(cache=True)
+def _spacing(length, n):
+    """Grid spacing of ``n`` points along ``length``, ends included (the whole length for 1)."""
+    return length / (n - 1) if n > 1 else length
+
+
+@numba.njit(cache=True)
+def _point_area(geom, ref, f_ref, vr, n, inc, f_inc, vi, m, along, across, across_axis):
+    """Nominal area of a point-like contact (vertex-face, crossed edges), m2: the corner point's of
+    the face grid of the reference and landing faces (:func:`_grid_lengths` along the landing
+    face's longest edge and across it): a quarter cell, _spacing(along) x _spacing(across) / 4,
+    the counts as :func:`_count`."""
+    d = _longest_edge(geom, inc, f_inc, vi)
+    length_d, length_c = _grid_lengths(geom, ref, f_ref, vr, n, inc, f_inc, vi, m, d)
+    cx, cy, cz = m[1] * d[2] - m[2] * d[1], m[2] * d[0] - m[0] * d[2], m[0] * d[1] - m[1] * d[0]
+    n_d = across if abs(d[0] * across_axis[0] + d[1] * across_axis[1] + d[2] * across_axis[2]) > 0.999 else along
+    n_c = across if abs(cx * across_axis[0] + cy * across_axis[1] + cz * across_axis[2]) > 0.999 else along
+    return 0.25 * _spacing(length_d, n_d) * _spacing(length_c, n_c)
 
 
 @numba.njit(cache=True)
@@ -735,14 +778,15 @@ def _crossed_edges(found, k, va, ea, i, vb, eb, j, n, tolerance, area):
 
 
 @numba.njit(cache=True)
-def _features(found, k, geom, ref, f_ref, vr, n, vi, nvi, touching, tolerance, nominal, along, across, across_axis, u, v, face_a, small):
+def _features(found, k, geom, ref, f_ref, vr, n, inc, f_inc, vi, nvi, m, touching, tolerance, along, across, across_axis, u, v, face_a,
+              small):
     """Vertex-face or edge-face contact of the incident block (world vertices ``vi``) on the
     reference face ``f_ref`` of normal ``n``: its vertices within the tolerance of the face's
     plane are the touching feature. One vertex: a point (:func:`_point_area`) where it projects
-    inside the face; an edge (vertices on a line): the segment clipped to the face, points along
-    it at the face grid's spacing, each its trapezoid share of the segment times half a grid
-    spacing. Returns (points, kind); kind FACE_FACE when the touching vertices span an area (the
-    face-face path is the one for them)."""
+    inside the face; an edge (vertices on a line): the segment clipped to the face
+    (:func:`_segment_on_face`); the grid's lengths are the reference face's and the incident
+    block's landing face's (``f_inc``, normal ``m``). Returns (points, kind); kind FACE_FACE when
+    the touching vertices span an area (the face-face path is the one for them)."""
     origin = _face_frame(geom, ref, f_ref, vr, n, u, v)
     plane = n[0] * origin[0] + n[1] * origin[1] + n[2] * origin[2]
     t = 0
@@ -789,19 +833,23 @@ def _features(found, k, geom, ref, f_ref, vr, n, vi, nvi, touching, tolerance, n
         if not _inside(face_a, n_ref, wu, wv, tol2d):
             return 0, VERTEX_FACE
         gap = n[0] * w[0] + n[1] * w[1] + n[2] * w[2] - plane
-        kept = _put(found, k, 0, w[0] - gap * n[0], w[1] - gap * n[1], w[2] - gap * n[2], gap, _point_area(nominal, along, across))
+        kept = _put(found, k, 0, w[0] - gap * n[0], w[1] - gap * n[1], w[2] - gap * n[2], gap,
+                    _point_area(geom, ref, f_ref, vr, n, inc, f_inc, vi, m, along, across, across_axis))
         return kept, VERTEX_FACE
-    kept = _segment_on_face(found, k, p, q, origin, u, v, n, plane, face_a, n_ref, tol2d, tolerance, nominal, along, across, across_axis)
+    kept = _segment_on_face(found, k, geom, ref, f_ref, vr, inc, f_inc, vi, m, p, q, origin, u, v, n, plane, face_a, n_ref, tol2d, tolerance,
+                            along, across, across_axis)
     return kept, EDGE_FACE
 
 
 @numba.njit(cache=True)
-def _segment_on_face(found, k, p, q, origin, u, v, n, plane, face_a, n_ref, tol2d, tolerance, nominal, along, across, across_axis):
-    """Edge-face points of the segment p-q on the reference face (``face_a``, its ``n_ref``
-    corners in the frame ``origin``, ``u``, ``v``; plane n . x = ``plane``): the segment clipped
-    to the face (Cyrus-Beck), points along it at the face grid's spacing, each its trapezoid
-    share of the clipped length times half a grid spacing, those within ``tolerance`` of the
-    plane kept; returns how many."""
+def _segment_on_face(found, k, geom, ref, f_ref, vr, inc, f_inc, vi, m, p, q, origin, u, v, n, plane, face_a, n_ref, tol2d, tolerance,
+                     along, across, across_axis):
+    """Edge-face points of the segment p-q (an edge of block ``inc``, whose face ``f_inc`` of
+    normal ``m`` would land) on the reference face ``f_ref`` of block ``ref`` (``face_a``, its
+    ``n_ref`` corners in the frame ``origin``, ``u``, ``v``; plane n . x = ``plane``): the segment
+    clipped to the face (Cyrus-Beck), points along it at the spacing of the two faces' grid
+    (:func:`_grid_lengths`), each its trapezoid share of the clipped length times half the grid's
+    spacing across, those within ``tolerance`` of the plane kept; returns how many."""
     p2u = (p[0] - origin[0]) * u[0] + (p[1] - origin[1]) * u[1] + (p[2] - origin[2]) * u[2]
     p2v = (p[0] - origin[0]) * v[0] + (p[1] - origin[1]) * v[1] + (p[2] - origin[2]) * v[2]
     du = (q[0] - p[0]) * u[0] + (q[1] - p[1]) * u[1] + (q[2] - p[2]) * u[2]
@@ -832,9 +880,12 @@ def _segment_on_face(found, k, p, q, origin, u, v, n, plane, face_a, n_ref, tol2
         n_along, n_width = across, along
     else:
         n_along, n_width = along, across
-    width = 0.5 * _spacing(nominal, n_width)
+    edge = math.sqrt((q[0] - p[0]) ** 2 + (q[1] - p[1]) ** 2 + (q[2] - p[2]) ** 2)
+    direction = ((q[0] - p[0]) / edge, (q[1] - p[1]) / edge, (q[2] - p[2]) / edge)
+    length_along, length_across = _grid_lengths(geom, ref, f_ref, vr, n, inc, f_inc, vi, m, direction)
+    width = 0.5 * _spacing(length_across, n_width)
     # points at the face grid's spacing, at most as many as the row has room for
-    intervals = 0 if n_along == 1 else int(max(1.0, min(math.ceil(length / _spacing(nominal, n_along) - 1e-6), found.gaps.shape[1] - 1.0)))
+    intervals = 0 if n_along == 1 else int(max(1.0, min(math.ceil(length / _spacing(length_along, n_along) - 1e-6), found.gaps.shape[1] - 1.0)))
     nodes, weights = _trapezoid(intervals)
     kept = 0
     for i in range(nodes.shape[0]):
@@ -847,7 +898,19 @@ def _segment_on_face(found, k, p, q, origin, u, v, n, plane, face_a, n_ref, tol2
 
 
 @numba.njit(cache=True)
-def _edge_along_face(found, k, geom, ia, ib, va, vb, na, nb, ea, eb, edge_a, edge_b, axis, tolerance, nominal, along, across,
+def _crossed_area(geom, ia, ib, va, na, vb, nb, ea, eb, edge_a, edge_b, axis, along, across, across_axis):
+    """Nominal area of crossed edges (``edge_a`` of A, ``edge_b`` of B, ``axis`` from A to B), m2:
+    :func:`_point_area` of A's face of the edge most along the axis and B's most opposed to it."""
+    f_ref, f_inc = ea[edge_a, 2], eb[edge_b, 2]
+    if _dot(na[ea[edge_a, 3]], axis) > _dot(na[f_ref], axis):
+        f_ref = ea[edge_a, 3]
+    if _dot(nb[eb[edge_b, 3]], axis) < _dot(nb[f_inc], axis):
+        f_inc = eb[edge_b, 3]
+    return _point_area(geom, ia, f_ref, va, na[f_ref], ib, f_inc, vb, nb[f_inc], along, across, across_axis)
+
+
+@numba.njit(cache=True)
+def _edge_along_face(found, k, geom, ia, ib, va, vb, na, nb, nfa, nfb, ea, eb, edge_a, edge_b, axis, tolerance, along, across,
                      across_axis, u, v, face_a, small):
     """Crossed edges (``edge_a`` of A, ``edge_b`` of B, edge-pair ``axis`` from A to B) where one
     edge runs along a face of the other's are an edge-face contact: that face the reference, the
@@ -859,8 +922,8 @@ def _edge_along_face(found, k, geom, ia, ib, va, vb, na, nb, ea, eb, edge_a, edg
     nearly parallel ridges crossing would otherwise pass with any face, and a normal 45 deg off).
     An edge along both faces of the other edge crosses a shallow ridge: crossed edges (either
     face would tilt the normal by the ridge's slope, to a side round-off picks). The edge and
-    face most nearly parallel; written into row ``k`` (kind, reference, normal, points); returns
-    whether it was one."""
+    face most nearly parallel, the edge's block's face most opposed to that face the landing one;
+    written into row ``k`` (kind, reference, normal, points); returns whether it was one."""
     best_sine, best_side, best_face = FACE_SINE, -1, -1
     for side in range(2):
         verts, edges, edge = (va, ea, edge_a) if side == 0 else (vb, eb, edge_b)
@@ -883,13 +946,18 @@ def _edge_along_face(found, k, geom, ia, ib, va, vb, na, nb, ea, eb, edge_a, edg
     if best_side < 0:
         return False
     if best_side == 0:
-        ref, inc, vr, n, p, q = ib, ia, vb, nb[best_face], va[ea[edge_a, 0]], va[ea[edge_a, 1]]
+        ref, inc, vr, vi, n, p, q = ib, ia, vb, va, nb[best_face], va[ea[edge_a, 0]], va[ea[edge_a, 1]]
+        f_inc, _ = _most_opposed(na, nfa, n)
+        m = na[f_inc]
     else:
-        ref, inc, vr, n, p, q = ia, ib, va, na[best_face], vb[eb[edge_b, 0]], vb[eb[edge_b, 1]]
+        ref, inc, vr, vi, n, p, q = ia, ib, va, vb, na[best_face], vb[eb[edge_b, 0]], vb[eb[edge_b, 1]]
+        f_inc, _ = _most_opposed(nb, nfb, n)
+        m = nb[f_inc]
     origin = _face_frame(geom, ref, best_face, vr, n, u, v)
     plane = n[0] * origin[0] + n[1] * origin[1] + n[2] * origin[2]
     n_ref = _face_2d(geom, ref, best_face, vr, origin, u, v, face_a)
-    kept = _segment_on_face(found, k, p, q, origin, u, v, n, plane, face_a, n_ref, 1e-9 * small, tolerance, nominal, along, across, across_axis)
+    kept = _segment_on_face(found, k, geom, ref, best_face, vr, inc, f_inc, vi, m, p, q, origin, u, v, n, plane, face_a, n_ref, 1e-9 * small,
+                            tolerance, along, across, across_axis)
     if kept == 0:
         return False
     found.count[k], found.kind[k] = kept, EDGE_FACE
@@ -932,22 +1000,23 @@ def _pair(geom, position, rotation, k, ia, ib, tolerance, along, across, across_
         edge_wins = s_edge > separation + 1e-9 * small
         if parallel_faces and edge_wins and s_edge > separation + tolerance:
             parallel_faces = False
-    nominal = 2.0 * min(_radius(geom, ia), _radius(geom, ib)) / math.sqrt(3.0)
     if not parallel_faces and edge_wins:
         found.separation[k] = s_edge
         found.kind[k] = EDGE_EDGE
         if s_edge > tolerance:
             return overlap, corners, uv, area
-        if _edge_along_face(found, k, geom, ia, ib, va, vb, na, nb, ea, eb, edge_a, edge_b, axis, tolerance, nominal, along, across, across_axis,
-                            u, v, face_a, small):
+        if _edge_along_face(found, k, geom, ia, ib, va, vb, na, nb, nfa, nfb, ea, eb, edge_a, edge_b, axis, tolerance, along, across,
+                            across_axis, u, v, face_a, small):
             return overlap, corners, uv, area
-        found.count[k] = _crossed_edges(found, k, va, ea, edge_a, vb, eb, edge_b, axis, tolerance, _point_area(nominal, along, across))
+        area_m2 = _crossed_area(geom, ia, ib, va, na, vb, nb, ea, eb, edge_a, edge_b, axis, along, across, across_axis)
+        found.count[k] = _crossed_edges(found, k, va, ea, edge_a, vb, eb, edge_b, axis, tolerance, area_m2)
         found.ref[k], found.inc[k] = ia, ib
         for c in range(3):
             found.normal[k, c] = axis[c]
         return overlap, corners, uv, area
     if not parallel_faces:
-        kept, kind = _features(found, k, geom, ref, f_ref, vr, n, vi, nvi, touching, tolerance, nominal, along, across, across_axis, u, v, face_a, small)
+        kept, kind = _features(found, k, geom, ref, f_ref, vr, n, inc, f_inc, vi, nvi, ni[f_inc], touching, tolerance, along, across, across_axis,
+                               u, v, face_a, small)
         if kind != FACE_FACE:
             found.kind[k] = kind
             found.count[k] = kept
