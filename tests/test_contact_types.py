@@ -261,6 +261,11 @@ def test_a_block_on_its_edge_or_vertex_carries_its_bed_face_grids_edge_row_or_co
     assert [found.kind[0], found.kind[1]] == [npm.EDGE_FACE, npm.VERTEX_FACE]
     assert found.areas[0, :found.count[0]].sum() == pytest.approx(b * a / 3 / 2, rel=1e-12)
     assert found.count[1] == 1 and found.areas[1, 0] == pytest.approx(a / 3 * b / 3 / 4, rel=1e-12)
+    # one point across an in-plane wall (y): the edge along y is one point standing for the whole
+    # edge, its width again the bed's edge row's
+    found = detect(placed[:1], density=ContactDensity(along=4, across=1))
+    assert found.kind[0] == npm.EDGE_FACE and found.count[0] == 1
+    assert found.areas[0, 0] == pytest.approx(b * a / 3 / 2, rel=1e-12)
 
 
 def cube_on_ground(tilt_deg, a=0.2):

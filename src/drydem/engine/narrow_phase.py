@@ -52,19 +52,20 @@ the reference face and the incident block's landing face (its face most opposed 
 normal, the one it turns onto), whose spacing puts n points per length over the smaller face's
 extent, h(n) = extent / (n - 1) (the extent for n = 1, where the one point stands for the whole
 length; :func:`_grid_lengths`: the landing face's extents in its own plane, along an edge of it
-and across, the reference face's along their projections). A vertex-face contact is a grid's
-corner point: area h(along) h(across) / 4 (the landing face's longest edge giving the grid's
-direction), the quarter cell a face grid's corner point carries. Crossed edges are the corner of
-the grid of their faces most along and most opposed to the edge-pair axis. An edge-face contact
-is a grid's edge row: points at spacing h(along) along the segment (``along``, or ``across``
-along the model's across axis), each its trapezoid share of the segment's length times half the
-spacing across it, the width the edge row of a face grid carries. So a block turning off its bed
-face onto its edge keeps, at the turn, the stiffness of the same row of points, whatever its
-height: a column of bed a x b (edge b) carries its weight on its edge with a closure
-W / (kn b h / 2), h = a / (n - 1). (The nominal length was first the smaller block's
-circumradius', 2 R / sqrt(3): a slender block's edge row then carried 2.4 to 3.4 times its bed
-face's, and the force jumped at the turn. Itasca's documentation, searched, gives no
-published rule for the contact area of 3DEC's vertex-face and edge-edge contacts; this one is ours.)
+and across, the reference face's along their projections), and whose end row carries a width
+w(n) = h(n) / 2 (the whole extent for n = 1). A vertex-face contact is a grid's corner point:
+area w(along) w(across) (the landing face's longest edge giving the grid's direction), the
+quarter cell a face grid's corner point carries. Crossed edges are the corner of the grid of
+their faces most along and most opposed to the edge-pair axis. An edge-face contact is a grid's
+edge row: points at spacing h(along) along the segment (``along``, or ``across`` along the
+model's across axis), each its trapezoid share of the segment's length times w(across). So a
+block turning off its bed face onto its edge keeps, at the turn, the stiffness of the same row
+of points, whatever its height: a column of bed a x b (edge b) carries its weight on its edge
+with a closure W / (kn b h / 2), h = a / (n - 1). (The nominal length was first the smaller
+block's circumradius', 2 R / sqrt(3): a slender block's edge row then carried 2.4 to 3.4 times
+its bed face's, and the force jumped at the turn. Itasca's documentation, searched, gives no
+published rule for the contact area of 3DEC's vertex-face and edge-edge contacts; this one is
+ours.)
 
 Geometry comes flattened (:class:`drydem.model.geometry.FlatGeometry`), so one call handles every
 stale pair of a re-detection, in parallel over chunks of candidates (each chunk with its own
@@ -728,17 +729,24 @@ def _spacing(length, n):
 
 
 @numba.njit(cache=True)
+def _end_share(length, n):
+    """The width a face grid's end row carries across a face of ``length`` with ``n`` points
+    across it, m: half a spacing, or the whole length for one point, which stands for all of it."""
+    return 0.5 * length / (n - 1) if n > 1 else length
+
+
+@numba.njit(cache=True)
 def _point_area(geom, ref, f_ref, vr, n, inc, f_inc, vi, m, along, across, across_axis):
     """Nominal area of a point-like contact (vertex-face, crossed edges), m2: the corner point's of
     the face grid of the reference and landing faces (:func:`_grid_lengths` along the landing
-    face's longest edge and across it): a quarter cell, _spacing(along) x _spacing(across) / 4,
+    face's longest edge and across it): _end_share along x _end_share across (a quarter cell),
     the counts as :func:`_count`."""
     d = _longest_edge(geom, inc, f_inc, vi)
     length_d, length_c = _grid_lengths(geom, ref, f_ref, vr, n, inc, f_inc, vi, m, d)
     cx, cy, cz = m[1] * d[2] - m[2] * d[1], m[2] * d[0] - m[0] * d[2], m[0] * d[1] - m[1] * d[0]
     n_d = across if abs(d[0] * across_axis[0] + d[1] * across_axis[1] + d[2] * across_axis[2]) > 0.999 else along
     n_c = across if abs(cx * across_axis[0] + cy * across_axis[1] + cz * across_axis[2]) > 0.999 else along
-    return 0.25 * _spacing(length_d, n_d) * _spacing(length_c, n_c)
+    return _end_share(length_d, n_d) * _end_share(length_c, n_c)
 
 
 @numba.njit(cache=True)
@@ -848,8 +856,8 @@ def _segment_on_face(found, k, geom, ref, f_ref, vr, inc, f_inc, vi, m, p, q, or
     normal ``m`` would land) on the reference face ``f_ref`` of block ``ref`` (``face_a``, its
     ``n_ref`` corners in the frame ``origin``, ``u``, ``v``; plane n . x = ``plane``): the segment
     clipped to the face (Cyrus-Beck), points along it at the spacing of the two faces' grid
-    (:func:`_grid_lengths`), each its trapezoid share of the clipped length times half the grid's
-    spacing across, those within ``tolerance`` of the plane kept; returns how many."""
+    (:func:`_grid_lengths`), each its trapezoid share of the clipped length times the end row's
+    width across (:func:`_end_share`), those within ``tolerance`` of the plane kept; returns how many."""
     p2u = (p[0] - origin[0]) * u[0] + (p[1] - origin[1]) * u[1] + (p[2] - origin[2]) * u[2]
     p2v = (p[0] - origin[0]) * v[0] + (p[1] - origin[1]) * v[1] + (p[2] - origin[2]) * v[2]
     du = (q[0] - p[0]) * u[0] + (q[1] - p[1]) * u[1] + (q[2] - p[2]) * u[2]
@@ -883,7 +891,7 @@ def _segment_on_face(found, k, geom, ref, f_ref, vr, inc, f_inc, vi, m, p, q, or
     edge = math.sqrt((q[0] - p[0]) ** 2 + (q[1] - p[1]) ** 2 + (q[2] - p[2]) ** 2)
     direction = ((q[0] - p[0]) / edge, (q[1] - p[1]) / edge, (q[2] - p[2]) / edge)
     length_along, length_across = _grid_lengths(geom, ref, f_ref, vr, n, inc, f_inc, vi, m, direction)
-    width = 0.5 * _spacing(length_across, n_width)
+    width = _end_share(length_across, n_width)
     # points at the face grid's spacing, at most as many as the row has room for
     intervals = 0 if n_along == 1 else int(max(1.0, min(math.ceil(length / _spacing(length_along, n_along) - 1e-6), found.gaps.shape[1] - 1.0)))
     nodes, weights = _trapezoid(intervals)
