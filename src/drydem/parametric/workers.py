@@ -90,9 +90,10 @@ def connect(address: str, *, timeout_s: float = SCHEDULER_TIMEOUT_S):
 
 def check_scheduler_address(address: str) -> None:
     """SweepError unless ``address`` is a network address Dask can connect to: a known scheme
-    (tcp:// when none is given) and a HOST:PORT. Checked here rather than left to ``Client``: an
-    empty address there means "start a local cluster", and a half-made client that fails
-    leaves state behind in this process."""
+    (tcp:// when none is given) and a HOST:PORT. Checked here, before any ``Client`` is made: one
+    that fails half-made leaves its event loop and state behind in this process (the empty
+    address once failed so in a fresh clone's test run, with a bare AssertionError from inside
+    distributed, not reproduced since)."""
     from distributed.comm.addressing import parse_address, parse_host_port
     from distributed.comm.registry import get_backend
 
