@@ -243,29 +243,59 @@ def test_point_contacts_carry_a_corner_cells_area_and_edge_contacts_an_edge_rows
     assert found.count[1] == 1 and found.areas[1, 0] == pytest.approx(h * h / 4, rel=1e-12)
 
 
-@pytest.mark.parametrize("size", [(0.1, 0.1, 0.4), (0.2, 0.1, 0.05), (0.05, 0.3, 0.1)])
-def test_a_block_on_its_edge_or_vertex_carries_its_bed_face_grids_edge_row_or_corner(size):
-    """A slender column, a brick and a flat slab of bed a x b (x, y), 4 points per length, turned
-    0.3 rad about y onto the bed's edge along y, and onto a corner: the edge contact's areas sum
-    to the edge row of the bed face's grid, b x (a / 3) / 2, and the corner's is its corner cell,
-    (a / 3)(b / 3) / 4, whatever the block's height (the nominal length was the circumradius',
-    which gave the 0.1 x 0.1 x 0.4 column 2.4 times its bed's edge row, so a force that jumped as
-    the column turned off its bed onto its edge)."""
+def landing_weight(phi):
+    """The module docstring's weight of a face at angle ``phi`` (rad) to the reference plane."""
+    return 1.0 / (phi - 0.2) - 1.0 / (math.pi / 2 - 0.2) if phi < math.pi / 2 else 0.0
+
+
+def edge_and_corner(size, tilt, density=DENSITY):
+    """Found of a box of ``size`` (a, b, c along x, y, z) turned ``tilt`` rad about y onto the
+    edge along y of its bed, and ``tilt`` about y then 0.3 rad about x onto a corner, on a slab."""
     a, b, c = size
     ground = dd.box([-1, -1, -0.2], [1, 1, 0])
     block = dd.box([-a / 2, -b / 2, -c / 2], [a / 2, b / 2, c / 2])
-    on_edge = block.vertices @ Rotation.from_euler("y", 0.3).as_matrix().T
-    on_corner = block.vertices @ Rotation.from_euler("yx", [0.3, 0.3]).as_matrix().T
+    on_edge = block.vertices @ Rotation.from_euler("y", tilt).as_matrix().T
+    on_corner = block.vertices @ Rotation.from_euler("yx", [tilt, 0.3]).as_matrix().T
     placed = [(ground.vertices, v - [0, 0, v[:, 2].min() + DEPTH], None) for v in (on_edge, on_corner)]
-    found = detect(placed)
+    return detect(placed, density=density)
+
+
+SIZES = [(0.1, 0.1, 0.4), (0.2, 0.1, 0.05), (0.05, 0.3, 0.1)]
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_a_block_turned_off_its_bed_carries_its_bed_face_grids_edge_row_whatever_its_height(size):
+    """A slender column, a brick and a flat slab of bed a x b (x, y), 4 points per length, just
+    past the face-face limit (0.2 rad) onto the bed's edge along y: the edge contact's areas sum
+    to the edge row of the bed face's grid, b x (a / 3) / 2 (the nominal length was first the
+    circumradius', which gave the 0.1 x 0.1 x 0.4 column 2.4 times its bed's edge row, so a force
+    that jumped as the column turned off its bed onto its edge); also with one point across
+    (y, in-plane walls), the one point standing for the whole edge."""
+    a, b, _ = size
+    for density in (DENSITY, ContactDensity(along=4, across=1)):
+        found = edge_and_corner(size, 0.2 + 1e-9, density)
+        assert found.kind[0] == npm.EDGE_FACE
+        # the side face's weight beside the bed's: 1e-9 of it
+        assert found.areas[0, :found.count[0]].sum() == pytest.approx(b * a / 3 / 2, rel=1e-7)
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_a_block_on_its_edge_blends_its_bed_and_side_faces_grids_by_their_angles(size):
+    """On its edge at 0.3 rad the row's width across blends the bed's (a) and the side face's (c)
+    with the module docstring's weights, w = 1 / (phi - 0.2) - 1 / (pi/2 - 0.2), phi each face's
+    angle to the slab: 0.3 and pi/2 - 0.3; at 45 deg half and half, (a + c) / 2, and the same
+    just either side of it (the landing face changes there: a jump of c / a before the blend,
+    found by a hunt); and a corner's area is finite and positive."""
+    a, b, c = size
+    w_bed, w_side = landing_weight(0.3), landing_weight(math.pi / 2 - 0.3)
+    across = (w_bed * a + w_side * c) / (w_bed + w_side)
+    found = edge_and_corner(size, 0.3)
     assert [found.kind[0], found.kind[1]] == [npm.EDGE_FACE, npm.VERTEX_FACE]
-    assert found.areas[0, :found.count[0]].sum() == pytest.approx(b * a / 3 / 2, rel=1e-12)
-    assert found.count[1] == 1 and found.areas[1, 0] == pytest.approx(a / 3 * b / 3 / 4, rel=1e-12)
-    # one point across an in-plane wall (y): the edge along y is one point standing for the whole
-    # edge, its width again the bed's edge row's
-    found = detect(placed[:1], density=ContactDensity(along=4, across=1))
-    assert found.kind[0] == npm.EDGE_FACE and found.count[0] == 1
-    assert found.areas[0, 0] == pytest.approx(b * a / 3 / 2, rel=1e-12)
+    assert found.areas[0, :found.count[0]].sum() == pytest.approx(b * across / 3 / 2, rel=1e-12)
+    assert found.count[1] == 1 and 0 < found.areas[1, 0] < a * b
+    for tilt in (math.pi / 4 - 1e-6, math.pi / 4, math.pi / 4 + 1e-6):
+        found = edge_and_corner(size, tilt)
+        assert found.areas[0, :found.count[0]].sum() == pytest.approx(b * (a + c) / 2 / 3 / 2, rel=1e-5)
 
 
 def cube_on_ground(tilt_deg, a=0.2):

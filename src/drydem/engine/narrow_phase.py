@@ -48,24 +48,28 @@ the edge clipped to that face is the contact (:func:`_edge_along_face`).
 **Nominal areas of point-like contacts.** A sub-contact's normal force is kn x area x closure, so
 the area given to a contact without one sets its stiffness. The rule: *a point-like contact
 carries what the same point would carry in the face grid it would get had it landed*: the grid of
-the reference face and the incident block's landing face (its face most opposed to the reference
-normal, the one it turns onto), whose spacing puts n points per length over the smaller face's
-extent, h(n) = extent / (n - 1) (the extent for n = 1, where the one point stands for the whole
-length; :func:`_grid_lengths`: the landing face's extents in its own plane, along an edge of it
-and across, the reference face's along their projections), and whose end row carries a width
-w(n) = h(n) / 2 (the whole extent for n = 1). A vertex-face contact is a grid's corner point:
-area w(along) w(across) (the landing face's longest edge giving the grid's direction), the
-quarter cell a face grid's corner point carries. Crossed edges are the corner of the grid of
-their faces most along and most opposed to the edge-pair axis. An edge-face contact is a grid's
+the reference face and the incident block's landing face, whose spacing puts n points per length
+over the smaller face's extent, h(n) = extent / (n - 1) (the extent for n = 1, where the one
+point stands for the whole length; :func:`_grid_lengths`: the landing face's extents in its own
+plane, along an edge of it and across, the reference face's along their projections), and whose
+end row carries a width w(n) = h(n) / 2 (the whole extent for n = 1). A vertex-face contact is a
+grid's corner point: area w(along) w(across) (the landing face's longest edge giving the grid's
+direction), the quarter cell a face grid's corner point carries. An edge-face contact is a grid's
 edge row: points at spacing h(along) along the segment (``along``, or ``across`` along the
-model's across axis), each its trapezoid share of the segment's length times w(across). So a
-block turning off its bed face onto its edge keeps, at the turn, the stiffness of the same row
-of points, whatever its height: a column of bed a x b (edge b) carries its weight on its edge
-with a closure W / (kn b h / 2), h = a / (n - 1). (The nominal length was first the smaller
-block's circumradius', 2 R / sqrt(3): a slender block's edge row then carried 2.4 to 3.4 times
-its bed face's, and the force jumped at the turn. Itasca's documentation, searched, gives no
-published rule for the contact area of 3DEC's vertex-face and edge-edge contacts; this one is
-ours.)
+model's across axis), each its trapezoid share of the segment's length times w(across). Which
+face lands is a blend: every face of the incident block turned less than square to the reference
+plane, by angle phi, weighs w = 1 / (phi - 0.2) - 1 / (pi/2 - 0.2) (:func:`_landing_weight`),
+so the face at the face-face limit (0.2 rad, where the face grid hands over) takes it all, and
+the blend changes continuously as the block turns, also where its most opposed face changes (a
+box on its edge at 45 deg, half bed and half side: a jump of the side's extent over the bed's
+with the most opposed face alone, found by a hunt). Crossed edges are the corner of the grid of
+their faces most along and most opposed to the edge-pair axis. So a block turning off its bed
+face onto its edge keeps, at the turn, the stiffness of the same row of points, whatever its
+height: a column of bed a x b (edge b) carries its weight on its edge with a closure
+W / (kn b h / 2), h = a / (n - 1). (The nominal length was first the smaller block's
+circumradius', 2 R / sqrt(3): a slender block's edge row then carried 2.4 to 3.4 times its bed
+face's, and the force jumped at the turn. Itasca's documentation, searched, gives no published
+rule for the contact area of 3DEC's vertex-face and edge-edge contacts; this one is ours.)
 
 Geometry comes flattened (:class:`drydem.model.geometry.FlatGeometry`), so one call handles every
 stale pair of a re-detection, in parallel over chunks of candidates (each chunk with its own
@@ -722,6 +726,47 @@ def _grid_lengths(geom, ref, f_ref, vr, n, inc, f_inc, vi, m, d):
     return along, across
 
 
+#: the angle between a face of the incident block and the reference plane past which it no longer
+#: lands (:func:`_landing_weight`), rad: square to the plane
+LANDING_LIMIT_RAD = 0.5 * math.pi
+
+
+@numba.njit(cache=True)
+def _landing_weight(cosine):
+    """The weight of an incident face whose normal has ``cosine`` with the reference normal in the
+    blend of :func:`_blended_lengths`: w = 1 / (phi - 0.2) - 1 / (pi/2 - 0.2), phi the face's angle
+    to the reference plane, so that the face at the face-face limit (0.2 rad, :data:`FACE_COSINE`)
+    takes it all (inf) and a face turned square to the plane or away nothing; continuous in phi,
+    so the nominal areas change smoothly as a block turns, also where its most opposed face
+    changes (a box on its edge at 45 deg)."""
+    phi = math.acos(min(1.0, max(-1.0, -cosine)))
+    if phi >= LANDING_LIMIT_RAD:
+        return 0.0
+    face_limit = math.acos(FACE_COSINE)
+    if phi <= face_limit:
+        return np.inf
+    return 1.0 / (phi - face_limit) - 1.0 / (LANDING_LIMIT_RAD - face_limit)
+
+
+@numba.njit(cache=True)
+def _blended_lengths(geom, ref, f_ref, vr, n, inc, vi, ni, nfi, d):
+    """:func:`_grid_lengths` along ``d`` and across, blended over the incident block's faces that
+    may land (normals ``ni``, ``nfi`` of them) with :func:`_landing_weight`, m."""
+    total, along, across = 0.0, 0.0, 0.0
+    for f in range(nfi):
+        w = _landing_weight(_dot(ni[f], n))
+        if w == 0.0:
+            continue
+        length_d, length_c = _grid_lengths(geom, ref, f_ref, vr, n, inc, f, vi, ni[f], d)
+        if w == np.inf:
+            return length_d, length_c
+        total, along, across = total + w, along + w * length_d, across + w * length_c
+    if total == 0.0:  # no face towards the plane (round-off at a square face): the most opposed one
+        f, _ = _most_opposed(ni, nfi, n)
+        return _grid_lengths(geom, ref, f_ref, vr, n, inc, f, vi, ni[f], d)
+    return along / total, across / total
+
+
 @numba.njit(cache=True)
 def _spacing(length, n):
     """Grid spacing of ``n`` points along ``length``, ends included (the whole length for 1)."""
@@ -736,17 +781,35 @@ def _end_share(length, n):
 
 
 @numba.njit(cache=True)
-def _point_area(geom, ref, f_ref, vr, n, inc, f_inc, vi, m, along, across, across_axis):
-    """Nominal area of a point-like contact (vertex-face, crossed edges), m2: the corner point's of
-    the face grid of the reference and landing faces (:func:`_grid_lengths` along the landing
-    face's longest edge and across it): _end_share along x _end_share across (a quarter cell),
-    the counts as :func:`_count`."""
+def _corner_area(geom, ref, f_ref, vr, n, inc, f_inc, vi, m, along, across, across_axis):
+    """The corner point's area of the face grid of the reference face and the landing face
+    ``f_inc`` (:func:`_grid_lengths` along the landing face's longest edge and across it), m2:
+    _end_share along x _end_share across (a quarter cell), the counts as :func:`_count`."""
     d = _longest_edge(geom, inc, f_inc, vi)
     length_d, length_c = _grid_lengths(geom, ref, f_ref, vr, n, inc, f_inc, vi, m, d)
     cx, cy, cz = m[1] * d[2] - m[2] * d[1], m[2] * d[0] - m[0] * d[2], m[0] * d[1] - m[1] * d[0]
     n_d = across if abs(d[0] * across_axis[0] + d[1] * across_axis[1] + d[2] * across_axis[2]) > 0.999 else along
     n_c = across if abs(cx * across_axis[0] + cy * across_axis[1] + cz * across_axis[2]) > 0.999 else along
     return _end_share(length_d, n_d) * _end_share(length_c, n_c)
+
+
+@numba.njit(cache=True)
+def _point_area(geom, ref, f_ref, vr, n, inc, vi, ni, nfi, along, across, across_axis):
+    """Nominal area of a vertex-face contact, m2: :func:`_corner_area` blended over the incident
+    block's faces that may land (:func:`_landing_weight`)."""
+    total, area = 0.0, 0.0
+    for f in range(nfi):
+        w = _landing_weight(_dot(ni[f], n))
+        if w == 0.0:
+            continue
+        corner = _corner_area(geom, ref, f_ref, vr, n, inc, f, vi, ni[f], along, across, across_axis)
+        if w == np.inf:
+            return corner
+        total, area = total + w, area + w * corner
+    if total == 0.0:  # as _blended_lengths
+        f, _ = _most_opposed(ni, nfi, n)
+        return _corner_area(geom, ref, f_ref, vr, n, inc, f, vi, ni[f], along, across, across_axis)
+    return area / total
 
 
 @numba.njit(cache=True)
@@ -786,14 +849,14 @@ def _crossed_edges(found, k, va, ea, i, vb, eb, j, n, tolerance, area):
 
 
 @numba.njit(cache=True)
-def _features(found, k, geom, ref, f_ref, vr, n, inc, f_inc, vi, nvi, m, touching, tolerance, along, across, across_axis, u, v, face_a,
+def _features(found, k, geom, ref, f_ref, vr, n, inc, vi, nvi, ni, nfi, touching, tolerance, along, across, across_axis, u, v, face_a,
               small):
     """Vertex-face or edge-face contact of the incident block (world vertices ``vi``) on the
     reference face ``f_ref`` of normal ``n``: its vertices within the tolerance of the face's
     plane are the touching feature. One vertex: a point (:func:`_point_area`) where it projects
     inside the face; an edge (vertices on a line): the segment clipped to the face
     (:func:`_segment_on_face`); the grid's lengths are the reference face's and the incident
-    block's landing face's (``f_inc``, normal ``m``). Returns (points, kind); kind FACE_FACE when
+    block's faces' that may land (normals ``ni``, ``nfi`` faces). Returns (points, kind); kind FACE_FACE when
     the touching vertices span an area (the face-face path is the one for them)."""
     origin = _face_frame(geom, ref, f_ref, vr, n, u, v)
     plane = n[0] * origin[0] + n[1] * origin[1] + n[2] * origin[2]
@@ -842,21 +905,21 @@ def _features(found, k, geom, ref, f_ref, vr, n, inc, f_inc, vi, nvi, m, touchin
             return 0, VERTEX_FACE
         gap = n[0] * w[0] + n[1] * w[1] + n[2] * w[2] - plane
         kept = _put(found, k, 0, w[0] - gap * n[0], w[1] - gap * n[1], w[2] - gap * n[2], gap,
-                    _point_area(geom, ref, f_ref, vr, n, inc, f_inc, vi, m, along, across, across_axis))
+                    _point_area(geom, ref, f_ref, vr, n, inc, vi, ni, nfi, along, across, across_axis))
         return kept, VERTEX_FACE
-    kept = _segment_on_face(found, k, geom, ref, f_ref, vr, inc, f_inc, vi, m, p, q, origin, u, v, n, plane, face_a, n_ref, tol2d, tolerance,
+    kept = _segment_on_face(found, k, geom, ref, f_ref, vr, inc, vi, ni, nfi, p, q, origin, u, v, n, plane, face_a, n_ref, tol2d, tolerance,
                             along, across, across_axis)
     return kept, EDGE_FACE
 
 
 @numba.njit(cache=True)
-def _segment_on_face(found, k, geom, ref, f_ref, vr, inc, f_inc, vi, m, p, q, origin, u, v, n, plane, face_a, n_ref, tol2d, tolerance,
+def _segment_on_face(found, k, geom, ref, f_ref, vr, inc, vi, ni, nfi, p, q, origin, u, v, n, plane, face_a, n_ref, tol2d, tolerance,
                      along, across, across_axis):
-    """Edge-face points of the segment p-q (an edge of block ``inc``, whose face ``f_inc`` of
-    normal ``m`` would land) on the reference face ``f_ref`` of block ``ref`` (``face_a``, its
+    """Edge-face points of the segment p-q (an edge of block ``inc``, of face normals ``ni``,
+    ``nfi`` faces) on the reference face ``f_ref`` of block ``ref`` (``face_a``, its
     ``n_ref`` corners in the frame ``origin``, ``u``, ``v``; plane n . x = ``plane``): the segment
-    clipped to the face (Cyrus-Beck), points along it at the spacing of the two faces' grid
-    (:func:`_grid_lengths`), each its trapezoid share of the clipped length times the end row's
+    clipped to the face (Cyrus-Beck), points along it at the spacing of the faces' grid
+    (:func:`_blended_lengths`), each its trapezoid share of the clipped length times the end row's
     width across (:func:`_end_share`), those within ``tolerance`` of the plane kept; returns how many."""
     p2u = (p[0] - origin[0]) * u[0] + (p[1] - origin[1]) * u[1] + (p[2] - origin[2]) * u[2]
     p2v = (p[0] - origin[0]) * v[0] + (p[1] - origin[1]) * v[1] + (p[2] - origin[2]) * v[2]
@@ -890,7 +953,7 @@ def _segment_on_face(found, k, geom, ref, f_ref, vr, inc, f_inc, vi, m, p, q, or
         n_along, n_width = along, across
     edge = math.sqrt((q[0] - p[0]) ** 2 + (q[1] - p[1]) ** 2 + (q[2] - p[2]) ** 2)
     direction = ((q[0] - p[0]) / edge, (q[1] - p[1]) / edge, (q[2] - p[2]) / edge)
-    length_along, length_across = _grid_lengths(geom, ref, f_ref, vr, n, inc, f_inc, vi, m, direction)
+    length_along, length_across = _blended_lengths(geom, ref, f_ref, vr, n, inc, vi, ni, nfi, direction)
     width = _end_share(length_across, n_width)
     # points at the face grid's spacing, at most as many as the row has room for
     intervals = 0 if n_along == 1 else int(max(1.0, min(math.ceil(length / _spacing(length_along, n_along) - 1e-6), found.gaps.shape[1] - 1.0)))
@@ -908,13 +971,13 @@ def _segment_on_face(found, k, geom, ref, f_ref, vr, inc, f_inc, vi, m, p, q, or
 @numba.njit(cache=True)
 def _crossed_area(geom, ia, ib, va, na, vb, nb, ea, eb, edge_a, edge_b, axis, along, across, across_axis):
     """Nominal area of crossed edges (``edge_a`` of A, ``edge_b`` of B, ``axis`` from A to B), m2:
-    :func:`_point_area` of A's face of the edge most along the axis and B's most opposed to it."""
+    :func:`_corner_area` of A's face of the edge most along the axis and B's most opposed to it."""
     f_ref, f_inc = ea[edge_a, 2], eb[edge_b, 2]
     if _dot(na[ea[edge_a, 3]], axis) > _dot(na[f_ref], axis):
         f_ref = ea[edge_a, 3]
     if _dot(nb[eb[edge_b, 3]], axis) < _dot(nb[f_inc], axis):
         f_inc = eb[edge_b, 3]
-    return _point_area(geom, ia, f_ref, va, na[f_ref], ib, f_inc, vb, nb[f_inc], along, across, across_axis)
+    return _corner_area(geom, ia, f_ref, va, na[f_ref], ib, f_inc, vb, nb[f_inc], along, across, across_axis)
 
 
 @numba.njit(cache=True)
@@ -930,8 +993,7 @@ def _edge_along_face(found, k, geom, ia, ib, va, vb, na, nb, nfa, nfb, ea, eb, e
     nearly parallel ridges crossing would otherwise pass with any face, and a normal 45 deg off).
     An edge along both faces of the other edge crosses a shallow ridge: crossed edges (either
     face would tilt the normal by the ridge's slope, to a side round-off picks). The edge and
-    face most nearly parallel, the edge's block's face most opposed to that face the landing one;
-    written into row ``k`` (kind, reference, normal, points); returns whether it was one."""
+    face most nearly parallel; written into row ``k`` (kind, reference, normal, points); returns whether it was one."""
     best_sine, best_side, best_face = FACE_SINE, -1, -1
     for side in range(2):
         verts, edges, edge = (va, ea, edge_a) if side == 0 else (vb, eb, edge_b)
@@ -954,17 +1016,13 @@ def _edge_along_face(found, k, geom, ia, ib, va, vb, na, nb, nfa, nfb, ea, eb, e
     if best_side < 0:
         return False
     if best_side == 0:
-        ref, inc, vr, vi, n, p, q = ib, ia, vb, va, nb[best_face], va[ea[edge_a, 0]], va[ea[edge_a, 1]]
-        f_inc, _ = _most_opposed(na, nfa, n)
-        m = na[f_inc]
+        ref, inc, vr, vi, ni, nfi, n, p, q = ib, ia, vb, va, na, nfa, nb[best_face], va[ea[edge_a, 0]], va[ea[edge_a, 1]]
     else:
-        ref, inc, vr, vi, n, p, q = ia, ib, va, vb, na[best_face], vb[eb[edge_b, 0]], vb[eb[edge_b, 1]]
-        f_inc, _ = _most_opposed(nb, nfb, n)
-        m = nb[f_inc]
+        ref, inc, vr, vi, ni, nfi, n, p, q = ia, ib, va, vb, nb, nfb, na[best_face], vb[eb[edge_b, 0]], vb[eb[edge_b, 1]]
     origin = _face_frame(geom, ref, best_face, vr, n, u, v)
     plane = n[0] * origin[0] + n[1] * origin[1] + n[2] * origin[2]
     n_ref = _face_2d(geom, ref, best_face, vr, origin, u, v, face_a)
-    kept = _segment_on_face(found, k, geom, ref, best_face, vr, inc, f_inc, vi, m, p, q, origin, u, v, n, plane, face_a, n_ref, 1e-9 * small,
+    kept = _segment_on_face(found, k, geom, ref, best_face, vr, inc, vi, ni, nfi, p, q, origin, u, v, n, plane, face_a, n_ref, 1e-9 * small,
                             tolerance, along, across, across_axis)
     if kept == 0:
         return False
@@ -1023,7 +1081,7 @@ def _pair(geom, position, rotation, k, ia, ib, tolerance, along, across, across_
             found.normal[k, c] = axis[c]
         return overlap, corners, uv, area
     if not parallel_faces:
-        kept, kind = _features(found, k, geom, ref, f_ref, vr, n, inc, f_inc, vi, nvi, ni[f_inc], touching, tolerance, along, across, across_axis,
+        kept, kind = _features(found, k, geom, ref, f_ref, vr, n, inc, vi, nvi, ni, nfi, touching, tolerance, along, across, across_axis,
                                u, v, face_a, small)
         if kind != FACE_FACE:
             found.kind[k] = kind
