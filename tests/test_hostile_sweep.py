@@ -540,7 +540,8 @@ def test_an_unreachable_scheduler_fails_fast_naming_it(folder):
     assert not list((folder / "results").glob("runs/*.json"))
 
 
-@pytest.mark.parametrize("address", ["nonsense", "foo://host:1", "", "tcp://host"])
+@pytest.mark.parametrize("address", ["nonsense", "foo://host:1", "", "tcp://host", "tls://127.0.0.1:1", "ucx://127.0.0.1:1",
+                                     "inproc://x:1"])
 def test_a_scheduler_address_that_is_not_one_is_named(folder, address):
     refused(invoke("sweep", folder / "small.toml", "--out", folder / "results", "--scheduler", address),
             f"scheduler {address!r} is not a scheduler address", "expected tcp://HOST:PORT")

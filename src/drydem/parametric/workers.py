@@ -74,14 +74,17 @@ def open_workers(workers: int | None = None, scheduler: str | None = None) -> It
 
 def connect(address: str, *, timeout_s: float = SCHEDULER_TIMEOUT_S):
     """A Dask client of the scheduler at ``address``; SweepError naming the address and what to
-    check when it is not an address (:func:`check_scheduler_address`, before any client is made)
-    or does not answer within ``timeout_s`` (Dask's own default waits 30 s and then raises a bare
-    OSError)."""
+    check when it is not an address (:func:`check_scheduler_address` before any client is made,
+    and what Dask refuses as it makes one: tls:// without a TLS configuration, ucx:// without
+    UCX, inproc://) or does not answer within ``timeout_s`` (Dask's own default waits 30 s and
+    then raises a bare OSError)."""
     from distributed import Client
 
     check_scheduler_address(address)
     try:
         return Client(address, timeout=timeout_s)
+    except (ValueError, TypeError) as exc:
+        raise _not_an_address(address, exc) from None
     except OSError as exc:
         raise SweepError(f"cannot reach the Dask scheduler at {address} ({exc}): check that it is running "
                          "(`dask scheduler` prints its address), that the host and port are right, and that no firewall "
@@ -89,8 +92,8 @@ def connect(address: str, *, timeout_s: float = SCHEDULER_TIMEOUT_S):
 
 
 def check_scheduler_address(address: str) -> None:
-    """SweepError unless ``address`` is a network address Dask can connect to: a known scheme
-    (tcp:// when none is given) and a HOST:PORT. Checked here, before any ``Client`` is made: one
+    """SweepError unless ``address`` is a network address Dask can parse: a known scheme
+    (tcp:// when none is given) and a HOST:PORT. Checked before any ``Client`` is made: one
     that fails half-made leaves its event loop and state behind in this process (the empty
     address once failed so in a fresh clone's test run, with a bare AssertionError from inside
     distributed, not reproduced since)."""
@@ -102,8 +105,13 @@ def check_scheduler_address(address: str) -> None:
         get_backend(scheme)
         parse_host_port(location)
     except (ValueError, TypeError) as exc:
-        raise SweepError(f"scheduler {address!r} is not a scheduler address ({exc}): expected tcp://HOST:PORT, "
-                         "the address `dask scheduler` prints (port 8786 by default)") from None
+        raise _not_an_address(address, exc) from None
+
+
+def _not_an_address(address: str, reason: Exception) -> SweepError:
+    """The SweepError of an address Dask cannot use, with its ``reason``."""
+    return SweepError(f"scheduler {address!r} is not a scheduler address ({reason}): expected tcp://HOST:PORT, "
+                      "the address `dask scheduler` prints (port 8786 by default)")
 
 
 def local_executor(workers: int) -> Executor:
