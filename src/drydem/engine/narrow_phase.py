@@ -749,21 +749,36 @@ def _landing_weight(cosine):
 
 
 @numba.njit(cache=True)
+def _landing_weights(ni, nfi, n, weights):
+    """:func:`_landing_weight` of each of the incident block's faces (normals ``ni``, ``nfi`` of
+    them) into ``weights``; returns (face, total): the face that takes it all (one at the
+    face-face limit; the most opposed one when none faces the plane, round-off at a square face)
+    and 0, or -1 and the weights' total, which they share."""
+    total = 0.0
+    for f in range(nfi):
+        weights[f] = _landing_weight(_dot(ni[f], n))
+        if weights[f] == np.inf:
+            return f, 0.0
+        total += weights[f]
+    if total == 0.0:
+        f, _ = _most_opposed(ni, nfi, n)
+        return f, 0.0
+    return -1, total
+
+
+@numba.njit(cache=True)
 def _blended_lengths(geom, ref, f_ref, vr, n, inc, vi, ni, nfi, d):
     """:func:`_grid_lengths` along ``d`` and across, blended over the incident block's faces that
-    may land (normals ``ni``, ``nfi`` of them) with :func:`_landing_weight`, m."""
-    total, along, across = 0.0, 0.0, 0.0
+    may land (normals ``ni``, ``nfi`` of them) by :func:`_landing_weights`, m."""
+    weights = np.empty(nfi)
+    alone, total = _landing_weights(ni, nfi, n, weights)
+    if alone >= 0:
+        return _grid_lengths(geom, ref, f_ref, vr, n, inc, alone, vi, ni[alone], d)
+    along, across = 0.0, 0.0
     for f in range(nfi):
-        w = _landing_weight(_dot(ni[f], n))
-        if w == 0.0:
-            continue
-        length_d, length_c = _grid_lengths(geom, ref, f_ref, vr, n, inc, f, vi, ni[f], d)
-        if w == np.inf:
-            return length_d, length_c
-        total, along, across = total + w, along + w * length_d, across + w * length_c
-    if total == 0.0:  # no face towards the plane (round-off at a square face): the most opposed one
-        f, _ = _most_opposed(ni, nfi, n)
-        return _grid_lengths(geom, ref, f_ref, vr, n, inc, f, vi, ni[f], d)
+        if weights[f] > 0.0:
+            length_d, length_c = _grid_lengths(geom, ref, f_ref, vr, n, inc, f, vi, ni[f], d)
+            along, across = along + weights[f] * length_d, across + weights[f] * length_c
     return along / total, across / total
 
 
@@ -788,27 +803,24 @@ def _corner_area(geom, ref, f_ref, vr, n, inc, f_inc, vi, m, along, across, acro
     d = _longest_edge(geom, inc, f_inc, vi)
     length_d, length_c = _grid_lengths(geom, ref, f_ref, vr, n, inc, f_inc, vi, m, d)
     cx, cy, cz = m[1] * d[2] - m[2] * d[1], m[2] * d[0] - m[0] * d[2], m[0] * d[1] - m[1] * d[0]
-    n_d = across if abs(d[0] * across_axis[0] + d[1] * across_axis[1] + d[2] * across_axis[2]) > 0.999 else along
-    n_c = across if abs(cx * across_axis[0] + cy * across_axis[1] + cz * across_axis[2]) > 0.999 else along
+    # the counts by the directions' cosines with the across axis (_count's rule)
+    n_d = _count(_dot(d, across_axis), 0.0, 1.0, 0.0, along, across)
+    n_c = _count(_dot((cx, cy, cz), across_axis), 0.0, 1.0, 0.0, along, across)
     return _end_share(length_d, n_d) * _end_share(length_c, n_c)
 
 
 @numba.njit(cache=True)
 def _point_area(geom, ref, f_ref, vr, n, inc, vi, ni, nfi, along, across, across_axis):
     """Nominal area of a vertex-face contact, m2: :func:`_corner_area` blended over the incident
-    block's faces that may land (:func:`_landing_weight`)."""
-    total, area = 0.0, 0.0
+    block's faces that may land (:func:`_landing_weights`)."""
+    weights = np.empty(nfi)
+    alone, total = _landing_weights(ni, nfi, n, weights)
+    if alone >= 0:
+        return _corner_area(geom, ref, f_ref, vr, n, inc, alone, vi, ni[alone], along, across, across_axis)
+    area = 0.0
     for f in range(nfi):
-        w = _landing_weight(_dot(ni[f], n))
-        if w == 0.0:
-            continue
-        corner = _corner_area(geom, ref, f_ref, vr, n, inc, f, vi, ni[f], along, across, across_axis)
-        if w == np.inf:
-            return corner
-        total, area = total + w, area + w * corner
-    if total == 0.0:  # as _blended_lengths
-        f, _ = _most_opposed(ni, nfi, n)
-        return _corner_area(geom, ref, f_ref, vr, n, inc, f, vi, ni[f], along, across, across_axis)
+        if weights[f] > 0.0:
+            area += weights[f] * _corner_area(geom, ref, f_ref, vr, n, inc, f, vi, ni[f], along, across, across_axis)
     return area / total
 
 
@@ -1005,8 +1017,8 @@ def _edge_along_face(found, k, geom, ia, ib, va, vb, na, nb, nfa, nfb, ea, eb, e
         for j in range(2, 4):
             f = other_edges[other_edge, j]
             m = normals[f]
-            sine = abs(m[0] * (q[0] - p[0]) + m[1] * (q[1] - p[1]) + m[2] * (q[2] - p[2])) / length
-            facing = outward * (m[0] * axis[0] + m[1] * axis[1] + m[2] * axis[2])
+            sine = abs(_dot(m, (q[0] - p[0], q[1] - p[1], q[2] - p[2]))) / length
+            facing = outward * _dot(m, axis)
             if sine <= FACE_SINE and facing >= FACE_COSINE:
                 along_faces += 1
                 if sine <= best_sine:
