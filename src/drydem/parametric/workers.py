@@ -92,17 +92,24 @@ def connect(address: str, *, timeout_s: float = SCHEDULER_TIMEOUT_S):
 
 
 def check_scheduler_address(address: str) -> None:
-    """SweepError unless ``address`` is a network address Dask can parse: a known scheme
-    (tcp:// when none is given) and a HOST:PORT. Checked before any ``Client`` is made: one
-    that fails half-made leaves its event loop and state behind in this process (the empty
-    address once failed so in a fresh clone's test run, with a bare AssertionError from inside
-    distributed, not reproduced since)."""
+    """SweepError unless ``address`` is a network address Dask can connect to: a known scheme
+    (tcp:// when none is given) that reaches another process (not inproc://), whose connector this
+    installation has (ucx:// needs UCX) and, for tls:// and wss://, a TLS configuration; and a
+    HOST:PORT. Checked before any ``Client`` is made: one that fails half-made leaves its event
+    loop and state behind in this process, and a later one failed there with a bare
+    AssertionError from inside distributed (tls:// then ucx:// then inproc://, in one test
+    process)."""
     from distributed.comm.addressing import parse_address, parse_host_port
     from distributed.comm.registry import get_backend
+    from distributed.security import Security
 
     try:
         scheme, location = parse_address(address)
-        get_backend(scheme)
+        if scheme == "inproc":
+            raise ValueError("inproc:// is a scheduler inside one process")
+        get_backend(scheme).get_connector()
+        if scheme in ("tls", "wss") and Security().get_connection_args("client")["ssl_context"] is None:
+            raise ValueError(f"{scheme}:// needs a TLS configuration (Dask's distributed.comm.tls settings)")
         parse_host_port(location)
     except (ValueError, TypeError) as exc:
         raise _not_an_address(address, exc) from None
