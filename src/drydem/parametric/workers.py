@@ -74,10 +74,9 @@ def open_workers(workers: int | None = None, scheduler: str | None = None) -> It
 
 def connect(address: str, *, timeout_s: float = SCHEDULER_TIMEOUT_S):
     """A Dask client of the scheduler at ``address``; SweepError naming the address and what to
-    check when it is not an address (:func:`check_scheduler_address` before any client is made,
-    and what Dask refuses as it makes one: tls:// without a TLS configuration, ucx:// without
-    UCX, inproc://) or does not answer within ``timeout_s`` (Dask's own default waits 30 s and
-    then raises a bare OSError)."""
+    check when it is not an address (:func:`check_scheduler_address` before any client is made;
+    whatever Dask still refuses as it makes one, the same) or does not answer within
+    ``timeout_s`` (Dask's own default waits 30 s and then raises a bare OSError)."""
     from distributed import Client
 
     check_scheduler_address(address)
