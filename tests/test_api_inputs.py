@@ -11,6 +11,7 @@ import re
 import numpy as np
 import pytest
 from conftest import BRICK, stack_model
+from scipy.spatial.transform import Rotation
 
 import drydem as dd
 from drydem.analysis.limit import limit_analysis
@@ -466,6 +467,41 @@ def hand_made(**change):
 ])
 def test_a_hand_made_polyhedron_breaking_its_invariants_is_refused(change, words):
     refused(dd.GeometryError, "ConvexPolyhedron: ", words, call=lambda: hand_made(**change))
+
+
+BOX = dd.box([0, 0, 0], [1, 1, 1])
+
+
+@pytest.mark.parametrize("change, words", [
+    (dict(second_moment=-BOX.second_moment), "second_moment is off that of its vertices and faces by up to 0.167 m5 "
+                                             "(theirs: diagonal 0.08333, 0.08333, 0.08333 m5)"),
+    (dict(second_moment=np.zeros((3, 3))), "second_moment is off that of its vertices and faces"),
+    (dict(second_moment=BOX.second_moment + np.array([[0, 0.05, 0], [0, 0, 0], [0, 0, 0]])), "second_moment is off"),
+    (dict(face_normals=np.zeros((6, 3))), "face_normals[0] is 0 long: face normals must be unit vectors"),
+    (dict(face_normals=BOX.face_normals * 1e6), "face_normals[0] is 1e+06 long"),
+    (dict(face_normals=-BOX.face_normals), "vertex 0 lies 1 m outside face 2's plane: face normals must point outward and the polyhedron be convex"),
+    (dict(face_normals=BOX.face_normals[[1, 0, 2, 3, 4, 5]]), "face 0's corners lie up to 1 m off its plane"),
+    (dict(faces=tuple(f[::-1] for f in BOX.faces)), "face 0 has an area of -1 m2 along its normal: a face's corners must be "
+                                                    "distinct and run counter-clockwise seen from outside"),
+    (dict(faces=(BOX.faces[0][[0, 0, 0]],) + BOX.faces[1:]), "face 0 has an area of 0 m2"),
+    (dict(volume=1e-300), "volume = 1e-300: its vertices and faces enclose 1 m3"),
+    (dict(volume=0.9), "volume = 0.9: its vertices and faces enclose 1 m3"),
+    (dict(centroid=np.array([1e6, 0.0, 0.0])), "centroid = [1000000.0, 0.0, 0.0]: its vertices and faces have theirs at [0.5, 0.5, 0.5] m"),
+    (dict(vertices=BOX.vertices * 1e12, volume=1e36), "a vertex is 1e+12 m from the origin: coordinates must be within 1e+06 m"),
+    (dict(vertices=BOX.vertices * 1e-7, volume=1e-21), "1.73e-07 m across: a block must be at least 1e-06 m across"),
+])
+def test_a_hand_made_polyhedron_whose_parts_disagree_is_refused_naming_the_part(change, words):
+    """Found by a hunt: these were taken, and the block sank through its base (inward normals,
+    repeated corners), cycled at a timestep of 0 (zero normals) or 1e-151 s (the volume 1e-300),
+    or failed with numpy's LinAlgError (a second moment not positive definite)."""
+    refused(dd.GeometryError, "ConvexPolyhedron: ", words, call=lambda: hand_made(**change))
+
+
+def test_a_hand_made_polyhedron_of_a_turned_hull_s_parts_is_taken():
+    turn = Rotation.from_rotvec([0.3, -0.2, 0.7]).as_matrix()
+    hull = dd.convex_hull(np.array([[0, 0, 0], [2, 0, 0], [2, 1, 0], [0, 1, 0], [0.5, 0.5, 1.0], [1.5, 0.5, 1.0]]) @ turn.T + 100.0)
+    parts = {f.name: getattr(hull, f.name) for f in dataclasses.fields(hull)}
+    assert dd.ConvexPolyhedron(**parts).volume == hull.volume
 
 
 def test_a_polyhedron_moved_rigidly_keeps_its_invariants():

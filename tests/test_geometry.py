@@ -161,6 +161,27 @@ def test_a_point_a_hair_off_a_face_dents_nothing(offset_m):
     np.testing.assert_allclose(shape.centroid, [0.5, 0.5, 0.5], atol=1e-9)
 
 
+@pytest.mark.parametrize("apart_m", [1e-12, 1e-7])
+def test_a_cube_s_corners_given_twice_a_hair_apart_are_the_cube(apart_m):
+    """A mesh's round-off twins (within the hull's tolerance, 1e-6 of the size): one of each is
+    kept, and the hull is the cube, 8 vertices, 6 square faces, 1e-3 m3 (found by a hunt: the
+    faces mixed the twins, slivers between them came out as faces of one corner, and the error
+    named neither the block nor the rule)."""
+    corners = box_vertices([0, -0.05, 0], [0.1, 0.05, 0.1])
+    shape = dd.convex_hull(np.vstack([corners, corners + apart_m]), name="brick7")
+    assert len(shape.vertices) == 8 and all(len(face) == 4 for face in shape.faces)
+    assert shape.volume == pytest.approx(1e-3, rel=1e-6)
+
+
+def test_a_point_a_hair_off_an_edge_leaves_no_sliver_face():
+    """The midpoint of a cube's edge moved 1e-8 m out (within the hull's tolerance): Qhull's
+    sliver faces along the edge have fewer than 3 corners once the point is dropped from them,
+    and are left out."""
+    corners = box_vertices([0, -0.05, 0], [0.1, 0.05, 0.1])
+    shape = dd.convex_hull(np.vstack([corners, [[0.05, -0.05 - 1e-8, -1e-8]]]))
+    assert len(shape.faces) == 6 and shape.volume == pytest.approx(1e-3, rel=1e-6)
+
+
 def test_an_l_prism_with_its_inner_corner_a_hair_out_is_its_hull_not_a_dented_l():
     """The L's inner corner (1, 1) pushed 1e-9 m out lies on the prism's end faces, inside them:
     the hull is the pentagon prism (3.5 m3), never a dented L (3.33 m3 before)."""

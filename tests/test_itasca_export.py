@@ -197,6 +197,18 @@ def test_what_3dec_cannot_take_is_refused_before_writing(tmp_path, change, messa
     assert sorted(p.name for p in tmp_path.iterdir()) == ["model.dat", "model.toml"]
 
 
+@pytest.mark.parametrize("call, words", [
+    (lambda path: write_3dec(None, path), "write_3dec model = None: must be a Model"),
+    (lambda path: write_3dec(load_target("WD3").model, None), "write_3dec path = None: must be a file path"),
+    (lambda path: threedec_commands("WD3"), "threedec_commands model = 'WD3': must be a Model"),
+])
+def test_an_argument_that_is_no_model_or_path_is_named(tmp_path, call, words):
+    """Found by a hunt: a bare TypeError (path None) and AttributeError (model None) from inside."""
+    with pytest.raises(dd.ModelError, match=re.escape(words)):
+        call(tmp_path / "x.dat")
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize("solver, criterion", [
     (dd.SolverSettings(ratio=1e-6), "ratio: the largest unbalanced force over the mean block weight below 1e-06"),
     (dd.SolverSettings(criterion="velocity", max_velocity=1e-9), "velocity: the largest block point speed below 1e-09 m/s"),

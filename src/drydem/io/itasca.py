@@ -64,7 +64,7 @@ from drydem import __version__
 from drydem.errors import ModelError
 from drydem.files import write_text
 from drydem.model.assembly import Model
-from drydem.model.parameters import G, SolverSettings
+from drydem.model.parameters import FILE_PATH, G, InstanceOf, SolverSettings, check_arguments
 
 #: the group slots that hold each block's drydem name and its support group
 NAME_SLOT, SUPPORT_SLOT = "drydem", "support"
@@ -76,12 +76,16 @@ NOT_IN_NAMES = ("'", "=", "\n", "\r")
 
 
 def write_3dec(model: Model, path: str | Path) -> None:
-    """Write ``model`` to ``path`` as a 3DEC command file (see the module docstring)."""
+    """Write ``model`` to ``path`` as a 3DEC command file (see the module docstring); ModelError
+    for an argument that is not what it must be (found by a hunt: a bare TypeError for a path of
+    None) or a model 3DEC cannot take."""
+    check_arguments("write_3dec", {"model": InstanceOf(Model), "path": FILE_PATH}, model=model, path=path)
     write_text(path, threedec_commands(model))
 
 
 def threedec_commands(model: Model) -> str:
-    """The 3DEC command file of ``model``, as text; ModelError if 3DEC cannot take the model."""
+    """The 3DEC command file of ``model``, as text; ModelError if it is no Model or 3DEC cannot take it."""
+    check_arguments("threedec_commands", {"model": InstanceOf(Model)}, model=model)
     _check_exportable(model)
     sections = (_header(model), _blocks(model), _supports(model), _densities(model), _joints(model), _solver(model),
                 _not_written(model))

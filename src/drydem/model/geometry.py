@@ -20,7 +20,7 @@ I = rho (trace(C) 1 - C) with C the second moment about the centroid.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING, NamedTuple
 
@@ -50,6 +50,11 @@ MIN_THICKNESS_M = 1e-7
 #: vertices asked 24 GB), and past ~1000 sides the faces of a round block lie closer than
 #: HULL_TOLERANCE to one plane and merge (a 5000-sided unit prism came out at 7.3 m3, not 3.14)
 MAX_BLOCK_VERTICES = 2000
+#: how far from 1 a hand-made polyhedron's face normal may be long (:func:`_faces_problem`): round-off
+UNIT_TOLERANCE = 1e-6
+#: how far, relatively, a hand-made polyhedron's volume, centroid and second moment may be from
+#: those its vertices and faces enclose (:func:`_mass_problem`): round-off, and a few digits given
+MASS_TOLERANCE = 1e-6
 
 
 @dataclass(frozen=True, eq=False)
@@ -76,9 +81,14 @@ class ConvexPolyhedron:
     volume: float
     centroid: np.ndarray
     second_moment: np.ndarray = field(repr=False)
+    #: True where the maker vouches that the faces bound a convex polyhedron of the vertices and
+    #: enclose the given volume, centroid and second moment, as :func:`box`, :func:`convex_hull`
+    #: and :meth:`transformed` do by construction: those checks (a few hundred microseconds, which
+    #: 20,000 bricks would take seconds for) are skipped, not the others
+    consistent: InitVar[bool] = False
 
-    def __post_init__(self):
-        problem = _polyhedron_problem(self)
+    def __post_init__(self, consistent: bool):
+        problem = _polyhedron_problem(self, consistent)
         if problem is not None:
             raise GeometryError(f"ConvexPolyhedron: {problem} (drydem.box and drydem.convex_hull make a block's polyhedron)")
         object.__setattr__(self, "faces", tuple(map(frozen_array, self.faces)))
@@ -95,11 +105,8 @@ class ConvexPolyhedron:
         """The vertex numbers at the tail and head of every face's edges, face by face, each
         edge of a face from a corner to the next counter-clockwise (every edge twice: once in
         each of its two faces)."""
-        tails = np.concatenate(self.faces)
-        sides = np.fromiter((len(f) for f in self.faces), dtype=np.int64, count=len(self.faces))
-        after = np.arange(1, len(tails) + 1)
-        after[np.cumsum(sides) - 1] -= sides  # a face's last corner is followed by its first
-        return tails, tails[after]
+        tails, heads, _ = face_corners(self.faces)
+        return tails, heads
 
     @cached_property
     def edge_directions(self) -> np.ndarray:
@@ -137,17 +144,20 @@ class ConvexPolyhedron:
             volume=self.volume,
             centroid=rotation @ self.centroid + translation,
             second_moment=rotation @ self.second_moment @ rotation.T,
+            consistent=True,
         )
 
 
-def _polyhedron_problem(p: ConvexPolyhedron) -> str | None:
+def _polyhedron_problem(p: ConvexPolyhedron, consistent: bool) -> str | None:
     """What breaks the invariants of a :class:`ConvexPolyhedron` (one made by hand: the cycles
     would divide by its volume and index its vertices by its faces), None if nothing does.
     Every polyhedron is checked as it is made (:meth:`~ConvexPolyhedron.transformed` makes one
     per block of a building), so the checks cost a few array passes, no hull: at least 4 finite
     vertices, (n, 3) floats; at least 4 faces of at least 3 vertex numbers each, in range; as many
     finite face normals (3,); a volume above 0 and within the vertices' bounding box; a finite
-    centroid (3,) and second moment (3, 3)."""
+    centroid (3,) and second moment (3, 3); then, unless ``consistent``, a block's size
+    (:func:`_size_problem`), faces that bound a convex polyhedron (:func:`_faces_problem`) and
+    the mass properties they enclose (:func:`_mass_problem`)."""
     v = p.vertices
     if not (_floats(v) and v.ndim == 2 and v.shape[0] >= 4 and v.shape[1] == 3):
         return f"vertices must be an (n >= 4, 3) array of finite floats, m, got {described(v)}"
@@ -167,6 +177,63 @@ def _polyhedron_problem(p: ConvexPolyhedron) -> str | None:
     if not (_floats(p.centroid) and p.centroid.shape == (3,) and _floats(p.second_moment) and p.second_moment.shape == (3, 3)):
         return (f"centroid must be a (3,) and second_moment a (3, 3) array of finite floats, "
                 f"got {described(p.centroid)}, {described(p.second_moment)}")
+    return None if consistent else _size_problem(v) or _faces_problem(p) or _mass_problem(p)
+
+
+def _faces_problem(p: ConvexPolyhedron) -> str | None:
+    """What makes the faces of ``p`` (its other parts well formed) no convex polyhedron's, within
+    HULL_TOLERANCE of its size: a normal not of unit length, a face's corners off the plane of
+    its normal through its first corner, a vertex outside a face's plane (a normal pointing
+    inward, or a polyhedron not convex), a face with no area or running clockwise about its
+    normal (found by a hunt: inward normals, zero normals and repeated corners were taken, and
+    the block sank through its base or cycled at a timestep of 0)."""
+    v, normals = p.vertices, p.face_normals
+    length = np.linalg.norm(normals, axis=1)
+    k = int(np.argmax(np.abs(length - 1.0)))
+    if abs(length[k] - 1.0) > UNIT_TOLERANCE:
+        return f"face_normals[{k}] is {length[k]:.6g} long: face normals must be unit vectors"
+    tol = HULL_TOLERANCE * float(np.linalg.norm(v.max(0) - v.min(0)))
+    tails, heads, face = face_corners(p.faces)
+    starts = np.flatnonzero(np.diff(face, prepend=-1))  # where each face's corners begin
+    first = v[tails[starts]]
+    offset = np.einsum("ij,ij->i", normals, first)
+    off_plane = np.abs(np.einsum("ij,ij->i", normals[face], v[tails]) - offset[face])
+    if off_plane.max() > tol:
+        k = int(face[np.argmax(off_plane)])
+        return f"face {k}'s corners lie up to {off_plane.max():.3g} m off its plane: a face must be plane, its normal perpendicular to it"
+    outside = v @ normals.T - offset
+    i, k = np.unravel_index(np.argmax(outside), outside.shape)
+    if outside[i, k] > tol:
+        return (f"vertex {i} lies {outside[i, k]:.3g} m outside face {k}'s plane: face normals must point outward "
+                "and the polyhedron be convex")
+    twice_area = np.add.reduceat(np.cross(v[tails] - first[face], v[heads] - first[face]), starts)
+    area = 0.5 * np.einsum("ij,ij->i", twice_area, normals)
+    k = int(np.argmin(area))
+    if area[k] <= 0.0:
+        return (f"face {k} has an area of {area[k]:.3g} m2 along its normal: a face's corners must be distinct and run "
+                "counter-clockwise seen from outside")
+    return None
+
+
+def _mass_problem(p: ConvexPolyhedron) -> str | None:
+    """Where the volume, centroid or second moment of ``p`` (its faces well formed) differ from
+    those its vertices and faces enclose (:func:`_mass_properties`) by more than
+    :data:`MASS_TOLERANCE` of them (the centroid: of its size), or its volume is a sheet's or a
+    film's (:func:`_flatness_problem`); None if they do not (found by a hunt: a volume of 1e-300
+    cycled at a timestep of 1e-151 s, a centroid 1,000 km from the vertices was taken)."""
+    volume, centroid, second = _mass_properties(p.vertices, p.faces)
+    size = float(np.linalg.norm(p.vertices.max(0) - p.vertices.min(0)))
+    flat = _flatness_problem(volume, size)
+    if flat is not None:
+        return flat
+    if abs(p.volume - volume) > MASS_TOLERANCE * volume:
+        return f"volume = {shown(p.volume)}: its vertices and faces enclose {volume:.9g} m3"
+    if np.abs(p.centroid - centroid).max() > MASS_TOLERANCE * size:
+        return f"centroid = {shown(p.centroid.tolist())}: its vertices and faces have theirs at {shown(centroid.tolist())} m"
+    off = float(np.abs(p.second_moment - second).max())
+    if off > MASS_TOLERANCE * float(np.abs(second).max()):
+        diagonal = ", ".join(f"{x:.4g}" for x in np.diag(second))
+        return f"second_moment is off that of its vertices and faces by up to {off:.3g} m5 (theirs: diagonal {diagonal} m5)"
     return None
 
 
@@ -254,6 +321,8 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
         return box(*corners, name=name)
     from scipy.spatial import ConvexHull, QhullError  # here: scipy.spatial takes a fifth of a second to import
 
+    kept = _without_twins(pts, HULL_TOLERANCE * scale)
+    pts = pts[kept]
     try:
         hull = ConvexHull(pts)
     except QhullError:  # its text is Qhull's own (QH6013 qhull input error: ...; found by a hunt)
@@ -265,7 +334,7 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
     if inside.size:
         i = int(inside[np.argmax(depth[inside])])
         raise GeometryError(
-            f"{name}: vertex {i} {pts[i].tolist()} lies {depth[i]:.3g} m inside the hull of the others; "
+            f"{name}: vertex {kept[i]} {pts[i].tolist()} lies {depth[i]:.3g} m inside the hull of the others; "
             "the block is not convex (split it into convex blocks)"
         )
     faces, normals = _merge_coplanar(pts, hull, tol)
@@ -275,7 +344,20 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
     vertices = pts[used]
     faces = tuple(remap[f] for f in faces)
     volume, centroid, second = _mass_properties(vertices, faces)
-    return ConvexPolyhedron(vertices, faces, normals, volume, centroid, second)
+    return ConvexPolyhedron(vertices, faces, normals, volume, centroid, second, consistent=True)
+
+
+def _without_twins(pts: np.ndarray, tol: float) -> np.ndarray:
+    """The indices of ``pts`` ((n, 3), m) but those within ``tol`` (m) of an earlier point: a
+    mesh's round-off twins, whose hull has faces that mix the twins and slivers ``tol`` wide
+    between them (found by a hunt: a cube's corners given twice, 1e-7 m apart, made faces of
+    one corner and a GeometryError naming neither the block nor the rule)."""
+    from scipy.spatial import cKDTree
+
+    pairs = cKDTree(pts).query_pairs(tol, output_type="ndarray")  # each pair (i, j) with i < j
+    twin = np.zeros(len(pts), dtype=bool)
+    twin[pairs[:, 1]] = True
+    return np.flatnonzero(~twin)
 
 
 def box_corners(pts: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
@@ -308,28 +390,45 @@ def _check_name(name) -> None:
 
 def _block_scale(pts: np.ndarray, name: str) -> float:
     """The size of a block of vertices ``pts`` ((n, 3) finite, m), its bounding box's diagonal;
-    GeometryError naming ``name`` for a vertex beyond MAX_COORDINATE_M or a block smaller than
-    MIN_BLOCK_SIZE_M (a model in another unit)."""
+    GeometryError naming ``name`` if :func:`_size_problem` finds one."""
+    problem = _size_problem(pts)
+    if problem is not None:
+        raise GeometryError(f"{name}: {problem}")
+    return float(np.linalg.norm(pts.max(0) - pts.min(0)))
+
+
+def _size_problem(pts: np.ndarray) -> str | None:
+    """Why vertices ``pts`` ((n, 3) finite, m) cannot be a block's: one beyond MAX_COORDINATE_M
+    (:func:`far_vertex_problem`) or a block smaller than MIN_BLOCK_SIZE_M (a model in another
+    unit); None if they can."""
     far = far_vertex_problem(pts)
     if far is not None:
-        raise GeometryError(f"{name}: {far}")
+        return far
     scale = float(np.linalg.norm(pts.max(0) - pts.min(0)))
     if scale < MIN_BLOCK_SIZE_M:
-        raise GeometryError(f"{name}: {scale:.3g} m across: a block must be at least {MIN_BLOCK_SIZE_M:g} m across "
-                            "(a model in another unit than metres? a model file is in metres; --unit scales imported geometry)")
-    return scale
+        return (f"{scale:.3g} m across: a block must be at least {MIN_BLOCK_SIZE_M:g} m across "
+                "(a model in another unit than metres? a model file is in metres; --unit scales imported geometry)")
+    return None
 
 
 def _refuse_flat(volume: float, scale: float, name: str) -> None:
-    """GeometryError naming ``name`` for a block of ``volume`` (m3) at most 1e-9 of its size
-    ``scale`` (m) cubed: a sheet or a needle, whose inertia the cycles would divide by; or
-    thinner on average than :data:`MIN_THICKNESS_M` (volume / size^2): a film, whose joints'
-    timestep (it goes as the square root of the mass) would keep a run from ending."""
+    """GeometryError naming ``name`` if :func:`_flatness_problem` finds one."""
+    problem = _flatness_problem(volume, scale)
+    if problem is not None:
+        raise GeometryError(f"{name}: {problem}")
+
+
+def _flatness_problem(volume: float, scale: float) -> str | None:
+    """Why a block of ``volume`` (m3) and size ``scale`` (m) cannot be: at most 1e-9 of its size
+    cubed, a sheet or a needle, whose inertia the cycles would divide by; or thinner on average
+    than :data:`MIN_THICKNESS_M` (volume / size^2): a film, whose joints' timestep (it goes as
+    the square root of the mass) would keep a run from ending. None if it can."""
     if volume <= 1e-9 * scale**3:
-        raise GeometryError(f"{name}: degenerate block (volume {volume:.3g} m3 for size {scale:.3g} m)")
+        return f"degenerate block (volume {volume:.3g} m3 for size {scale:.3g} m)"
     if volume < MIN_THICKNESS_M * scale**2:
-        raise GeometryError(f"{name}: {volume / scale**2:.3g} m thick on average (volume {volume:.3g} m3 over its size {scale:.3g} m "
-                            f"squared): a block must be at least {MIN_THICKNESS_M:g} m thick (a model in another unit than metres?)")
+        return (f"{volume / scale**2:.3g} m thick on average (volume {volume:.3g} m3 over its size {scale:.3g} m "
+                f"squared): a block must be at least {MIN_THICKNESS_M:g} m thick (a model in another unit than metres?)")
+    return None
 
 
 def face_interior_points(points: np.ndarray, shape: ConvexPolyhedron) -> np.ndarray:
@@ -369,7 +468,7 @@ def box(lower, upper, *, name: str = "block") -> ConvexPolyhedron:
     side = hi - lo
     volume = float(side[0] * side[1] * side[2])
     _refuse_flat(volume, scale, name)
-    return ConvexPolyhedron(corners, BOX_FACES, BOX_NORMALS, volume, 0.5 * (lo + hi), np.diag(volume / 12.0 * side**2))
+    return ConvexPolyhedron(corners, BOX_FACES, BOX_NORMALS, volume, 0.5 * (lo + hi), np.diag(volume / 12.0 * side**2), consistent=True)
 
 
 #: the faces of :func:`box`'s corners (numbered 4 ix + 2 iy + iz, i = 0 at the min corner),
@@ -381,7 +480,9 @@ for _shared in (*BOX_FACES, BOX_NORMALS):  # every box holds these arrays: none 
 
 
 def _merge_coplanar(pts: np.ndarray, hull: ConvexHull, tol: float) -> tuple[list[np.ndarray], np.ndarray]:
-    """Group hull triangles by plane; order each face's vertices counter-clockwise."""
+    """Group hull triangles by plane; order each face's vertices counter-clockwise; leave out
+    the faces whose corners are fewer than 3 (:func:`_corners_only`): slivers along an edge or
+    at a corner, points within ``tol`` of it having made them."""
     faces: list[np.ndarray] = []
     normals: list[np.ndarray] = []
     equations = hull.equations
@@ -392,8 +493,10 @@ def _merge_coplanar(pts: np.ndarray, hull: ConvexHull, tol: float) -> tuple[list
         unassigned &= ~((equations[:, :3] @ n > 1 - 1e-9) & (np.abs(equations[:, 3] - d) <= tol))
         on_plane = np.flatnonzero(np.abs(pts @ n + d) <= tol)
         idx = np.intersect1d(on_plane, hull.vertices)
-        faces.append(_corners_only(pts, _counter_clockwise(pts, idx, n), n, tol))
-        normals.append(n / np.linalg.norm(n))
+        corners = _corners_only(pts, _counter_clockwise(pts, idx, n), n, tol)
+        if len(corners) >= 3:  # else a sliver within tol of an edge or a corner (points a hair off it)
+            faces.append(corners)
+            normals.append(n / np.linalg.norm(n))
     return faces, np.array(normals)
 
 
@@ -434,14 +537,25 @@ def _counter_clockwise(pts: np.ndarray, idx: np.ndarray, normal: np.ndarray) -> 
     return idx[np.argsort(angle)]
 
 
+def face_corners(faces: tuple[np.ndarray, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every face's corners in turn: the vertex number of each corner, of the corner after it
+    (counter-clockwise; a face's last corner is followed by its first) and the face it is of."""
+    tails = np.concatenate(faces)
+    sides = np.fromiter((len(f) for f in faces), dtype=np.int64, count=len(faces))
+    after = np.arange(1, len(tails) + 1)
+    after[np.cumsum(sides) - 1] -= sides
+    return tails, tails[after], np.repeat(np.arange(len(faces)), sides)
+
+
 def _mass_properties(vertices: np.ndarray, faces: tuple[np.ndarray, ...]) -> tuple[float, np.ndarray, np.ndarray]:
-    """Volume, centroid and second moment about the centroid (see module docstring)."""
+    """Volume, centroid and second moment about the centroid (see module docstring): the
+    tetrahedra of each face's fan, (first corner, corner k, corner k + 1), are its edges but the
+    two at its first corner."""
     apex = vertices.mean(0)
-    tets = []
-    for f in faces:
-        for k in range(1, len(f) - 1):
-            tets.append((vertices[f[0]], vertices[f[k]], vertices[f[k + 1]]))
-    t = np.array(tets) - apex  # (nt, 3, 3): three vertices relative to the apex (fourth vertex at 0)
+    tails, heads, face = face_corners(faces)
+    first = tails[np.flatnonzero(np.diff(face, prepend=-1))][face]
+    fan = (tails != first) & (heads != first)
+    t = vertices[np.stack([first[fan], tails[fan], heads[fan]], axis=1)] - apex  # (nt, 3, 3): relative to the apex (the fourth vertex, at 0)
     vol = np.einsum("ij,ij->i", t[:, 0], np.cross(t[:, 1], t[:, 2])) / 6.0
     volume = float(vol.sum())
     s = t.sum(1)
