@@ -163,6 +163,12 @@ def test_write_vtu_checks_its_state_and_active_blocks(model, tmp_path, arguments
     assert not (tmp_path / "a.vtu").exists()
 
 
+def test_write_vtu_refuses_a_path_that_is_no_vtu_file(model, tmp_path):
+    """Found by a hunt: VTU's XML was written to x.txt without a word."""
+    refused(lambda: write_vtu(model, tmp_path / "x.txt"), "write_vtu path = ", "x.txt'", "the suffix '.txt' is no VTU file's")
+    assert list(tmp_path.iterdir()) == []
+
+
 # -- the readers' unit_m (f17) ---------------------------------------------------------------
 
 BAD_UNITS = [True, -1, 0, 0.0, math.nan, math.inf, "1", 1j, None]
@@ -217,11 +223,11 @@ def test_write_mesh_writes_the_format_its_suffix_says_whatever_the_case(model, t
     assert (tmp_path / "x.Stl").read_text().startswith("solid ")
 
 
-@pytest.mark.parametrize("write", [lambda m, path: write_mesh(m, path), lambda m, path: write_compas(m, path),
-                                   lambda m, path: write_vtu(m, path)], ids=["mesh", "compas", "vtu"])
-def test_the_writers_say_a_path_that_is_a_folder_is_one(model, tmp_path, write):
+@pytest.mark.parametrize("write, name", [(lambda m, path: write_mesh(m, path), "out.stl"), (lambda m, path: write_compas(m, path), "out.json"),
+                                         (lambda m, path: write_vtu(m, path), "out.vtu")], ids=["mesh", "compas", "vtu"])
+def test_the_writers_say_a_path_that_is_a_folder_is_one(model, tmp_path, write, name):
     pytest.importorskip("meshio")
-    folder = tmp_path / "out.stl"
+    folder = tmp_path / name
     folder.mkdir()
     refused(lambda: write(model, folder), str(folder), "is a folder", error=DrydemError)
     refused(lambda: write(model, None), "path = None: must be a file path")

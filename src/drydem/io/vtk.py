@@ -40,7 +40,7 @@ OPEN, STUCK, SLIDING = 0, 1, 2
 
 
 def write_vtu(model: Model, path: str | Path, state: State | None = None, active: np.ndarray | None = None) -> Path:
-    """Write the blocks at ``state`` (default: as in the model file) to ``path`` (.vtu);
+    """Write the blocks at ``state`` (default: as in the model file) to ``path`` (ending in .vtu);
     ``active`` (default: all) says, block by block, which are still in the analysis. ModelError
     naming an argument that is not what it must be: ``state`` a State of the model's blocks
     (:func:`~drydem.model.state.checked_state`), ``active`` one boolean per block."""
@@ -48,6 +48,8 @@ def write_vtu(model: Model, path: str | Path, state: State | None = None, active
     from scipy.spatial.transform import Rotation
 
     check_arguments("write_vtu", {"model": InstanceOf(Model), "path": FILE_PATH}, model=model, path=path)
+    if Path(path).suffix.lower() != ".vtu":  # found by a hunt: VTU's XML was written to x.txt, which ParaView does not open as VTU
+        raise ModelError(f"write_vtu path = {shown(str(path))}: the suffix {Path(path).suffix!r} is no VTU file's; give a path ending in .vtu")
     state = State.at_rest(model.block_centroid) if state is None else checked_state(state, model.n_blocks, "write_vtu")
     active = np.ones(model.n_blocks, dtype=bool) if active is None else _flags(active, model.n_blocks, "write_vtu active")
     points, cells, offset = [], [], 0
