@@ -7,6 +7,7 @@ result or silent acceptance; and what is meant (a NumPy number, a list of floats
 import dataclasses
 import json
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -528,6 +529,16 @@ def test_hull_points_that_are_no_real_numbers_are_refused():
 
 
 # -- numbers -----------------------------------------------------------------------------------
+
+def test_a_float16_is_compared_with_its_range_without_overflowing_to_it():
+    """Found by a hunt: the bound 1e15 was cast to float16 (inf), with numpy's overflow warning."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        joint = dd.JointMaterial(model="power", kn_exponent=0.5, stress_ref=1e3, kn_min=np.float16(1e4))
+    assert joint.kn_min == 1e4
+    refused(ModelError, "[joint] kn = np.float16(inf): must be a number in [1e+04, 1e+15] Pa/m",
+            call=lambda: dd.JointMaterial(kn=np.float16(np.inf)))
+
 
 @pytest.mark.parametrize("make, field, expected", [
     (lambda: dd.JointMaterial(kn=np.int64(30_000_000)), "kn", 30_000_000),

@@ -262,6 +262,7 @@ class Range(Rule):
     def __contains__(self, value) -> bool:
         if not (is_integer(value) if self.integer else is_number(value)):
             return False
+        value = int(value) if self.integer else float(value)  # a float16 cast the bound to its own type (found by a hunt: 1e15 overflowed)
         above = self.low is None or (value > self.low if self.low_open else value >= self.low)
         below = self.high is None or (value < self.high if self.high_open else value <= self.high)
         return above and below
