@@ -245,6 +245,9 @@ def test_the_main_direction_is_the_horizontal_axis_with_the_larger_peak():
     (AT2_NEW + "  .1000000E-01\n", "line 4 gives NPTS = 7, but the file holds 8 values"),
     (AT2_NEW.replace("UNITS OF G", "UNITS OF CM/S").replace("ACCELERATION", "VELOCITY"),
      "line 3: 'VELOCITY TIME SERIES IN UNITS OF CM/S': expected 'ACCELERATION TIME SERIES IN UNITS OF G'"),
+    (AT2_NEW.replace("UNITS OF G", "UNITS OF G/100"),  # found by a hunt: read as g, 100 times too strong
+     "line 3: 'ACCELERATION TIME SERIES IN UNITS OF G/100': expected 'ACCELERATION TIME SERIES IN UNITS OF G'"),
+    (AT2_NEW.replace("UNITS OF G", "UNITS OF G (CM/S2)"), "line 3: 'ACCELERATION TIME SERIES IN UNITS OF G (CM/S2)': expected"),
     (AT2_NEW.replace("NPTS=     7, DT=   .0050 SEC", "7 points every 5 ms"),
      "line 4: '7 points every 5 ms': expected 'NPTS=  5590, DT=   .0050 SEC' or '5590    0.0050    NPTS, DT'"),
     (AT2_NEW.replace("DT=   .0050", "DT=   0.000"), "line 4: DT = 0.0: must be a number in [1e-06, inf) s"),
@@ -254,7 +257,7 @@ def test_the_main_direction_is_the_horizontal_axis_with_the_larger_peak():
     (AT2_NEW.replace(".5000000E+00", ".5000000E+0x"), "line 6: '.5000000E+0x' is not a number"),
     (AT2_NEW.replace(".5000000E+00", "NaN"), "line 6: 'NaN' is not a finite number"),
     ("PEER NGA STRONG MOTION DATABASE RECORD\n", "1 lines; a PEER .AT2 file has 4 header lines"),
-], ids=["truncated", "too-long", "velocity", "no-npts", "zero-dt", "tiny-dt", "word-dt", "fractional-npts", "word-value", "nan", "short"])
+], ids=["truncated", "too-long", "velocity", "g-over-100", "g-in-cm-s2", "no-npts", "zero-dt", "tiny-dt", "word-dt", "fractional-npts", "word-value", "nan", "short"])
 def test_a_bad_at2_record_is_refused_naming_the_file_and_the_problem(tmp_path, text, message):
     path = written(tmp_path, "bad.AT2", text)
     refused(lambda: read_motion(path), f"{path}: ", message)

@@ -539,8 +539,9 @@ def _present_columns(path: Path, header: list[str]) -> list[str]:
 #: ``5590    0.0050    NPTS, DT`` (the older NGA files)
 AT2_NPTS_DT = (re.compile(r"NPTS\s*=\s*(\S+?)\s*,?\s*DT\s*=\s*(\S+?)(?:\s*SECS?)?\s*,?\s*$", re.IGNORECASE),
                re.compile(r"^\s*(\S+)\s+(\S+)\s+NPTS\s*,\s*DT\b", re.IGNORECASE))
-#: line 3 of a PEER NGA .AT2 file: ``ACCELERATION TIME SERIES IN UNITS OF G`` (or ``HISTORY``)
-AT2_UNITS = re.compile(r"\bACCELERATION\b.*\bUNITS\s+OF\s+G\b", re.IGNORECASE)
+#: line 3 of a PEER NGA .AT2 file: ``ACCELERATION TIME SERIES IN UNITS OF G`` (or ``HISTORY``), G
+#: ending the line (found by a hunt: ``UNITS OF G/100`` was read as g, a record 100 times too strong)
+AT2_UNITS = re.compile(r"\bACCELERATION\b.*\bUNITS\s+OF\s+G\s*\.?\s*$", re.IGNORECASE)
 #: the number of points, at least 2 (a motion's least)
 NPTS = Range(2, None, integer=True)
 #: s: an .AT2 record's time step DT, at least that of any record read from a file
