@@ -7,6 +7,7 @@ outputs: test_hostile_io.py.)"""
 import json
 import os
 import re
+import shutil
 import zipfile
 from pathlib import Path
 
@@ -134,6 +135,25 @@ def test_overwrite_deletes_no_file_of_a_run_s_name_that_no_drydem_run_wrote(tmp_
     assert refused(run("shake", path, "--pulse", "one-sine", "--amplitude", "1", "--frequency", "5", "--damping-ratio", "0.1",
                        "--duration", "1e-9", "--out", tmp_path / "instant"), "spans fewer than 20 timesteps")
     assert list((tmp_path / "instant").iterdir()) == []
+
+
+def test_overwrite_deletes_no_file_a_user_put_in_a_run_s_output_folder(tmp_path):
+    """Found by a hunt: --overwrite deleted the whole vtk/ of a run's folder, with a file a user
+    had put there after the run. It deletes the VTK series a run writes, and refuses, deleting
+    nothing, while vtk/ holds anything else."""
+    path, out = model_file(tmp_path), tmp_path / "run"
+    assert run("tilt", path, "--out", out, "--increment", "2", "--vtk").exit_code == 0
+    series = sorted(p.name for p in (out / "vtk").iterdir())
+    assert "blocks.pvd" in series and "blocks_0000.vtu" in series
+    (out / "vtk" / "mine.vtu").write_text("my own")
+    (out / "vtk" / "notes").mkdir()
+    (out / "vtk" / "notes" / "a.txt").write_text("mine")
+    assert refused(run("tilt", path, "--out", out, "--increment", "2", "--overwrite"),
+                   "--overwrite would delete vtk/mine.vtu, vtk/notes/a.txt, which no drydem run writes there")
+    assert sorted(p.name for p in (out / "vtk").iterdir()) == sorted(series + ["mine.vtu", "notes"])
+    shutil.rmtree(out / "vtk" / "notes"), (out / "vtk" / "mine.vtu").unlink()
+    assert run("tilt", path, "--out", out, "--increment", "2", "--overwrite").exit_code == 0
+    assert not (out / "vtk").exists() and (out / "summary.json").is_file()
 
 
 @pytest.mark.parametrize("failure, code, said", [

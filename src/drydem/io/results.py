@@ -16,6 +16,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import re
 import shutil
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
@@ -266,7 +267,8 @@ def prepared_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | No
     the new results; other files are kept. Only a drydem run's outputs are deleted
     (:func:`drydem_run_folder`): files of those names that no drydem run wrote there (a user's
     samples/ or vtk/, a motion record called history.csv, a model file inside them: found by a
-    hunt, each deleted) are refused, with ``overwrite`` too. The run marks the folder as its
+    hunt, each deleted) are refused, with ``overwrite`` too, and so are files in a run's output
+    folders that no run writes there (:func:`_not_written_by_a_run`). The run marks the folder as its
     own (:data:`RUN_MARK`) for the block, and leaves the mark if it wrote anything. A path that
     is not a folder, or cannot be made or written in, is refused with the reason
     (:func:`drydem.files.writable_folder`).
@@ -307,6 +309,11 @@ def _check_outputs(folder: Path, present: list[str], ours: list[str], *, resume:
         raise DrydemError(f"{folder}: holds {', '.join(ours)}, named as a run's results but not written there by a drydem run "
                           f"(no {RUN_MARK} nor drydem summary.json): drydem deletes no file it did not write; move them away, "
                           "or give another --out")
+    foreign = [path for name in ours for path in _not_written_by_a_run(folder, name)] if overwrite and not resume else []
+    if foreign:
+        raise DrydemError(f"{folder}: --overwrite would delete {', '.join(foreign[:5])}{', ...' if len(foreign) > 5 else ''}, "
+                          "which no drydem run writes there: drydem deletes no file it did not write; move them away, "
+                          "or give another --out")
     if present and not (resume or overwrite):
         go_on = "" if resume is None else ", --resume to go on with it (a run of this command)"
         others = f"{', '.join(present[:5])}{', ...' if len(present) > 5 else ''}"
@@ -314,6 +321,33 @@ def _check_outputs(folder: Path, present: list[str], ours: list[str], *, resume:
                           "or another --out" if ours else
                           f"{folder}: already holds other files ({others}); pass --overwrite to write the run beside them "
                           "(they are kept), or another --out")
+
+
+#: the files a run writes in its output folders (paths inside them, "/" between folders; a
+#: name drydem is writing, .NAME.partial.SUFFIX or its lock, taken for NAME.SUFFIX): the VTK
+#: series (drydem.io.vtk) and the Monte Carlo samples (drydem.parametric.montecarlo)
+OUTPUT_FOLDER_FILES = {"vtk": re.compile(r"(blocks|contacts)(_\d+\.vtu|\.pvd)|frames\.csv|series\.json"),
+                       "samples": re.compile(r"\d+/(summary\.json|pushover\.csv)")}
+#: drydem's tag on a name being written (drydem.files.partial_name): .STEM.TAG.SUFFIX or .STEM.TAG
+BEING_WRITTEN = re.compile(rf"\.(.+)\.(partial|{WRITING})(\.[^.]*)?")
+
+
+def _not_written_by_a_run(folder: Path, name: str) -> list[str]:
+    """The files inside output folder ``name`` of ``folder`` (none if it is a file) that no run
+    writes there (:data:`OUTPUT_FOLDER_FILES`), as NAME/PATH (found by a hunt: --overwrite
+    deleted a file a user had put in an earlier run's vtk/)."""
+    written = OUTPUT_FOLDER_FILES.get(name)
+    top = folder / name
+    if not top.is_dir() or top.is_symlink():
+        return []
+    found = []
+    for root, _, files in os.walk(top):
+        for file in files:
+            parts = Path(root, file).relative_to(top).parts
+            inside = "/".join(BEING_WRITTEN.sub(r"\1\3", part) if BEING_WRITTEN.fullmatch(part) else part for part in parts)
+            if written is None or not written.fullmatch(inside):
+                found.append(f"{name}/{'/'.join(parts)}")
+    return sorted(found)
 
 
 def drydem_run_folder(folder: Path) -> bool:
