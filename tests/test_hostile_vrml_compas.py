@@ -252,6 +252,32 @@ def test_a_compas_element_on_two_graph_nodes_is_refused_naming_it(tmp_path):
         read_compas(path)
 
 
+def test_a_compas_element_on_no_graph_node_is_refused_naming_it(tmp_path):
+    """Found by a hunt: an element on the tree but on no graph node was left out without a word
+    (drydem check counted one block fewer)."""
+    model = block_model([{"element": "g1", "children": []}, {"element": "g2", "children": []}])
+    model["data"]["elements"]["g2"] = model["data"]["elements"]["g1"]
+    path = json_file(tmp_path, model)
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}: element\(s\) 'g2' are on no graph node: drydem reads the blocks"):
+        read_compas(path)
+
+
+def test_a_compas_element_grouping_others_in_the_tree_need_not_be_on_the_graph(tmp_path):
+    """A tree node above the blocks (a group moving them) is no block: it may be on no graph node."""
+    model = block_model([{"element": "group", "children": [{"element": "g1", "children": []}]}])
+    lift = {"dtype": "compas.geometry/Translation", "data": {"matrix": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 2], [0, 0, 0, 1]]}}
+    model["data"]["elements"]["group"] = {"dtype": "compas_model.elements/Group", "data": {"transformation": lift}}
+    blocks, _ = read_compas(json_file(tmp_path, model))
+    assert len(blocks) == 1 and blocks[0].shape.vertices[:, 2].min() == pytest.approx(2.0)
+
+
+def test_a_blank_key_of_an_object_of_compas_meshes_is_refused_naming_the_file(tmp_path):
+    # found by a hunt: the key "" was taken, and the block called "Mesh" without a word
+    path = json_file(tmp_path, {"base": unit_mesh(), "": unit_mesh()})
+    with pytest.raises(ModelError, match=rf"^{re.escape(str(path))}: the key '' is blank: the keys of an object of meshes are"):
+        read_compas(path)
+
+
 @pytest.mark.parametrize("edit, message", [
     (lambda model: model["data"]["graph"].__setitem__("edge", []), "graph edges: must be a JSON object, not []"),
     (lambda model: model["data"]["tree"].__setitem__("root", 0), "tree root: must be a JSON object, not 0"),

@@ -181,6 +181,9 @@ def _parts(data, source: str) -> list[_Part]:
     if not isinstance(data, dict):
         raise ModelError(f"{source}: the file holds a JSON {JSON_KINDS.get(type(data), type(data).__name__)}; drydem reads {READS}")
     if "dtype" not in data:
+        blank = [key for key in data if not key.strip()]
+        if blank:  # found by a hunt: the key "" was taken, the block called "Mesh"
+            raise ModelError(f"{source}: the key {blank[0]!r} is blank: the keys of an object of meshes are their blocks' names")
         return [_mesh_part(item, key, k, f"{source}: mesh") for k, (key, item) in enumerate(data.items())]
     if _is(data, MODEL_DTYPE) or data.get("dtype") == BLOCK_MODEL_DTYPE:
         return _model_parts(data, source)
@@ -238,6 +241,7 @@ def _model_parts(data: dict, source: str) -> list[_Part]:
             raise ModelError(f"{source}: graph edge {edge} has modifiers (cuts of one element by another); "
                              "drydem reads blocks as their meshes are: apply the modifiers in compas first")
     nodes = _object(graph.get("node"), f"{source}: graph nodes")
+    _refuse_off_the_graph(elements, nodes, parents, source)
     parts, node_of = [], {}
     for node, attributes in sorted(nodes.items(), key=lambda item: _key(item[0], f"{source}: graph node")):
         guid = _object(attributes, f"{source}: graph node {node}").get("element")
@@ -258,6 +262,19 @@ def _model_parts(data: dict, source: str) -> list[_Part]:
                            _flag(element.get(SUPPORT_KEY, False), f"{where}: {SUPPORT_KEY}"),
                            _density(element.get("material"), materials, where), f"{where}: {name!r}"))
     return parts
+
+
+def _refuse_off_the_graph(elements: dict, nodes: dict, parents: dict[str, list[str]], source: str) -> None:
+    """ModelError naming the model's elements that are on no graph node and no ancestor in the
+    tree of one that is: drydem reads the blocks from the graph's nodes, and would leave them
+    out without a word (found by a hunt: an element on the tree but not the graph was dropped)."""
+    on_graph = {attributes.get("element") for attributes in nodes.values() if isinstance(attributes, dict)}
+    grouping = {above for guid in on_graph for above in parents.get(guid, [])}
+    off = sorted(guid for guid in elements if guid not in on_graph and guid not in grouping)
+    if off:
+        more = f" (and {len(off) - 5} more)" if len(off) > 5 else ""
+        raise ModelError(f"{source}: element(s) {', '.join(map(repr, off[:5]))}{more} are on no graph node: drydem reads the "
+                         "blocks from the graph's nodes, each element one block on one node (compas_model's add_element puts it there)")
 
 
 def _element(elements: dict, guid: str, source: str) -> dict:
