@@ -88,6 +88,11 @@ BAD_TILT_FIELDS = {
     "overflowing angle": (("collapse_angle_deg",), 1e308, "summary collapse_angle_deg = 1e+308: must be a number in [0, 90] deg"),
     "string angle": (("collapse_angle_deg",), "26", "summary collapse_angle_deg = '26': must be a number in [0, 90] deg"),
     "string stability": (("stable_under_gravity",), "no", "summary stable_under_gravity = 'no': must be true or false"),
+    # found by a hunt: these were taken, an ending the report's cells are drawn by
+    "number ending": (("ended_by",), 5, "summary ended_by = 5: must be one of ('monitored block fell', 'monitored block toppled', "),
+    "unknown ending": (("ended_by",), "fell over", "summary ended_by = 'fell over': must be one of"),
+    "negative cycles": (("cycles",), -1, "summary cycles = -1: must be an integer in [0, inf)"),
+    "fractional cycles": (("cycles",), 2.5, "summary cycles = 2.5: must be an integer in [0, inf)"),
 }
 
 

@@ -23,7 +23,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 from drydem.analysis.drift import drift_limit_angles, drifts
-from drydem.analysis.tilt.settings import LOADINGS, TILT_AXES
+from drydem.analysis.tilt.settings import ENDINGS, LOADINGS, TILT_AXES
 from drydem.errors import DrydemError, ModelError
 from drydem.files import regular_file
 from drydem.model.parameters import FLAG, FRICTION, JOINT_RULES, JOINT_STIFFNESS, POINTS, OneOf, Range, Rule, field_problems
@@ -82,7 +82,8 @@ HEIGHT = Range(0.0, 1e4, low_open=True, unit="m")
 #: the rules of the fields of a tilt or limit summary the report reads (:mod:`drydem.report.study`);
 #: each may be null or absent (no value) but those of :data:`SUMMARY_NOT_NULL`
 SUMMARY_RULES = {"tilt": {"collapse_angle_deg": ANGLE, "last_equilibrium_deg": ANGLE, "load_multiplier": LOAD_MULTIPLIER,
-                          "stable_under_gravity": FLAG, "wall_height_m": HEIGHT},
+                          "stable_under_gravity": FLAG, "wall_height_m": HEIGHT, "ended_by": OneOf(ENDINGS),
+                          "cycles": Range(0, None, integer=True)},
                  "limit": {"collapse_angle_deg": ANGLE, "load_multiplier": LOAD_MULTIPLIER, "method": OneOf(ANALYSES["limit"])}}
 SUMMARY_NOT_NULL = ("wall_height_m", "method")
 #: deg: a recorded run's tilt step, in (0, 90): runs made before the least step of

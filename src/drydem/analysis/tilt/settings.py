@@ -41,6 +41,9 @@ MAXIMUM_ANGLE = "maximum angle"
 #: equilibria it had found were not reported. That divergence's cause, an edge-face contact taken
 #: for crossed edges, is fixed: :func:`drydem.engine.narrow_phase._edge_along_face`)
 DIVERGED = "integration diverged"
+#: every TiltResult.ended_by: the three collapses, then the endings that are none
+ENDINGS = (MONITOR_FELL, MONITOR_TOPPLED, STOP_DISPLACEMENT, UNSTABLE_UNDER_GRAVITY, NO_EQUILIBRIUM_UNDER_GRAVITY, NO_EQUILIBRIUM,
+           MAXIMUM_ANGLE, DIVERGED)
 
 
 #: the allowed values of TiltSettings' numbers (a tilt of 90 deg or more is no tilting table)
