@@ -157,9 +157,9 @@ class LimitSettings:
 @dataclass(frozen=True)
 class LimitResult:
     """load_multiplier : lambda at collapse. collapse_angle_deg : atan(lambda) in degrees.
-    method : "associative" or "non-associative". status : the solver's message. iterations and
-    converged : of the non-associative scheme (1 and True for LA-A); history : lambda per
-    iteration. velocity : (nb, 3) m/s and angular_velocity : (nb, 3) rad/s, the mechanism,
+    method : "associative" or "non-associative". status : the solver's message. iterations : the
+    solves, LA-A's and the non-associative scheme's after it (1 for LA-A; at most max_iterations + 1);
+    converged : of the scheme (True for LA-A); history : lambda per solve. velocity : (nb, 3) m/s and angular_velocity : (nb, 3) rad/s, the mechanism,
     normalised so that the fastest point of a block moves at 1 m/s. normal_force : (np,) N."""
 
     load_multiplier: float
