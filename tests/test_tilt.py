@@ -125,6 +125,23 @@ def test_a_prism_overhanging_its_slabs_edge_topples_about_that_edge():
     assert within_one_step_below(result.collapse_angle_deg, math.degrees(math.atan(8 / 30)))
 
 
+def test_a_cohesive_joint_collapses_near_its_first_slip_converging_with_more_points():
+    """Elastic-brittle cohesion (lost for good where a sub-contact slips): the brick's joint
+    first slips where the linear normal stress W / A (1 - 3 lambda h / b) is least, at
+    lambda = (mu + c A / W) / (1 + 3 mu h / b) = 0.6015 (31.0 deg; README, "Limit analysis"),
+    below the rigid-plastic limit lambda = mu + c A / W = 0.8 (38.66 deg); the tilt converges on
+    the first slip as the points per length grow (35.7 deg at 2, 31.8 at 16 in 0.1 deg steps, 2026-11-28)."""
+    b, _, h = BRICK
+    weight_per_area = 1800.0 * dd.G * h
+    joint = dd.JointMaterial(kn=1e9, ks=1e9, friction=0.5, cohesion=0.3 * weight_per_area)
+    first_slip = math.degrees(math.atan((0.5 + 0.3) / (1 + 3 * 0.5 * h / b)))
+    angles = [tilt_analysis(stack_model([h], joint=joint, points=points, supports=dd.Supports(fix_y=True)),
+                            TiltSettings(increment_deg=STEP, adaptive=True, loading="multiplier")).collapse_angle_deg
+              for points in (2, 16)]
+    assert first_slip - STEP <= angles[1] < angles[0] < math.degrees(math.atan(0.8))
+    assert angles[1] - first_slip < 1.0
+
+
 def test_multiplier_loading_gives_lambda_equal_to_mu():
     # horizontal lambda W against friction mu W: lambda = mu, i.e. the same tilt equivalent
     model = stack_model([0.0055], joint=dd.JointMaterial(kn=1e8, ks=1e8, friction=0.5))
