@@ -151,8 +151,8 @@ class ConvexPolyhedron:
 def _polyhedron_problem(p: ConvexPolyhedron, consistent: bool) -> str | None:
     """What breaks the invariants of a :class:`ConvexPolyhedron` (one made by hand: the cycles
     would divide by its volume and index its vertices by its faces), None if nothing does.
-    Every polyhedron is checked as it is made (:meth:`~ConvexPolyhedron.transformed` makes one
-    per block of a building), so the checks cost a few array passes, no hull: at least 4 finite
+    Every polyhedron is checked as it is made (:func:`box` makes one per brick of a building), so
+    these checks cost a few array passes, no hull: at least 4 finite
     vertices, (n, 3) floats; at least 4 faces of at least 3 vertex numbers each, in range; as many
     finite face normals (3,); a volume above 0 and within the vertices' bounding box; a finite
     centroid (3,) and second moment (3, 3); then, unless ``consistent``, a block's size
