@@ -116,7 +116,7 @@ def test_a_resumed_series_refuses_a_frames_csv_that_is_a_pipe(wall, tmp_path):
     (tmp_path / "vtk").mkdir()
     os.mkfifo(tmp_path / "vtk" / "frames.csv")
     with within(), pytest.raises(DrydemError, match="frames.csv: not a regular file"):
-        VtkSeries(tmp_path / "vtk", wall, resume_after=1)
+        VtkSeries(tmp_path / "vtk", wall, resumed_tilts_deg=[0.0])
     assert stat.S_ISFIFO(os.lstat(tmp_path / "vtk" / "frames.csv").st_mode)
 
 

@@ -137,6 +137,19 @@ def test_overwrite_deletes_no_file_of_a_run_s_name_that_no_drydem_run_wrote(tmp_
     assert list((tmp_path / "instant").iterdir()) == []
 
 
+def test_a_run_mark_that_is_a_link_is_replaced_not_written_through_and_a_folder_is_refused(tmp_path):
+    """Found by a hunt: the mark (RUN_MARK) was written through a link, replacing its target's
+    text, and a folder of its name ended in IsADirectoryError's traceback."""
+    path, victim = model_file(tmp_path), tmp_path / "precious.txt"
+    victim.write_text("precious")
+    (tmp_path / "linked").mkdir()
+    (tmp_path / "linked" / RUN_MARK).symlink_to(victim)
+    assert run("tilt", path, "--out", tmp_path / "linked", "--increment", "2").exit_code == 0
+    assert victim.read_text() == "precious" and not (tmp_path / "linked" / RUN_MARK).is_symlink()
+    (tmp_path / "folder" / RUN_MARK).mkdir(parents=True)
+    assert refused(run("tilt", path, "--out", tmp_path / "folder", "--increment", "2"), f"{RUN_MARK}: is a folder")
+
+
 def test_overwrite_deletes_no_file_a_user_put_in_a_run_s_output_folder(tmp_path):
     """Found by a hunt: --overwrite deleted the whole vtk/ of a run's folder, with a file a user
     had put there after the run. It deletes the VTK series a run writes, and refuses, deleting

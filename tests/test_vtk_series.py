@@ -1,6 +1,7 @@
 """Seeing the collapse: the VTK time series, videos, and nothing written unless asked."""
 
 import csv
+import re
 
 import meshio
 import numpy as np
@@ -10,6 +11,7 @@ from click.testing import CliRunner
 import drydem as dd
 from drydem.analysis.tilt import TiltSettings, tilt_analysis
 from drydem.cli import main
+from drydem.errors import DrydemError
 from drydem.files import WRITING, lock_exclusively, partial_name, unlock
 from drydem.io.model_file import save_model
 from drydem.io.results import RUN_MARK
@@ -383,10 +385,56 @@ def test_a_resumed_run_keeps_the_frames_already_written_and_goes_on_after_them(w
     with pytest.raises(KeyboardInterrupt):
         tilt_analysis(wall, SETTINGS, on_frame=series, on_record=interrupt, checkpoint=checkpoint)
     assert [row["tilt_deg"] for row in frames(folder)] == ["0.000000", "5.000000"]
-    kept = len(load_checkpoint(checkpoint)[1]["records"])
-    tilt_analysis(wall, SETTINGS, on_frame=VtkSeries(folder, wall, resume_after=kept), checkpoint=checkpoint, resume=True)
+    kept = load_checkpoint(checkpoint)[1]["records"][:, 0]
+    tilt_analysis(wall, SETTINGS, on_frame=VtkSeries(folder, wall, resumed_tilts_deg=kept), checkpoint=checkpoint, resume=True)
     resumed, uninterrupted = frames(folder), frames(run[1])
     assert [(r["frame"], r["kind"], r["tilt_deg"]) for r in resumed] == [(r["frame"], r["kind"], r["tilt_deg"]) for r in uninterrupted]
+
+
+def interrupted_series(wall, folder, checkpoint):
+    """A series and checkpoint of the run interrupted at its third equilibrium (two frames,
+    0 and 5 deg); the checkpoint's equilibrium tilts."""
+    def interrupt(record):
+        if record.tilt_deg >= 10.0:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        tilt_analysis(wall, SETTINGS, on_frame=VtkSeries(folder, wall), on_record=interrupt, checkpoint=checkpoint, checkpoint_every_s=0.0)
+    return load_checkpoint(checkpoint)[1]["records"][:, 0]
+
+
+def shifted_tilt(folder):
+    text = (folder / "frames.csv").read_text()
+    (folder / "frames.csv").write_text(text.replace(",5.000000,", ",4.000000,"))
+
+
+def cut_short(folder):
+    (folder / "frames.csv").write_text("".join((folder / "frames.csv").read_text().splitlines(keepends=True)[:2]))
+
+
+@pytest.mark.parametrize("tamper, problem", [
+    (shifted_tilt, "its frame 1 is at 4 deg where the run's equilibrium is at 5 deg"),
+    (cut_short, "it lists 1 of the 2 equilibrium frames the run's checkpoint has reached"),
+    (lambda folder: (folder / "contacts_0001.vtu").unlink(), "contacts_0001.vtu, which frames.csv lists, is missing"),
+], ids=["another-run", "cut-short", "file-deleted"])
+def test_a_resumed_series_that_is_not_the_run_s_is_refused_naming_what_differs(wall, tmp_path, tamper, problem):
+    """Found by a hunt: another run's series copied in, a frames.csv cut short and a frame's file
+    deleted were each spliced into the resumed series without a word."""
+    folder = tmp_path / "vtk"
+    tilts = interrupted_series(wall, folder, tmp_path / "checkpoint.npz")
+    tamper(folder)
+    with pytest.raises(DrydemError, match=re.escape(f"{folder}: its VTK series is not this run's ({problem}): pass --overwrite")):
+        VtkSeries(folder, wall, resumed_tilts_deg=tilts)
+
+
+def test_a_series_folder_that_is_a_link_is_refused(wall, tmp_path):
+    # found by a hunt: a resumed run wrote its frames into the other run's series the link led to
+    (tmp_path / "other").mkdir()
+    (tmp_path / "vtk").symlink_to(tmp_path / "other")
+    for resumed in (None, [0.0]):
+        with pytest.raises(DrydemError, match=re.escape(f"{tmp_path / 'vtk'}: is a link; a run writes its VTK series in a folder of its own")):
+            VtkSeries(tmp_path / "vtk", wall, resumed_tilts_deg=resumed)
+    assert list((tmp_path / "other").iterdir()) == []
 
 
 def test_a_caption_shows_a_round_off_below_a_hundredth_of_a_millimetre_as_zero():

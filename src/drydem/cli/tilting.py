@@ -215,6 +215,7 @@ def _run_tilt(found: Target, model: Model, settings, folder: Path, *, saved: dic
     from tqdm import tqdm
 
     from drydem.analysis.tilt import CHECKPOINT_EVERY_S, tilt_analysis
+    from drydem.analysis.tilt.checkpointing import saved_records
     from drydem.io.results import PushoverWriter
     from drydem.io.vtk import VtkSeries
 
@@ -230,7 +231,7 @@ def _run_tilt(found: Target, model: Model, settings, folder: Path, *, saved: dic
             frames = writer = None
             resume = saved is not None
             try:
-                frames = (VtkSeries(folder / "vtk", model, every=save_every, resume_after=len(saved["records"]) if resume else None,
+                frames = (VtkSeries(folder / "vtk", model, every=save_every, resumed_tilts_deg=saved_records(saved)[:, 0] if resume else None,
                                     load_direction=settings.load_direction) if series else None)
                 writer = PushoverWriter(folder)
                 result = tilt_analysis(model, settings, on_record=writer, on_progress=progress, on_frame=frames,

@@ -28,7 +28,7 @@ import numpy as np
 
 from drydem import __version__
 from drydem.errors import DrydemError
-from drydem.files import WRITING, held, locked_by_another, regular_file, replaceable, replaced_atomically, writable_folder
+from drydem.files import WRITING, held, locked_by_another, regular_file, replaceable, replaced_atomically, writable_folder, write_text
 
 if TYPE_CHECKING:  # annotations only: importing the limit analysis takes scipy.optimize, a third of a second
     from drydem.analysis.limit import LimitResult, LimitSettings
@@ -283,7 +283,8 @@ def prepared_folder(folder: Path, outputs: tuple[str, ...], *, resume: bool | No
         for name in ours if overwrite and not resume else ():
             path = folder / name
             shutil.rmtree(path) if path.is_dir() and not path.is_symlink() else path.unlink()
-        (folder / RUN_MARK).write_text(f"a results folder of drydem {__version__}: drydem tilt, limit, shake or montecarlo\n")
+        # replaced, not written through: a link there was followed to its target (found by a hunt)
+        write_text(folder / RUN_MARK, f"a results folder of drydem {__version__}: drydem tilt, limit, shake or montecarlo\n")
         try:
             yield folder
         finally:
@@ -353,7 +354,8 @@ def _not_written_by_a_run(folder: Path, name: str) -> list[str]:
 def drydem_run_folder(folder: Path) -> bool:
     """Whether ``folder`` holds a drydem run's results: its :data:`RUN_MARK`, or a summary.json
     of drydem (its drydem_version: a finished run of a drydem before the mark)."""
-    if (folder / RUN_MARK).is_file():
+    mark = folder / RUN_MARK
+    if mark.is_file() and not mark.is_symlink():
         return True
     try:
         summary = json.loads(regular_file(folder / "summary.json", "").read_text(encoding="utf-8"))

@@ -31,7 +31,7 @@ from drydem.engine.contacts import SubContacts, world_points
 from drydem.errors import DrydemError, ModelError, plain_reason
 from drydem.files import read_text, replaced_atomically, writable
 from drydem.model.assembly import Model
-from drydem.model.geometry import described
+from drydem.model.geometry import described, real_array
 from drydem.model.parameters import FILE_PATH, InstanceOf, Range, check_arguments, shown
 from drydem.model.rotation import matrices
 from drydem.model.state import State, checked_state
@@ -127,29 +127,33 @@ class VtkSeries:
     Equilibrium frames are kept every ``every``-th, and the last before the states past collapse,
     which are all kept. Use an instance as ``tilt_analysis(..., on_frame=series)``.
 
-    ``resume_after``: None for a new series; n for the series of a run resumed from a
-    checkpoint that holds n equilibrium states (``len(saved["records"])`` of
-    :func:`~drydem.engine.checkpoint.load_checkpoint`): the frames of those are kept, the
-    frames after them (written before the interruption, given again by the resumed analysis)
-    dropped, and the count of equilibria goes on from n, so that the frames kept are those of
-    an uninterrupted run (found by a hunt: counting on from the frames written shifted every
-    later frame of a --save-every 3 series). The series must have been begun with the same
-    ``every`` (its series.json): DrydemError otherwise."""
+    ``resumed_tilts_deg``: None for a new series; for the series of a run resumed from a
+    checkpoint, the tilts of the n equilibrium states it holds (the first column of
+    ``saved["records"]`` of :func:`~drydem.engine.checkpoint.load_checkpoint`): the frames of
+    those are kept, the frames after them (written before the interruption, given again by the
+    resumed analysis) dropped, and the count of equilibria goes on from n, so that the frames
+    kept are those of an uninterrupted run (found by a hunt: counting on from the frames written
+    shifted every later frame of a --save-every 3 series). The series must have been begun with
+    the same ``every`` (its series.json), and its frames kept must be those equilibria's, each
+    file there (:func:`_check_resumed_frames`): DrydemError otherwise. A ``folder`` that is a
+    link is refused: the frames would be written into its target."""
 
-    def __init__(self, folder: Path, model: Model, *, every: int = 1, resume_after: int | None = None, load_direction: int = 0):
+    def __init__(self, folder: Path, model: Model, *, every: int = 1, resumed_tilts_deg=None, load_direction: int = 0):
         SAVE_EVERY.check(every, "VtkSeries every")
         LOAD_DIRECTION.check(load_direction, "VtkSeries load_direction")
-        if resume_after is not None:
-            RESUMED_EQUILIBRIA.check(resume_after, "VtkSeries resume_after")
+        tilts = None if resumed_tilts_deg is None else _resumed_tilts(resumed_tilts_deg)
         self.folder, self.model, self.every, self.load_axis = Path(folder), model, every, LOAD_AXES[load_direction]
+        if self.folder.is_symlink():  # found by a hunt: a resumed run wrote its frames into another run's series
+            raise DrydemError(f"{self.folder}: is a link; a run writes its VTK series in a folder of its own")
         self.folder.mkdir(parents=True, exist_ok=True)
         self.rows: list[tuple[int, str, float, float]] = []
         self.equilibria = 0
         self._skipped = None  # the last equilibrium frame, when ``every`` left it out
-        if resume_after is not None:
+        if tilts is not None:
             _check_series_every(self.folder, every)
-            self.rows = _equilibrium_rows(self.folder / "frames.csv")[:-(-resume_after // every)]
-            self.equilibria = resume_after
+            self.rows = _equilibrium_rows(self.folder / "frames.csv")[:-(-len(tilts) // every)]
+            _check_resumed_frames(self.folder, self.rows, tilts[::every])
+            self.equilibria = len(tilts)
         _write_series_settings(self.folder, every)
 
     def __call__(self, frame) -> None:
@@ -171,8 +175,39 @@ class VtkSeries:
                        [(i, kind, f"{tilt:.6f}", f"{ux:.8g}", self.load_axis) for i, kind, tilt, ux in self.rows])
 
 
-#: the equilibrium states a resumed tilting series goes on after
-RESUMED_EQUILIBRIA = Range(0, None, integer=True)
+def _resumed_tilts(tilts_deg) -> np.ndarray:
+    """``tilts_deg`` as a 1-D float array; ModelError naming VtkSeries resumed_tilts_deg unless
+    it is one of finite numbers."""
+    tilts = real_array(tilts_deg)
+    if tilts is None or tilts.ndim != 1 or not np.isfinite(tilts).all():
+        raise ModelError(f"VtkSeries resumed_tilts_deg = {shown(tilts_deg)}: must be the tilts (deg) of the equilibria "
+                         "the resumed run's checkpoint holds, a list of finite numbers")
+    return tilts
+
+
+#: deg: how far a kept frame's tilt may be from its equilibrium's: frames.csv writes 6 decimals
+FRAME_TILT_TOLERANCE_DEG = 1e-6
+
+
+def _check_resumed_frames(folder: Path, rows: list, tilts_deg: np.ndarray) -> None:
+    """DrydemError naming ``folder`` unless its kept equilibrium ``rows`` (frames.csv) are one per
+    tilt of ``tilts_deg`` (the checkpoint's equilibria, every ``every``-th), at those tilts, each
+    with its blocks and contacts files (found by a hunt: another run's series copied in, a
+    frames.csv cut short and a frame's file deleted were each spliced into the resumed series)."""
+    tilts = np.array([row[2] for row in rows])
+    problem = None
+    if len(rows) < len(tilts_deg):
+        problem = f"it lists {len(rows)} of the {len(tilts_deg)} equilibrium frames the run's checkpoint has reached"
+    elif len(tilts) and np.abs(tilts - tilts_deg).max() > FRAME_TILT_TOLERANCE_DEG:
+        k = int(np.argmax(np.abs(tilts - tilts_deg)))
+        problem = f"its frame {k} is at {tilts[k]:g} deg where the run's equilibrium is at {tilts_deg[k]:g} deg"
+    else:
+        missing = [name for k in range(len(rows)) for name in (f"blocks_{k:04d}.vtu", f"contacts_{k:04d}.vtu")
+                   if not (folder / name).is_file()]
+        problem = f"{missing[0]}, which frames.csv lists, is missing" if missing else None
+    if problem is not None:
+        raise DrydemError(f"{folder}: its VTK series is not this run's ({problem}): pass --overwrite to run again from the "
+                          "start, or give another --out")
 #: a tilting series' settings file in its folder: ``{"every": N}``
 SERIES_SETTINGS = "series.json"
 

@@ -58,6 +58,11 @@ def _same_file(before: str | None, now: str) -> bool:
         return False
 
 
+def saved_records(saved: dict) -> np.ndarray:
+    """A checkpoint's equilibrium records (:func:`progress`) as rows (tilt deg, ux m, uz m, drift, cycles)."""
+    return np.asarray(saved["records"], dtype=float).reshape(-1, 5)
+
+
 def progress(records: list[Record], run: TiltRun, theta: float, step: float) -> dict:
     """The protocol's position, for a checkpoint (with the equilibria before the last one, for
     the predictor)."""
@@ -112,7 +117,7 @@ def _restored(run: TiltRun, snapshot, saved: dict, records: list[Record]) -> tup
     if unknown:
         raise ModelError(f"its lost blocks {unknown}: not blocks of the model")
     run.sim.restore(snapshot)
-    rows = np.asarray(saved["records"], dtype=float).reshape(-1, 5)
+    rows = saved_records(saved)
     if not np.isfinite(rows).all() or (np.diff(rows[:, 0]) <= 0).any() or (rows[:, 4] < 0).any() or (rows[:, 4] % 1).any() \
             or (rows.size and abs(rows[-1, 0] - theta) > 1e-9):  # found by a hunt: reversed records resumed to wrong drift angles
         raise ModelError("its records: must be rows of finite numbers (tilt, ux, uz, drift, cycles), the tilts increasing to its last "
