@@ -93,6 +93,9 @@ BAD_TILT_FIELDS = {
     "unknown ending": (("ended_by",), "fell over", "summary ended_by = 'fell over': must be one of"),
     "negative cycles": (("cycles",), -1, "summary cycles = -1: must be an integer in [0, inf)"),
     "fractional cycles": (("cycles",), 2.5, "summary cycles = 2.5: must be an integer in [0, inf)"),
+    # found by a hunt: a Monte Carlo sample's angle edited to 42 beside its last equilibrium at 17 was averaged in
+    "collapse past the last equilibrium": (("collapse_angle_deg",), 30.0, "summary collapse_angle_deg = 30: not the last "
+                                                                           "equilibrium's tilt, 24 deg"),
 }
 
 
@@ -188,6 +191,16 @@ def test_a_pushover_csv_cut_short_of_the_summary_s_equilibria_is_named_corrupt(t
     stderr, text = report(tmp_path)
     assert (f"corrupt record left out: {bad.parent / 'pushover.csv'}: 25 rows, where summary.json records 201 equilibrium states "
             "(one row each): cut short or edited by hand?") in stderr
+    assert "1 runs recorded (0 failed)" in text and GOOD_TILT_ROW in text
+
+
+def test_a_pushover_csv_ending_before_the_summary_s_last_equilibrium_is_named_corrupt(tmp_path):
+    """The curve's rows are the equilibria, so its last is the last equilibrium (24 deg here)."""
+    run_folder(tmp_path, "good", tilt_summary())
+    bad = run_folder(tmp_path, "edited", tilt_summary() | {"last_equilibrium_deg": 30.0, "collapse_angle_deg": 30.0})
+    stderr, text = report(tmp_path)
+    assert (f"corrupt record left out: {bad.parent / 'pushover.csv'}: its last row is at 24 deg, where summary.json records the "
+            "last equilibrium at 30 deg: cut short or edited by hand?") in stderr
     assert "1 runs recorded (0 failed)" in text and GOOD_TILT_ROW in text
 
 

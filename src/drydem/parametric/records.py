@@ -286,15 +286,19 @@ def _tilt_problems(summary: dict) -> list[str]:
     """The problems of a tilt summary beyond :data:`SUMMARY_RULES`: each drift limit's angle in
     [0, 90] deg or null (never reached), and at most the last equilibrium's (a limit is reached at
     an equilibrium; found by a hunt: one at 89 deg beside a collapse at 25 was tabled); the
-    settings within :data:`TILT_SETTING_RULES` (a tilt_axis "z" was taken)."""
+    settings within :data:`TILT_SETTING_RULES` (a tilt_axis "z" was taken); a collapse angle that
+    is not the last equilibrium's tilt."""
     drift = summary["drift_limit_angles_deg"]
     if not isinstance(drift, dict):
         return ["summary drift_limit_angles_deg must map drift limits to angles"]
     problems = table_problems(drift, dict.fromkeys(drift, ANGLE), "summary drift_limit_angles_deg", optional=drift)
-    last = summary.get("last_equilibrium_deg")
+    last, collapse = summary.get("last_equilibrium_deg"), summary.get("collapse_angle_deg")
     if not problems and _numeric(last):
         problems = [f"summary drift_limit_angles_deg {limit} = {angle:g}: above the last equilibrium, {last:g} deg (a drift limit is "
                     "reached at an equilibrium)" for limit, angle in drift.items() if angle is not None and angle > last + 1e-9]
+    if not problems and _numeric(last) and _numeric(collapse) and abs(collapse - last) > 1e-9:  # found by a hunt: 42 beside 17 was averaged
+        problems = [f"summary collapse_angle_deg = {collapse:g}: not the last equilibrium's tilt, {last:g} deg (a tilt that collapses "
+                    "does so in the step after its last equilibrium, and is given that equilibrium's tilt)"]
     settings = summary.get("analysis", {})
     if not isinstance(settings, dict):
         return [*problems, "summary analysis must be the tilting settings (a table)"]
@@ -401,12 +405,16 @@ def read_pushover(folder: str | Path, summary: dict) -> list[list[float]]:
 def _rows_problem(summary: dict, curve: list) -> str | None:
     """A tilt's pushover.csv without one row per equilibrium state its summary records, or None
     (found by a hunt: a pushover.csv cut to 49 of its 201 rows was drawn beside the tables of
-    the whole run), or with a row at or past the stop displacement (summary analysis
+    the whole run), whose last row is not at the last equilibrium's tilt, or with a row at or past the stop displacement (summary analysis
     stop_displacement_m). What a summary does not record (a drydem before it) is not checked."""
     states = summary.get("equilibrium_states")
     if isinstance(states, int) and not isinstance(states, bool) and states != len(curve):
         return (f"{len(curve)} rows, where summary.json records {states} equilibrium states (one row each): cut short or "
                 "edited by hand?")
+    last = summary.get("last_equilibrium_deg")
+    if curve and _numeric(last) and abs(curve[-1][0] - last) > DRIFT_ANGLE_SLACK_DEG:
+        return (f"its last row is at {curve[-1][0]:g} deg, where summary.json records the last equilibrium at {last:g} deg: "
+                "cut short or edited by hand?")
     analysis = summary.get("analysis")  # a dict in a summary drydem wrote (found by a review: a text was an AttributeError)
     stop = analysis.get("stop_displacement_m") if isinstance(analysis, dict) else None
     past = [k for k, row in enumerate(curve) if _numeric(stop) and abs(row[1]) >= stop]
