@@ -241,7 +241,6 @@ def _model_parts(data: dict, source: str) -> list[_Part]:
             raise ModelError(f"{source}: graph edge {edge} has modifiers (cuts of one element by another); "
                              "drydem reads blocks as their meshes are: apply the modifiers in compas first")
     nodes = _object(graph.get("node"), f"{source}: graph nodes")
-    _refuse_off_the_graph(elements, nodes, parents, source)
     parts, node_of = [], {}
     for node, attributes in sorted(nodes.items(), key=lambda item: _key(item[0], f"{source}: graph node")):
         guid = _object(attributes, f"{source}: graph node {node}").get("element")
@@ -261,6 +260,7 @@ def _model_parts(data: dict, source: str) -> list[_Part]:
         parts.append(_Part(name, int(node), _mesh(element.get("geometry"), f"{where}: geometry"), matrix,
                            _flag(element.get(SUPPORT_KEY, False), f"{where}: {SUPPORT_KEY}"),
                            _density(element.get("material"), materials, where), f"{where}: {name!r}"))
+    _refuse_off_the_graph(elements, nodes, parents, source)
     return parts
 
 
@@ -268,7 +268,8 @@ def _refuse_off_the_graph(elements: dict, nodes: dict, parents: dict[str, list[s
     """ModelError naming the model's elements that are on no graph node and no ancestor in the
     tree of one that is: drydem reads the blocks from the graph's nodes, and would leave them
     out without a word (found by a hunt: an element on the tree but not the graph was dropped)."""
-    on_graph = {attributes.get("element") for attributes in nodes.values() if isinstance(attributes, dict)}
+    on_graph = {attributes.get("element") for attributes in nodes.values() if isinstance(attributes, dict)
+                and isinstance(attributes.get("element"), str)}
     grouping = {above for guid in on_graph for above in parents.get(guid, [])}
     off = sorted(guid for guid in elements if guid not in on_graph and guid not in grouping)
     if off:
