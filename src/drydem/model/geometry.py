@@ -321,13 +321,13 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
         return box(*corners, name=name)
     from scipy.spatial import ConvexHull, QhullError  # here: scipy.spatial takes a fifth of a second to import
 
-    kept = _without_twins(pts, HULL_TOLERANCE * scale)
+    tol = HULL_TOLERANCE * scale
+    kept = _without_twins(pts, tol)
     pts = pts[kept]
     try:
         hull = ConvexHull(pts)
     except QhullError:  # its text is Qhull's own (QH6013 qhull input error: ...; found by a hunt)
         raise GeometryError(f"{name}: degenerate block: its vertices are coplanar or collinear, it has no volume") from None
-    tol = HULL_TOLERANCE * scale
     _refuse_flat(hull.volume, scale, name)
     depth = -(pts @ hull.equations[:, :3].T + hull.equations[:, 3]).max(axis=1)
     inside = np.flatnonzero(depth > tol)
