@@ -484,7 +484,13 @@ BOX = dd.box([0, 0, 0], [1, 1, 1])
     (dict(face_normals=BOX.face_normals[[1, 0, 2, 3, 4, 5]]), "face 0's corners lie up to 1 m off its plane"),
     (dict(faces=tuple(f[::-1] for f in BOX.faces)), "face 0 has an area of -1 m2 along its normal: a face's corners must be "
                                                     "distinct and run counter-clockwise seen from outside"),
-    (dict(faces=(BOX.faces[0][[0, 0, 0]],) + BOX.faces[1:]), "face 0 has an area of 0 m2"),
+    (dict(faces=(BOX.faces[0][[0, 0, 0]],) + BOX.faces[1:]), f"face 0 has vertex {BOX.faces[0][0]} as a corner twice: a face's "
+                                                             "corners must be distinct"),
+    # found by a review: a corner given twice in a row was taken, and its edge had no direction (NaN)
+    (dict(faces=(BOX.faces[0][[0, 1, 1, 2, 3]],) + BOX.faces[1:]), f"face 0 has vertex {BOX.faces[0][1]} as a corner twice"),
+    (dict(faces=BOX.faces[:5] + (BOX.faces[4],), face_normals=BOX.face_normals[[0, 1, 2, 3, 4, 4]]),
+     "'s edge from vertex 5 to 1 is not run the other way by one other face: the faces must close the polyhedron, each edge "
+     "shared by two faces"),  # the top (face 5) given as face 4 again: face 1's top edge has no twin
     (dict(volume=1e-300), "volume = 1e-300: its vertices and faces enclose 1 m3"),
     (dict(volume=0.9), "volume = 0.9: its vertices and faces enclose 1 m3"),
     (dict(centroid=np.array([1e6, 0.0, 0.0])), "centroid = [1000000.0, 0.0, 0.0]: its vertices and faces have theirs at [0.5, 0.5, 0.5] m"),

@@ -184,6 +184,13 @@ def test_animate_names_a_shake_runs_video_as_shake_video_does(wall, tmp_path):
     result = invoke("animate", tmp_path / "run")
     assert result.exit_code == 0, result.output
     assert not list((tmp_path / "run").glob("collapse.*")) and list((tmp_path / "run").glob("shake.*"))
+    # given the run's vtk/ itself, the video goes beside it, as --video writes it (not into vtk/,
+    # where --overwrite of the run would find a file no run writes there)
+    for video in (tmp_path / "run").glob("shake.*"):
+        video.unlink()
+    result = invoke("animate", folder)
+    assert result.exit_code == 0, result.output
+    assert not list(folder.glob("shake.*")) and list((tmp_path / "run").glob("shake.*"))
 
 
 def test_animate_notes_the_frames_on_disk_that_frames_csv_does_not_list(wall, tmp_path):

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from drydem.errors import DrydemError
+from drydem.errors import DrydemError, ModelError
 from drydem.model.parameters import CRITERIA
 from drydem.cli.common import (
     CHECKPOINT, MODEL_OPTIONS, PLAIN_FLOAT, PlainIntRange, check_save_every, discard_unstarted, joint_law_options, main,
@@ -154,8 +154,8 @@ def _tilt_plan(found: Target, tilt: TiltOptions, out: Path | None, resume: bool,
     """The model, settings and results folder of a tilt, and the checkpoint's saved state when
     resuming (else None); DrydemError for options that contradict each other or the folder."""
     from drydem.analysis.tilt import check_loading, check_stop_displacement, monitor_index
-    from drydem.analysis.tilt.checkpointing import check_fingerprint, fingerprint
-    from drydem.engine.checkpoint import load_checkpoint
+    from drydem.analysis.tilt.checkpointing import check_fingerprint, fingerprint, saved_records
+    from drydem.engine.checkpoint import load_checkpoint, unreadable
 
     model = found.model.overridden(**tilt.model_overrides())
     settings = tilt.settings()
@@ -172,6 +172,10 @@ def _tilt_plan(found: Target, tilt: TiltOptions, out: Path | None, resume: bool,
     if resume:
         _, saved = load_checkpoint(folder / CHECKPOINT)
         check_fingerprint(folder / CHECKPOINT, saved, fingerprint(model, settings))
+        try:  # before the VTK series goes on from their tilts (found by a review: a ValueError's traceback)
+            saved_records(saved)
+        except ModelError as exc:
+            raise unreadable(folder / CHECKPOINT, exc) from None
         if not (folder / "summary.json").is_file():  # a finished run resumes nothing (the command says so)
             _check_resumed_series(folder, saved, series)
     return model, settings, folder, saved
@@ -335,7 +339,7 @@ def _fps(ctx, param, value):
 
 @main.command()
 @click.argument("result_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
-@click.option("--out", "-o", type=click.Path(dir_okay=False), callback=out_path, help="Video file, .mp4 or .gif (default: RESULT_DIR/collapse.mp4, or shake.mp4 for a shake run).")
+@click.option("--out", "-o", type=click.Path(dir_okay=False), callback=out_path, help="Video file, .mp4 or .gif (default: RESULT_DIR/collapse.mp4, or shake.mp4 for a shake run; beside a run's vtk/ given itself).")
 @click.option("--fps", type=PLAIN_FLOAT, default=8.0, show_default=True, callback=_fps,
               help="Frames per second, 0.1 to 100 (10 s a frame to the fastest a GIF can show: it counts in hundredths of a second).")
 @click.option("--overwrite", is_flag=True, help="Replace the video if it exists (else an existing file is kept and the command fails).")
@@ -349,7 +353,10 @@ def animate(result_dir: Path, out: Path | None, fps: float, overwrite: bool) -> 
     except DrydemError as exc:
         raise click.ClickException(str(exc)) from None
     folder = result_dir / "vtk" if (result_dir / "vtk").is_dir() else result_dir
-    _render(folder, out or _default_video(result_dir, folder), fps=fps, overwrite=overwrite)
+    # a run's vtk/ given itself: its video beside it, as --video writes it (found by a review: a
+    # video in vtk/ is no file of a run's there, and --overwrite of the run refused the folder)
+    run_dir = result_dir.parent if folder == result_dir and result_dir.name == "vtk" else result_dir
+    _render(folder, out or _default_video(run_dir, folder), fps=fps, overwrite=overwrite)
 
 
 def _check_finished(folder: Path) -> None:

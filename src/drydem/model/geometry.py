@@ -54,7 +54,7 @@ MAX_BLOCK_VERTICES = 2000
 #: how far from 1 a hand-made polyhedron's face normal may be long (:func:`_faces_problem`): round-off
 UNIT_TOLERANCE = 1e-6
 #: how far, relatively, a hand-made polyhedron's volume, centroid and second moment may be from
-#: those its vertices and faces enclose (:func:`_mass_problem`): round-off, and a few digits given
+#: those its vertices and faces enclose (:func:`_mass_problem`): round-off, and six digits given
 MASS_TOLERANCE = 1e-6
 
 
@@ -193,8 +193,11 @@ def _faces_problem(p: ConvexPolyhedron) -> str | None:
     k = int(np.argmax(np.abs(length - 1.0)))
     if abs(length[k] - 1.0) > UNIT_TOLERANCE:
         return f"face_normals[{k}] is {length[k]:.6g} long: face normals must be unit vectors"
-    tol = HULL_TOLERANCE * float(np.linalg.norm(v.max(0) - v.min(0)))
     tails, heads, face = face_corners(p.faces)
+    closure = _closure_problem(tails, heads, face, len(v))
+    if closure is not None:
+        return closure
+    tol = HULL_TOLERANCE * p.size
     starts = np.flatnonzero(np.diff(face, prepend=-1))  # where each face's corners begin
     first = v[tails[starts]]
     offset = np.einsum("ij,ij->i", normals, first)
@@ -216,6 +219,27 @@ def _faces_problem(p: ConvexPolyhedron) -> str | None:
     return None
 
 
+def _closure_problem(tails: np.ndarray, heads: np.ndarray, face: np.ndarray, count: int) -> str | None:
+    """Why faces of corners ``tails`` to ``heads`` (:func:`face_corners`; vertices 0 to ``count``
+    - 1) do not close a polyhedron: a face with a corner twice, or an edge not run once each way,
+    by two faces (found by a review: a corner repeated in a face gave edges of no direction, NaN;
+    a face left out, a surface with a hole); None if they do."""
+    corner = face * count + tails
+    order = np.argsort(corner, kind="stable")
+    again = np.flatnonzero(np.diff(corner[order]) == 0)
+    if again.size:
+        j = order[again[0] + 1]
+        return f"face {face[j]} has vertex {tails[j]} as a corner twice: a face's corners must be distinct"
+    edge = tails * count + heads
+    _, which, runs = np.unique(edge, return_inverse=True, return_counts=True)
+    unclosed = (runs[which] > 1) | ~np.isin(heads * count + tails, edge)
+    if not unclosed.any():
+        return None
+    j = int(np.argmax(unclosed))
+    return (f"face {face[j]}'s edge from vertex {tails[j]} to {heads[j]} is not run the other way by one other face: "
+            "the faces must close the polyhedron, each edge shared by two faces")
+
+
 def _mass_problem(p: ConvexPolyhedron) -> str | None:
     """Where the volume, centroid or second moment of ``p`` (its faces well formed) differ from
     those its vertices and faces enclose (:func:`_mass_properties`) by more than
@@ -223,13 +247,12 @@ def _mass_problem(p: ConvexPolyhedron) -> str | None:
     film's (:func:`_flatness_problem`); None if they do not (found by a hunt: a volume of 1e-300
     cycled at a timestep of 1e-151 s, a centroid 1,000 km from the vertices was taken)."""
     volume, centroid, second = _mass_properties(p.vertices, p.faces)
-    size = float(np.linalg.norm(p.vertices.max(0) - p.vertices.min(0)))
-    flat = _flatness_problem(volume, size)
+    flat = _flatness_problem(volume, p.size)
     if flat is not None:
         return flat
     if abs(p.volume - volume) > MASS_TOLERANCE * volume:
         return f"volume = {shown(p.volume)}: its vertices and faces enclose {volume:.9g} m3"
-    if np.abs(p.centroid - centroid).max() > MASS_TOLERANCE * size:
+    if np.abs(p.centroid - centroid).max() > MASS_TOLERANCE * p.size:
         return f"centroid = {shown(p.centroid.tolist())}: its vertices and faces have theirs at {shown(centroid.tolist())} m"
     off = float(np.abs(p.second_moment - second).max())
     if off > MASS_TOLERANCE * float(np.abs(second).max()):

@@ -59,8 +59,13 @@ def _same_file(before: str | None, now: str) -> bool:
 
 
 def saved_records(saved: dict) -> np.ndarray:
-    """A checkpoint's equilibrium records (:func:`progress`) as rows (tilt deg, ux m, uz m, drift, cycles)."""
-    return np.asarray(saved["records"], dtype=float).reshape(-1, 5)
+    """A checkpoint's equilibrium records (:func:`progress`) as rows (tilt deg, ux m, uz m, drift,
+    cycles); ModelError unless they are numbers, five a row."""
+    records = np.asarray(saved["records"])
+    if records.dtype.kind not in "iuf" or records.size % 5:
+        raise ModelError(f"its records ({records.dtype}, {records.size} numbers): must be rows of five numbers "
+                         "(tilt, ux, uz, drift, cycles)")
+    return records.astype(float).reshape(-1, 5)
 
 
 def progress(records: list[Record], run: TiltRun, theta: float, step: float) -> dict:
