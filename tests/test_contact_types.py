@@ -526,3 +526,22 @@ def test_almost_parallel_faces_stay_a_face_contact(tilt_deg, kind, count):
     found = npm.find(geometry, np.array([[0, 1]]), position, rotation, tolerance=TOLERANCE, density=DENSITY)
     assert found.kind[0] == kind and found.count[0] == count
     np.testing.assert_allclose(found.normal[0], [0, 0, 1], atol=1e-15)
+
+
+def test_a_bed_joint_of_bricks_stored_in_float32_far_out_is_found_whole():
+    """Two bricks (0.2 x 0.1 x 0.05 m, the upper one 0.05 m along) turned anyhow, 100 m from
+    the origin and stored in float32 as STL stores them: their corners are off by up to 8e-6 m,
+    folding each face by ~1e-4 rad. Their faces are joined again (geometry.FOLD_ANGLE_RAD), and
+    the contact is the whole overlap of the beds, 0.15 x 0.1 m (found by a review: the faces
+    came out as triangles, and the contact had 19 to 63 % of it)."""
+    rng = np.random.default_rng(0)
+    lower, upper = dd.box([0, 0, -0.05], [0.2, 0.1, 0]).vertices, dd.box([0.05, 0, 0], [0.25, 0.1, 0.05]).vertices
+    for _ in range(10):
+        turn = Rotation.random(random_state=rng).as_matrix()
+        shapes = [dd.convex_hull((v @ turn.T + 100.0).astype(np.float32).astype(float)) for v in (lower, upper)]
+        assert [len(s.faces) for s in shapes] == [6, 6]
+        position, rotation = np.array([s.centroid for s in shapes]), np.repeat(np.eye(3)[None], 2, 0)
+        found = npm.find(FlatGeometry.of(shapes), np.array([[0, 1]]), position, rotation, tolerance=TOLERANCE, density=DENSITY)
+        assert found.kind[0] == npm.FACE_FACE
+        # float32's spacing at 100 m is 7.6e-6 m: the overlap's sides are that uncertain
+        assert found.areas[0, :found.count[0]].sum() == pytest.approx(0.015, abs=7.6e-6 * 0.5)  # times its perimeter

@@ -335,7 +335,8 @@ def test_twins_just_past_the_tolerance_make_a_closed_hull_not_one_with_holes():
 def test_a_face_of_points_off_its_plane_by_round_off_closes_anywhere(noise_m):
     """Random hulls (about 1 m across) cut by a plane, the points beyond it moved onto it with
     noise about the tolerance (1e-6 of the size), 1 m to 10 km from the origin: each block
-    closes and holds its points' hull's volume within a sheet of the tolerance over its area.
+    closes and holds its points' hull's volume within a sheet of the fold tolerance (1e-4 of
+    the size, how far out of plane a face's corners are joined) over its area.
     Found by CI: 160 m out, two faces of one plane each took a corner of the other (0.2322 m3
     for 0.2268); a point 1e-6 m above a face of four made a dart of it on one side only."""
     rng = np.random.default_rng(7)
@@ -352,6 +353,6 @@ def test_a_face_of_points_off_its_plane_by_round_off_closes_anywhere(noise_m):
         except dd.GeometryError as error:  # the cut pushed a point inside the hull: not convex
             assert "inside the hull of the others" in str(error)
             continue
-        tolerance = geometry.HULL_TOLERANCE * np.linalg.norm(np.ptp(points, axis=0))
+        tolerance = geometry.FOLD_TOLERANCE * np.linalg.norm(np.ptp(points, axis=0))  # how far faces are joined
         assert closes(shape)
         assert shape.volume == pytest.approx(ConvexHull(points).volume, abs=tolerance * ConvexHull(points).area)

@@ -36,6 +36,15 @@ if TYPE_CHECKING:
 #: fraction of a block's size (its bounding box's diagonal) within which a point is on the hull,
 #: on a face's plane or on an edge (:func:`convex_hull`, :func:`face_interior_points`)
 HULL_TOLERANCE = 1e-6
+#: a face folded by its corners' rounding is one face: neighbouring hull triangles whose normals
+#: differ by less than FOLD_ANGLE_RAD and whose corners lie within FOLD_TOLERANCE of the block's
+#: size (1e-4: 0.02 mm on a 0.2 m brick) of the other's plane are joined (:func:`_coplanar_groups`).
+#: A brick turned anyhow and stored in float32, as STL is, 100 m from the origin has its
+#: corners 8e-6 m off (1e-4 rad on a 0.1 m face); its faces came out as triangles, and a contact
+#: found on one of them had 19 to 63 % of the bed's area. The sides of a 1000-sided prism (the
+#: most MAX_BLOCK_VERTICES allows) turn 6.3e-3 rad, and stay apart
+FOLD_ANGLE_RAD = 1e-3
+FOLD_TOLERANCE = 1e-4
 #: the largest coordinate of a vertex, m: 1,000 km; beyond it a model is in another unit (its
 #: squares and cubes, areas and volumes, would also leave floating point's range near 1e100)
 MAX_COORDINATE_M = 1e6
@@ -183,7 +192,8 @@ def _polyhedron_problem(p: ConvexPolyhedron, consistent: bool) -> str | None:
 
 def _faces_problem(p: ConvexPolyhedron) -> str | None:
     """What makes the faces of ``p`` (its other parts well formed) no convex polyhedron's, within
-    HULL_TOLERANCE of its size: a normal not of unit length, a face's corners off the plane of
+    FOLD_TOLERANCE of its size (a face :func:`convex_hull` joined of triangles folded by its
+    corners' rounding is not quite plane): a normal not of unit length, a face's corners off the plane of
     its normal through its first corner, a vertex outside a face's plane (a normal pointing
     inward, or a polyhedron not convex), a face with no area or running clockwise about its
     normal (found by a hunt: inward normals, zero normals and repeated corners were taken, and
@@ -197,7 +207,7 @@ def _faces_problem(p: ConvexPolyhedron) -> str | None:
     closure = _closure_problem(tails, heads, face, len(v))
     if closure is not None:
         return closure
-    tol = HULL_TOLERANCE * p.size
+    tol = FOLD_TOLERANCE * p.size
     starts = np.flatnonzero(np.diff(face, prepend=-1))  # where each face's corners begin
     first = v[tails[starts]]
     offset = np.einsum("ij,ij->i", normals, first)
@@ -361,8 +371,9 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
             f"{name}: vertex {kept[i]} {pts[i].tolist()} lies {depth[i]:.3g} m inside the hull of the others; "
             "the block is not convex (split it into convex blocks)"
         )
+    fold = FOLD_TOLERANCE * scale
     try:
-        pts, hull, faces, normals = _closed_faces(pts, hull, tol)
+        pts, hull, faces, normals = _closed_faces(pts, hull, tol, fold)
     except QhullError:
         raise GeometryError(f"{name}: degenerate block: its vertices are coplanar or collinear, it has no volume") from None
     used = np.unique(np.concatenate(faces))
@@ -371,10 +382,10 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
     vertices = pts[used]
     faces = tuple(remap[f] for f in faces)
     volume, centroid, second = _mass_properties(vertices, faces)
-    # merging within tol moves the surface by at most tol: a sheet of tol over the hull's area.
-    # More, and faces overlap or leave gaps (found by a review: points just past the tolerance)
-    if abs(volume - hull.volume) > tol * hull.area:
-        raise GeometryError(f"{name}: its faces, merged within {tol:.3g} m, enclose {volume:.6g} m3 where its hull holds "
+    # merging moves the surface by at most fold: a sheet of fold over the hull's area. More, and
+    # faces overlap or leave gaps (found by a review: points just past the tolerance)
+    if abs(volume - hull.volume) > fold * hull.area:
+        raise GeometryError(f"{name}: its faces, merged within {fold:.3g} m, enclose {volume:.6g} m3 where its hull holds "
                             f"{hull.volume:.6g} m3: vertices a hair apart (round-off twins?); merge them")
     return ConvexPolyhedron(vertices, faces, normals, volume, centroid, second, consistent=True)
 
@@ -511,7 +522,7 @@ for _shared in (*BOX_FACES, BOX_NORMALS):  # every box holds these arrays: none 
     _shared.setflags(write=False)
 
 
-def _closed_faces(pts: np.ndarray, hull: ConvexHull, tol: float) -> tuple[np.ndarray, ConvexHull, list[np.ndarray], np.ndarray]:
+def _closed_faces(pts: np.ndarray, hull: ConvexHull, tol: float, fold: float) -> tuple[np.ndarray, ConvexHull, list[np.ndarray], np.ndarray]:
     """The points, hull, faces and normals of :func:`_merge_coplanar`, once its faces close: a
     vertex that one face leaves out (within ``tol`` of its neighbours' chord there, or a hair
     out of its plane) while another keeps it as a corner would leave a gap, and the volume
@@ -521,7 +532,7 @@ def _closed_faces(pts: np.ndarray, hull: ConvexHull, tol: float) -> tuple[np.nda
     from scipy.spatial import ConvexHull
 
     while True:
-        faces, normals, left_out = _merge_coplanar(pts, hull, tol)
+        faces, normals, left_out = _merge_coplanar(pts, hull, tol, fold)
         stray = np.intersect1d(left_out, np.concatenate(faces))
         if not stray.size:
             return pts, hull, faces, normals
@@ -529,7 +540,7 @@ def _closed_faces(pts: np.ndarray, hull: ConvexHull, tol: float) -> tuple[np.nda
         hull = ConvexHull(pts)
 
 
-def _merge_coplanar(pts: np.ndarray, hull: ConvexHull, tol: float) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
+def _merge_coplanar(pts: np.ndarray, hull: ConvexHull, tol: float, fold: float) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
     """Hull triangles joined into faces (:func:`_coplanar_groups`); each face's vertices ordered
     counter-clockwise about its normal, the triangles' area-weighted mean; leave out the faces
     whose corners are fewer than 3 (:func:`_corners_only`): slivers along an edge or at a
@@ -537,12 +548,9 @@ def _merge_coplanar(pts: np.ndarray, hull: ConvexHull, tol: float) -> tuple[list
     faces: list[np.ndarray] = []
     normals: list[np.ndarray] = []
     left_out: list[int] = []
-    group = _coplanar_groups(pts, hull, tol)
-    twice_area = np.linalg.norm(np.cross(*(pts[hull.simplices[:, 1:]] - pts[hull.simplices[:, :1]]).transpose(1, 0, 2)), axis=1)
-    for g in range(group.max() + 1):
+    group, face_normals = _coplanar_groups(pts, hull, tol, fold)
+    for g, n in enumerate(face_normals):
         members = np.flatnonzero(group == g)
-        n = twice_area[members] @ hull.equations[members, :3]
-        n /= np.linalg.norm(n)
         ring = np.unique(hull.simplices[members])
         corners = _corners_only(*_counter_clockwise(pts, ring, n), tol)
         left_out += set(ring.tolist()).difference(corners.tolist())
@@ -552,15 +560,15 @@ def _merge_coplanar(pts: np.ndarray, hull: ConvexHull, tol: float) -> tuple[list
     return faces, np.array(normals), np.array(left_out, dtype=np.int64)
 
 
-def _coplanar_groups(pts: np.ndarray, hull: ConvexHull, tol: float) -> np.ndarray:
-    """The face each hull triangle is part of: neighbouring triangles are joined where each one's
-    corners lie within ``tol`` (m) of the other's plane, and faces are the connected groups
-    (scipy.sparse.csgraph). Both ways, so that the test is symmetric, and by corners, not by the
-    planes' offsets: 160 m from the origin, two planes 3e-6 rad apart differ by 4e-4 m in
-    offset (found by CI: a face held a corner of another, counting its area twice)."""
-    from scipy.sparse import coo_array
-    from scipy.sparse.csgraph import connected_components
-
+def _coplanar_groups(pts: np.ndarray, hull: ConvexHull, tol: float, fold: float) -> tuple[np.ndarray, np.ndarray]:
+    """The face each hull triangle is part of, and each face's unit normal (its triangles'
+    area-weighted mean). Neighbouring triangles are joined where one's corners lie within ``tol``
+    (m) of the other's plane (a sliver's own plane is ill-defined: either way), or within
+    ``fold`` (m) and their normals within :data:`FOLD_ANGLE_RAD`; faces are the connected groups
+    (scipy.sparse.csgraph). A face whose corners then spread more than ``fold`` along its normal
+    (a gentle curve of many triangles) is joined by ``tol`` alone. By corners, not by the planes'
+    offsets: 160 m from the origin, two planes 3e-6 rad apart differ by 4e-4 m in offset (found
+    by CI: a face held a corner of another, counting its area twice)."""
     count = len(hull.simplices)
     one, other = np.repeat(np.arange(count), 3), hull.neighbors.ravel()
 
@@ -568,9 +576,36 @@ def _coplanar_groups(pts: np.ndarray, hull: ConvexHull, tol: float) -> np.ndarra
         e = hull.equations[plane]
         return np.abs(np.einsum("tcd,td->tc", pts[hull.simplices[triangle]], e[:, :3]) + e[:, 3:]).max(axis=1)
 
-    joined = (off(one, other) <= tol) | (off(other, one) <= tol)
-    links = coo_array((np.ones(joined.sum()), (one[joined], other[joined])), shape=(count, count))
-    return connected_components(links, directed=False)[1]
+    near = np.minimum(off(one, other), off(other, one))
+    parallel = np.einsum("td,td->t", hull.equations[one, :3], hull.equations[other, :3]) >= math.cos(FOLD_ANGLE_RAD)
+    joined = (near <= tol) | (parallel & (near <= fold))
+    group, normals, spread = _faces_of(pts, hull, one[joined], other[joined])
+    bent = spread[group[one]] > fold
+    if bent.any():
+        keep = joined & (~bent | (near <= tol))
+        group, normals, _ = _faces_of(pts, hull, one[keep], other[keep])
+    return group, normals
+
+
+def _faces_of(pts: np.ndarray, hull: ConvexHull, one: np.ndarray, other: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The face of each hull triangle, the triangles ``one[k]`` and ``other[k]`` joined; each
+    face's unit normal (its triangles' area-weighted mean) and how far its corners spread along
+    it, m."""
+    from scipy.sparse import coo_array
+    from scipy.sparse.csgraph import connected_components
+
+    count = len(hull.simplices)
+    group = connected_components(coo_array((np.ones(len(one)), (one, other)), shape=(count, count)), directed=False)[1]
+    corners = pts[hull.simplices]  # (t, 3, 3)
+    twice_area = np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+    normals = np.zeros((group.max() + 1, 3))
+    np.add.at(normals, group, twice_area[:, None] * hull.equations[:, :3])
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    height = np.einsum("tcd,td->tc", corners, normals[group])
+    top, bottom = np.full(len(normals), -np.inf), np.full(len(normals), np.inf)
+    np.maximum.at(top, group, height.max(axis=1))
+    np.minimum.at(bottom, group, height.min(axis=1))
+    return group, normals, top - bottom
 
 
 def _corners_only(ring: np.ndarray, xy: np.ndarray, tol: float) -> np.ndarray:
