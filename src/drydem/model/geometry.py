@@ -36,9 +36,10 @@ if TYPE_CHECKING:
 #: fraction of a block's size (its bounding box's diagonal) within which a point is on the hull,
 #: on a face's plane or on an edge (:func:`convex_hull`, :func:`face_interior_points`)
 HULL_TOLERANCE = 1e-6
-#: a face folded by its corners' rounding is one face: neighbouring hull triangles whose normals
-#: differ by less than FOLD_ANGLE_RAD and whose corners lie within FOLD_TOLERANCE of the block's
-#: size (1e-4: 0.02 mm on a 0.2 m brick) of the other's plane are joined (:func:`_coplanar_groups`).
+#: a face folded by its corners' rounding is one face: hull triangles whose normals differ from
+#: the face's largest triangle's by less than FOLD_ANGLE_RAD and whose corners lie within
+#: FOLD_TOLERANCE of the block's size (1e-4: 0.02 mm on a 0.2 m brick) of its plane are joined
+#: to it (:func:`_coplanar_groups`).
 #: A brick turned anyhow and stored in float32, as STL is, 100 m from the origin has its
 #: corners 8e-6 m off (1e-4 rad on a 0.1 m face); its faces came out as triangles, and a contact
 #: found on one of them had 19 to 63 % of the bed's area. The sides of a 1000-sided prism (the
@@ -372,8 +373,10 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
             "the block is not convex (split it into convex blocks)"
         )
     fold = FOLD_TOLERANCE * scale
+    # hull stays the given points' for the check below (found by a review: checked against the
+    # hull of the points left, a cube gone pyramid passed)
     try:
-        pts, hull, faces, normals = _closed_faces(pts, hull, tol, fold)
+        pts, _, faces, normals = _closed_faces(pts, hull, tol, fold)
     except QhullError:
         raise GeometryError(f"{name}: degenerate block: its vertices are coplanar or collinear, it has no volume") from None
     used = np.unique(np.concatenate(faces))
@@ -543,8 +546,8 @@ def _closed_faces(pts: np.ndarray, hull: ConvexHull, tol: float, fold: float) ->
 def _merge_coplanar(pts: np.ndarray, hull: ConvexHull, tol: float, fold: float) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
     """Hull triangles joined into faces (:func:`_coplanar_groups`); each face's vertices ordered
     counter-clockwise about its normal, the triangles' area-weighted mean; leave out the faces
-    whose corners are fewer than 3 (:func:`_corners_only`): slivers along an edge or at a
-    corner, points within ``tol`` of it having made them. Also the vertices some face left out."""
+    whose corners are fewer than 3 (:func:`_corners_only`): slivers along an edge, points
+    within ``tol`` of it having made them. Also the vertices some face or sliver left out."""
     faces: list[np.ndarray] = []
     normals: list[np.ndarray] = []
     left_out: list[int] = []
@@ -553,59 +556,77 @@ def _merge_coplanar(pts: np.ndarray, hull: ConvexHull, tol: float, fold: float) 
         members = np.flatnonzero(group == g)
         ring = np.unique(hull.simplices[members])
         corners = _corners_only(*_counter_clockwise(pts, ring, n), tol)
-        left_out += set(ring.tolist()).difference(corners.tolist())
-        if len(corners) >= 3:  # else a sliver within tol of an edge or a corner (points a hair off it)
+        if len(corners) >= 3:
             faces.append(corners)
             normals.append(n)
+        else:
+            corners = _sliver_ends(pts, ring)
+        left_out += set(ring.tolist()).difference(corners.tolist())
     return faces, np.array(normals), np.array(left_out, dtype=np.int64)
+
+
+def _sliver_ends(pts: np.ndarray, ring: np.ndarray) -> np.ndarray:
+    """The two points of ``ring`` (indices of ``pts``, m) farthest apart: the ends of the edge
+    that a sliver face (points within the tolerance of it) runs along; its other points are a
+    hair off the edge (found by a review: a sliver's Graham pass kept one point, and the cube
+    corner it left out was dropped)."""
+    p = pts[ring]
+    far = np.linalg.norm(p[:, None] - p[None], axis=2)
+    return ring[list(np.unravel_index(np.argmax(far), far.shape))]
 
 
 def _coplanar_groups(pts: np.ndarray, hull: ConvexHull, tol: float, fold: float) -> tuple[np.ndarray, np.ndarray]:
     """The face each hull triangle is part of, and each face's unit normal (its triangles'
-    area-weighted mean). Neighbouring triangles are joined where one's corners lie within ``tol``
-    (m) of the other's plane (a sliver's own plane is ill-defined: either way), or within
-    ``fold`` (m) and their normals within :data:`FOLD_ANGLE_RAD`; faces are the connected groups
-    (scipy.sparse.csgraph). A face whose corners then spread more than ``fold`` along its normal
-    (a gentle curve of many triangles) is joined by ``tol`` alone. By corners, not by the planes'
-    offsets: 160 m from the origin, two planes 3e-6 rad apart differ by 4e-4 m in offset (found
-    by CI: a face held a corner of another, counting its area twice)."""
-    count = len(hull.simplices)
-    one, other = np.repeat(np.arange(count), 3), hull.neighbors.ravel()
-
-    def off(plane: np.ndarray, triangle: np.ndarray) -> np.ndarray:
-        e = hull.equations[plane]
-        return np.abs(np.einsum("tcd,td->tc", pts[hull.simplices[triangle]], e[:, :3]) + e[:, 3:]).max(axis=1)
-
-    near = np.minimum(off(one, other), off(other, one))
-    parallel = np.einsum("td,td->t", hull.equations[one, :3], hull.equations[other, :3]) >= math.cos(FOLD_ANGLE_RAD)
-    joined = (near <= tol) | (parallel & (near <= fold))
-    group, normals, spread = _faces_of(pts, hull, one[joined], other[joined])
-    bent = spread[group[one]] > fold
-    if bent.any():
-        keep = joined & (~bent | (near <= tol))
-        group, normals, _ = _faces_of(pts, hull, one[keep], other[keep])
-    return group, normals
-
-
-def _faces_of(pts: np.ndarray, hull: ConvexHull, one: np.ndarray, other: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The face of each hull triangle, the triangles ``one[k]`` and ``other[k]`` joined; each
-    face's unit normal (its triangles' area-weighted mean) and how far its corners spread along
-    it, m."""
-    from scipy.sparse import coo_array
-    from scipy.sparse.csgraph import connected_components
-
-    count = len(hull.simplices)
-    group = connected_components(coo_array((np.ones(len(one)), (one, other)), shape=(count, count)), directed=False)[1]
+    area-weighted mean). Faces grow from the largest triangle not yet in one (its plane the best
+    defined) over neighbouring triangles whose corners lie within ``tol`` (m) of that seed's
+    plane, or within ``fold`` (m) with their normals within :data:`FOLD_ANGLE_RAD` of it. Against
+    the seed's plane, not a neighbour's (found by a review: a sliver along an edge, within tol of
+    both faces' planes, joined them into one), and by corners, not the planes' offsets (found by
+    CI: 160 m out, two planes 3e-6 rad apart differ by 4e-4 m in offset)."""
     corners = pts[hull.simplices]  # (t, 3, 3)
     twice_area = np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
-    normals = np.zeros((group.max() + 1, 3))
-    np.add.at(normals, group, twice_area[:, None] * hull.equations[:, :3])
-    normals /= np.linalg.norm(normals, axis=1)[:, None]
-    height = np.einsum("tcd,td->tc", corners, normals[group])
-    top, bottom = np.full(len(normals), -np.inf), np.full(len(normals), np.inf)
-    np.maximum.at(top, group, height.max(axis=1))
-    np.minimum.at(bottom, group, height.min(axis=1))
-    return group, normals, top - bottom
+    group = [-1] * len(corners)
+    normals = []
+    fitting = _Fitting(corners.tolist(), hull.equations.tolist(), hull.neighbors.tolist(), tol, fold)
+    for seed in np.argsort(-twice_area, kind="stable").tolist():
+        if group[seed] < 0:
+            members = fitting.grown(seed, group)
+            for t in members:
+                group[t] = len(normals)
+            normal = twice_area[members] @ hull.equations[members, :3]
+            normals.append(normal / np.linalg.norm(normal))
+    return np.array(group), np.array(normals)
+
+
+class _Fitting(NamedTuple):
+    """Hull triangles as Python lists (a face grows one neighbour at a time: numpy's calls on three
+    numbers would take most of a hull's time): their ``corners`` (t, 3, 3), ``equations`` (t, 4:
+    unit normal, offset) and ``neighbors`` (t, 3); the tolerances ``tol`` and ``fold``, m."""
+
+    corners: list
+    equations: list
+    neighbors: list
+    tol: float
+    fold: float
+
+    def grown(self, seed: int, group: list[int]) -> list[int]:
+        """The triangles in no face yet (``group`` -1) reached from ``seed`` through neighbours,
+        each of whose corners lie within ``tol`` of the seed's plane, or within ``fold`` with its
+        normal within :data:`FOLD_ANGLE_RAD` of the seed's."""
+        a, b, c, d = self.equations[seed]
+        least = math.cos(FOLD_ANGLE_RAD)
+        members, stack, seen = [seed], [seed], {seed}
+        while stack:
+            for t in self.neighbors[stack.pop()]:
+                if t in seen or group[t] >= 0:
+                    continue
+                seen.add(t)
+                off = max(abs(a * x + b * y + c * z + d) for x, y, z in self.corners[t])
+                e = self.equations[t]
+                if off <= self.tol or (off <= self.fold and a * e[0] + b * e[1] + c * e[2] >= least):
+                    members.append(t)
+                    stack.append(t)
+        return members
 
 
 def _corners_only(ring: np.ndarray, xy: np.ndarray, tol: float) -> np.ndarray:
@@ -637,13 +658,20 @@ def _left_turn(a: list[float], b: list[float], c: list[float]) -> float:
 
 def _counter_clockwise(pts: np.ndarray, idx: np.ndarray, normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Vertex indices of a planar convex polygon sorted counter-clockwise about ``normal``, and
-    their coordinates (k, 2), m, along axes u, v of its plane, u x v = ``normal``."""
-    p = pts[idx] - pts[idx].mean(0)
-    u = p[0] / np.linalg.norm(p[0])
-    v = normal[[1, 2, 0]] * u[[2, 0, 1]] - normal[[2, 0, 1]] * u[[1, 2, 0]]  # normal x u (np.cross takes 20 us)
-    xy = p @ np.column_stack([u, v])
+    their coordinates (k, 2), m, along axes u, v of its plane, u x v = ``normal``: u across the
+    normal from the world axis least along it (found by a review: u from the first vertex, over
+    the face's centre, was the normal itself, and the face lost its corners)."""
+    u = _cross(normal, np.eye(3)[np.argmin(np.abs(normal))])
+    u /= np.linalg.norm(u)
+    xy = pts[idx] @ np.column_stack([u, _cross(normal, u)])
+    xy -= xy.mean(0)
     order = np.argsort(np.arctan2(xy[:, 1], xy[:, 0]))
     return idx[order], xy[order]
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b of two 3-vectors (np.cross takes 20 us)."""
+    return a[[1, 2, 0]] * b[[2, 0, 1]] - a[[2, 0, 1]] * b[[1, 2, 0]]
 
 
 def face_corners(faces: tuple[np.ndarray, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
