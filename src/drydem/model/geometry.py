@@ -334,8 +334,10 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
     """The convex polyhedron spanned by ``points`` ((n, 3), m).
 
     Raises GeometryError naming ``name`` if the points are degenerate (fewer than
-    four, coplanar, collinear) or if a point lies strictly inside the hull of the
-    others, i.e. the vertex set does not describe a convex block.
+    four, coplanar, collinear) or if a point lies inside the hull of the others by more than
+    FOLD_TOLERANCE of the size, i.e. the vertex set does not describe a convex block.
+    Triangles of Qhull's hull within the tolerances of one plane are one face
+    (:func:`_coplanar_groups`).
     """
     _check_name(name)
     pts = real_array(points)
@@ -364,15 +366,15 @@ def convex_hull(points, *, name: str = "block") -> ConvexPolyhedron:
     except QhullError:  # its text is Qhull's own (QH6013 qhull input error: ...; found by a hunt)
         raise GeometryError(f"{name}: degenerate block: its vertices are coplanar or collinear, it has no volume") from None
     _refuse_flat(hull.volume, scale, name)
+    fold = FOLD_TOLERANCE * scale
     depth = -(pts @ hull.equations[:, :3].T + hull.equations[:, 3]).max(axis=1)
-    inside = np.flatnonzero(depth > tol)
+    inside = np.flatnonzero(depth > fold)  # nearer, a hair in: rounding, as a face's fold (found by a review)
     if inside.size:
         i = int(inside[np.argmax(depth[inside])])
         raise GeometryError(
             f"{name}: vertex {kept[i]} {pts[i].tolist()} lies {depth[i]:.3g} m inside the hull of the others; "
             "the block is not convex (split it into convex blocks)"
         )
-    fold = FOLD_TOLERANCE * scale
     # hull stays the given points' for the check below (found by a review: checked against the
     # hull of the points left, a cube gone pyramid passed)
     try:
