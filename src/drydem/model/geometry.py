@@ -554,7 +554,10 @@ def _merge_coplanar(pts: np.ndarray, hull: ConvexHull, tol: float, fold: float) 
     normals: list[np.ndarray] = []
     left_out: list[int] = []
     group, face_normals = _coplanar_groups(pts, hull, tol, fold)
-    for g, n in enumerate(face_normals):
+    first = np.full(len(face_normals), len(group))  # each face's first triangle in Qhull's order:
+    np.minimum.at(first, group, np.arange(len(group)))  # the faces in the order they had before
+    for g in np.argsort(first).tolist():  # (a damped tilt's path is not indifferent to it)
+        n = face_normals[g]
         members = np.flatnonzero(group == g)
         ring = np.unique(hull.simplices[members])
         corners = _corners_only(*_counter_clockwise(pts, ring, n), tol)
@@ -662,12 +665,15 @@ def _counter_clockwise(pts: np.ndarray, idx: np.ndarray, normal: np.ndarray) -> 
     """Vertex indices of a planar convex polygon sorted counter-clockwise about ``normal``, and
     their coordinates (k, 2), m, along axes u, v of its plane, u x v = ``normal``: u across the
     normal from the world axis least along it (found by a review: u from the first vertex, over
-    the face's centre, was the normal itself, and the face lost its corners)."""
+    the face's centre, was the normal itself, and the face lost its corners). The angles count
+    from the first vertex's way from the centre, as they did from u before: the ring starts
+    where it did (a damped tilt's path is not indifferent to it)."""
     u = _cross(normal, np.eye(3)[np.argmin(np.abs(normal))])
     u /= np.linalg.norm(u)
     xy = pts[idx] @ np.column_stack([u, _cross(normal, u)])
     xy -= xy.mean(0)
-    order = np.argsort(np.arctan2(xy[:, 1], xy[:, 0]))
+    angle = np.arctan2(xy[:, 1], xy[:, 0])
+    order = np.argsort(-((angle[0] - angle + np.pi) % (2 * np.pi) - np.pi))  # angle - angle[0] in (-pi, pi]
     return idx[order], xy[order]
 
 
